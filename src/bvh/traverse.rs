@@ -1,0 +1,121 @@
+//! Closest-hit and any-hit traversal with an explicit fixed stack, nearer child first.
+//! mirror: shaders/traverse.wgsl
+
+use super::{BvhNode, STACK_SIZE};
+use crate::geometry::{TriVerts, intersect_aabb, intersect_triangle};
+use crate::math::Ray;
+use glam::Vec3;
+
+/// The closest hit: distance, barycentrics and the leaf-order triangle index.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub t: f32,
+    pub u: f32,
+    pub v: f32,
+    pub tri: u32,
+}
+
+/// The nearest intersection with `0 < t < t_max`.
+/// mirror: shaders/traverse.wgsl `traverse_closest`
+pub fn traverse_closest(
+    nodes: &[BvhNode],
+    tris: &[TriVerts],
+    ray: &Ray,
+    t_max: f32,
+) -> Option<Hit> {
+    let mut best: Option<Hit> = None;
+    let mut t_best = t_max;
+    walk(nodes, ray, t_max, |first, count, _| {
+        for i in first..first + count {
+            if let Some(h) = intersect_triangle(ray, &tris[i as usize], t_best) {
+                t_best = h.t;
+                best = Some(Hit {
+                    t: h.t,
+                    u: h.u,
+                    v: h.v,
+                    tri: i,
+                });
+            }
+        }
+        (false, t_best)
+    });
+    best
+}
+
+/// Whether anything lies on the ray with `0 < t < t_max` (shadow rays).
+/// mirror: shaders/traverse.wgsl `traverse_any`
+pub fn traverse_any(nodes: &[BvhNode], tris: &[TriVerts], ray: &Ray, t_max: f32) -> bool {
+    let mut hit = false;
+    walk(nodes, ray, t_max, |first, count, _| {
+        hit = (first..first + count)
+            .any(|i| intersect_triangle(ray, &tris[i as usize], t_max).is_some());
+        (hit, t_max)
+    });
+    hit
+}
+
+/// Visits the leaves the ray may reach, nearer child first. `leaf(first, count, t_max)`
+/// returns whether to stop and the (possibly shortened) ray extent.
+#[inline]
+fn walk(
+    nodes: &[BvhNode],
+    ray: &Ray,
+    mut t_max: f32,
+    mut leaf: impl FnMut(u32, u32, f32) -> (bool, f32),
+) {
+    let Some(root) = nodes.first() else { return };
+    // An empty scene's root is a leaf of no triangles.
+    if nodes.len() == 1 && root.count == 0 {
+        return;
+    }
+    let inv_dir = ray.dir.recip();
+    if intersect_aabb(ray.origin, inv_dir, root.min.into(), root.max.into(), t_max) == f32::INFINITY
+    {
+        return;
+    }
+    let mut stack = [0u32; STACK_SIZE];
+    let mut sp = 0usize;
+    let mut node = 0u32;
+    loop {
+        let n = &nodes[node as usize];
+        if n.count > 0 {
+            let (stop, t) = leaf(n.left_or_first, n.count, t_max);
+            t_max = t;
+            if stop || sp == 0 {
+                return;
+            }
+            sp -= 1;
+            node = stack[sp];
+            continue;
+        }
+        let (mut a, mut b) = (node + 1, n.left_or_first);
+        let box_t = |i: u32| {
+            let c = &nodes[i as usize];
+            intersect_aabb(
+                ray.origin,
+                inv_dir,
+                Vec3::from(c.min),
+                Vec3::from(c.max),
+                t_max,
+            )
+        };
+        let (mut ta, mut tb) = (box_t(a), box_t(b));
+        if tb < ta {
+            std::mem::swap(&mut ta, &mut tb);
+            std::mem::swap(&mut a, &mut b);
+        }
+        if ta == f32::INFINITY {
+            if sp == 0 {
+                return;
+            }
+            sp -= 1;
+            node = stack[sp];
+            continue;
+        }
+        node = a;
+        if tb != f32::INFINITY {
+            stack[sp] = b;
+            sp += 1;
+        }
+    }
+}

@@ -1,0 +1,189 @@
+//! The command line: argument types (clap) and the commands they run. Only this module and
+//! `main` know about clap, indicatif or anyhow.
+
+use anyhow::{Context, Result, bail};
+use clap::{Parser, Subcommand, ValueEnum};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use meshtrace::bvh::BuildParams;
+use meshtrace::render::{RenderJob, RenderScene, cpu};
+use meshtrace::scene::{self, Scene, builtin, load::validate_settings};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Parser)]
+#[command(
+    name = "meshtrace",
+    version,
+    about = "A physically based path tracer for triangle meshes"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Render a scene file (.toml), a bare mesh (.obj) or, with none, the built-in Cornell box.
+    Render(RenderArgs),
+    /// Print a scene's size and its BVH's statistics.
+    Info {
+        /// Scene file, .obj mesh, or builtin:NAME.
+        scene: PathBuf,
+    },
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Device {
+    /// The CPU reference path tracer, parallel over all cores.
+    Cpu,
+}
+
+#[derive(clap::Args)]
+pub struct RenderArgs {
+    /// Scene file, .obj mesh, or builtin:NAME; the built-in Cornell box when omitted.
+    pub scene: Option<PathBuf>,
+    /// Output image; the extension picks the format (.png .jpg .bmp .exr .hdr).
+    #[arg(short, long, default_value = "render.png")]
+    pub output: PathBuf,
+    /// Samples per pixel.
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Longest path in segments from the camera (1 = emitters seen directly).
+    #[arg(long)]
+    pub max_depth: Option<u32>,
+    #[arg(long)]
+    pub width: Option<u32>,
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Seed of the random sequences; the same seed gives the same image.
+    #[arg(long)]
+    pub seed: Option<u32>,
+    #[arg(long, value_enum, default_value_t = Device::Cpu)]
+    pub device: Device,
+    /// Worker threads for the CPU path (default: one per core).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Print nothing but warnings and errors.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// Loads a scene given on the command line: a path, or `builtin:NAME`.
+fn load(path: &Path) -> Result<Scene> {
+    let text = path.to_string_lossy();
+    let scene = match text.strip_prefix("builtin:") {
+        Some(name) => builtin::load_builtin(name)?,
+        None => scene::load_scene(path)?,
+    };
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(scene)
+}
+
+pub fn render(args: &RenderArgs) -> Result<()> {
+    meshtrace::film::Format::from_path(&args.output)?;
+    if let Some(n) = args.threads {
+        if n == 0 {
+            bail!("--threads must be at least 1");
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .context("cannot start the worker threads")?;
+    }
+    let mut scene = match &args.scene {
+        Some(path) => load(path)?,
+        None => load(Path::new(&format!("builtin:{}", builtin::DEFAULT)))?,
+    };
+    let s = &mut scene.settings;
+    s.width = args.width.unwrap_or(s.width);
+    s.height = args.height.unwrap_or(s.height);
+    s.spp = args.spp.unwrap_or(s.spp);
+    s.max_depth = args.max_depth.unwrap_or(s.max_depth);
+    s.seed = args.seed.unwrap_or(s.seed);
+    if let Err((field, message)) = validate_settings(s) {
+        bail!("--{}: {message}", field.replace('_', "-"));
+    }
+    let settings = *s;
+    let rs = RenderScene::new(&scene, &BuildParams::default())?;
+    let job = RenderJob::new(settings);
+    let total = settings.width as u64 * settings.height as u64 * settings.spp as u64;
+    let bar = progress_bar(total, args.quiet);
+    let start = Instant::now();
+    let (film, rays) = match args.device {
+        Device::Cpu => cpu::render(&rs, &job, &|n| bar.inc(n)),
+    };
+    let seconds = start.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    film.save(&args.output)?;
+    if !args.quiet {
+        eprintln!(
+            "{}x{} at {} spp in {:.2} s ({:.2} Mrays/s) -> {}",
+            settings.width,
+            settings.height,
+            settings.spp,
+            seconds,
+            rays as f64 / seconds / 1e6,
+            args.output.display()
+        );
+    }
+    Ok(())
+}
+
+fn progress_bar(total: u64, quiet: bool) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {percent:>3}%  {per_sec} samples  ETA {eta}")
+            .expect("the template is valid"),
+    );
+    bar
+}
+
+pub fn info(path: &Path) -> Result<()> {
+    let scene = load(path)?;
+    let rs = RenderScene::new(&scene, &BuildParams::default())?;
+    let st = &rs.bvh.stats;
+    let name = scene.path.as_deref().unwrap_or(path).display();
+    println!("scene        {name}");
+    println!("triangles    {}", st.triangles);
+    println!("vertices     {}", scene.mesh.positions.len());
+    println!("materials    {}", scene.materials.len());
+    println!("emitters     {} triangles", rs.emitters.len());
+    println!(
+        "bvh build    {:.2} ms ({:.2} M triangles/s)",
+        st.build_seconds * 1e3,
+        st.triangles as f64 / st.build_seconds.max(1e-9) / 1e6
+    );
+    println!("sah cost     {:.3}", st.sah_cost);
+    println!(
+        "nodes        {} ({} leaves, {} bytes)",
+        st.nodes,
+        st.leaves,
+        st.nodes * 32
+    );
+    println!("depth        {}", st.depth);
+    let hist: Vec<String> = st
+        .leaf_sizes
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| **n > 0)
+        .map(|(k, n)| format!("{k}:{n}"))
+        .collect();
+    println!("leaf sizes   {}", hist.join(" "));
+    if let Some(kib) = peak_memory_kib() {
+        println!("peak memory  {:.1} MiB", kib as f64 / 1024.0);
+    }
+    Ok(())
+}
+
+/// The process's peak resident memory, from /proc (Linux only).
+fn peak_memory_kib() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
+}

@@ -1,0 +1,13 @@
+//! meshtrace: a physically based path tracer for triangle meshes.
+//!
+//! The data flows one way: a scene file is loaded into a [`scene::Scene`], whose triangles
+//! a SAH [`bvh::Bvh`] orders and indexes; [`render::RenderScene`] packs both into the flat
+//! tables that the CPU reference integrator ([`render::cpu`]) and the GPU compute renderer
+//! read alike; the samples land in a [`film::Film`], which writes the image file.
+
+pub mod bvh;
+pub mod film;
+pub mod geometry;
+pub mod math;
+pub mod render;
+pub mod scene;

@@ -1,0 +1,135 @@
+//! Rendering: the flat scene tables both devices read ([`RenderScene`]), the shared
+//! sampling code, the BSDFs, and the CPU reference integrator. The GPU renderer uploads
+//! exactly these tables, so a path can be replayed on either device.
+
+pub mod bsdf;
+pub mod cpu;
+pub mod rng;
+pub mod sampling;
+
+use crate::bvh::{BuildParams, Bvh, BvhError};
+use crate::geometry::{self, TriVerts};
+use crate::math::{Aabb, luminance};
+use crate::scene::{Camera, Material, NO_NORMAL, RenderSettings, Scene, Sky};
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+/// Per-triangle shading data in leaf order (48 bytes): vertex normals, the material, and
+/// the probability that light sampling picks this triangle.
+/// mirror: shaders/types.wgsl `TriShading`
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TriShading {
+    pub n0: [f32; 3],
+    pub material: u32,
+    pub n1: [f32; 3],
+    /// Probability of choosing this triangle in next event estimation; 0 for non-emitters.
+    pub emitter_pmf: f32,
+    pub n2: [f32; 3],
+    /// Bit 0: the triangle has vertex normals (smooth shading).
+    pub flags: u32,
+}
+
+pub const TRI_SMOOTH: u32 = 1;
+
+/// Everything an integrator reads, as flat tables in BVH leaf order.
+#[derive(Clone, Debug)]
+pub struct RenderScene {
+    pub bvh: Bvh,
+    pub tris: Vec<TriVerts>,
+    pub shading: Vec<TriShading>,
+    pub materials: Vec<Material>,
+    /// Leaf-order indices of emissive triangles, and the inclusive CDF of their power.
+    pub emitters: Vec<u32>,
+    pub emitter_cdf: Vec<f32>,
+    pub camera: Camera,
+    pub sky: Sky,
+}
+
+impl RenderScene {
+    /// Builds the BVH over the scene's triangles and lays out the tables in its leaf order.
+    pub fn new(scene: &Scene, params: &BuildParams) -> Result<Self, BvhError> {
+        let mesh = &scene.mesh;
+        let corners: Vec<[Vec3; 3]> = mesh.triangles.iter().map(|t| mesh.vertices(t)).collect();
+        let bounds: Vec<Aabb> = corners.iter().map(|c| Aabb::from_points(c)).collect();
+        let bvh = Bvh::build(&bounds, params)?;
+        let tris: Vec<TriVerts> = bvh
+            .order
+            .iter()
+            .map(|&i| TriVerts::new(corners[i as usize]))
+            .collect();
+        drop(corners);
+        let mut shading: Vec<TriShading> = bvh
+            .order
+            .iter()
+            .map(|&i| {
+                let t = &mesh.triangles[i as usize];
+                let mut s = TriShading {
+                    material: t.material,
+                    ..Default::default()
+                };
+                if t.n[0] != NO_NORMAL {
+                    let [a, b, c] = t.n.map(|k| mesh.normals[k as usize].to_array());
+                    (s.n0, s.n1, s.n2, s.flags) = (a, b, c, TRI_SMOOTH);
+                }
+                s
+            })
+            .collect();
+        let (mut emitters, mut emitter_cdf) = (Vec::new(), Vec::new());
+        let mut total = 0.0f64;
+        for (i, s) in shading.iter().enumerate() {
+            let m = &scene.materials[s.material as usize];
+            let power = geometry::area(&tris[i]) as f64 * luminance(m.emission) as f64;
+            if power > 0.0 {
+                total += power;
+                emitters.push(i as u32);
+                emitter_cdf.push(total);
+            }
+        }
+        let emitter_cdf: Vec<f32> = emitter_cdf.iter().map(|&c| (c / total) as f32).collect();
+        let mut prev = 0.0;
+        for (k, &i) in emitters.iter().enumerate() {
+            shading[i as usize].emitter_pmf = emitter_cdf[k] - prev;
+            prev = emitter_cdf[k];
+        }
+        if let Some(last) = emitter_cdf.last() {
+            debug_assert!((last - 1.0).abs() < 1e-6);
+        }
+        Ok(Self {
+            bvh,
+            tris,
+            shading,
+            materials: scene.materials.clone(),
+            emitters,
+            emitter_cdf,
+            camera: scene.camera.clone(),
+            sky: scene.sky,
+        })
+    }
+}
+
+/// What a finished render reports besides its image.
+#[derive(Clone, Debug, Default)]
+pub struct RenderStats {
+    pub seconds: f64,
+    /// Rays traced (camera, bounce and shadow rays).
+    pub rays: u64,
+    pub samples: u64,
+}
+
+/// The settings of one render, with the sample range it covers (all of `0..spp` unless
+/// merging partial renders).
+#[derive(Clone, Debug)]
+pub struct RenderJob {
+    pub settings: RenderSettings,
+    pub samples: std::ops::Range<u32>,
+}
+
+impl RenderJob {
+    pub fn new(settings: RenderSettings) -> Self {
+        Self {
+            settings,
+            samples: 0..settings.spp,
+        }
+    }
+}

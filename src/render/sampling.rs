@@ -1,0 +1,129 @@
+//! Warps from the unit square to the distributions the path tracer draws from.
+//! Each function has a WGSL twin of the same name in `shaders/sampling.wgsl`.
+
+use glam::{Vec2, Vec3};
+use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4};
+
+/// Concentric map of the square onto the unit disk (Shirley and Chiu 1997).
+/// mirror: shaders/sampling.wgsl `sample_concentric_disk`
+pub fn sample_concentric_disk(u: Vec2) -> Vec2 {
+    let o = 2.0 * u - Vec2::ONE;
+    if o.x == 0.0 && o.y == 0.0 {
+        return Vec2::ZERO;
+    }
+    let (r, theta) = if o.x.abs() > o.y.abs() {
+        (o.x, FRAC_PI_4 * (o.y / o.x))
+    } else {
+        (o.y, FRAC_PI_2 - FRAC_PI_4 * (o.x / o.y))
+    };
+    r * Vec2::new(theta.cos(), theta.sin())
+}
+
+/// Cosine-weighted direction about +Z; its pdf is `cos_theta / pi`.
+/// mirror: shaders/sampling.wgsl `sample_cosine_hemisphere`
+pub fn sample_cosine_hemisphere(u: Vec2) -> Vec3 {
+    let d = sample_concentric_disk(u);
+    let z = (1.0 - d.x * d.x - d.y * d.y).max(0.0).sqrt();
+    Vec3::new(d.x, d.y, z)
+}
+
+/// Pdf of `sample_cosine_hemisphere` in solid angle. mirror: shaders/sampling.wgsl `cosine_hemisphere_pdf`
+pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
+    cos_theta.max(0.0) * FRAC_1_PI
+}
+
+/// Uniform barycentrics (b1, b2) on a triangle, by the square-root warp (pbrt-v3 §13.6.4).
+/// mirror: shaders/sampling.wgsl `sample_uniform_triangle`
+pub fn sample_uniform_triangle(u: Vec2) -> Vec2 {
+    let su = u.x.sqrt();
+    Vec2::new(1.0 - su, u.y * su)
+}
+
+/// The power heuristic (beta = 2) weight of a strategy with pdf `a` against one with pdf `b`.
+/// mirror: shaders/sampling.wgsl `power_heuristic`
+pub fn power_heuristic(a: f32, b: f32) -> f32 {
+    let a2 = a * a;
+    let b2 = b * b;
+    if a2 + b2 == 0.0 { 0.0 } else { a2 / (a2 + b2) }
+}
+
+/// Index of the first CDF entry greater than `u`: the discrete sample of a distribution whose
+/// inclusive CDF (last entry 1) is `cdf`. mirror: shaders/sampling.wgsl `sample_cdf`
+pub fn sample_cdf(cdf: &[f32], u: f32) -> usize {
+    let (mut lo, mut hi) = (0usize, cdf.len() - 1);
+    while lo < hi {
+        let mid = (lo + hi) / 2;
+        if cdf[mid] <= u {
+            lo = mid + 1
+        } else {
+            hi = mid
+        }
+    }
+    lo
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::rng::Rng;
+
+    fn u2(rng: &Rng, i: u32) -> Vec2 {
+        Vec2::new(rng.rng_1d(i, 0), rng.rng_1d(i, 1))
+    }
+
+    #[test]
+    fn disk_samples_lie_in_the_disk_with_uniform_density() {
+        let rng = Rng::new(0, 0, 1);
+        let n = 50_000;
+        let mut inner = 0;
+        for i in 0..n {
+            let p = sample_concentric_disk(u2(&rng, i));
+            assert!(p.length() <= 1.0 + 1e-6);
+            inner += (p.length() < 0.5) as u32;
+        }
+        // A quarter of a uniform disk's area lies within radius 1/2; binomial sd is ~0.002.
+        let frac = inner as f32 / n as f32;
+        assert!((frac - 0.25).abs() < 0.01, "{frac}");
+    }
+
+    #[test]
+    fn cosine_hemisphere_has_mean_cos_two_thirds() {
+        let rng = Rng::new(0, 0, 2);
+        let n = 50_000;
+        let mean: f32 = (0..n)
+            .map(|i| sample_cosine_hemisphere(u2(&rng, i)).z)
+            .sum::<f32>()
+            / n as f32;
+        // E[cos] under p = cos/pi is 2/3; sd of cos is ~0.24, so the standard error is ~0.001.
+        assert!((mean - 2.0 / 3.0).abs() < 0.006, "{mean}");
+    }
+
+    #[test]
+    fn triangle_barycentrics_are_uniform() {
+        let rng = Rng::new(0, 0, 3);
+        let n = 50_000;
+        let mut mean = Vec2::ZERO;
+        for i in 0..n {
+            let b = sample_uniform_triangle(u2(&rng, i));
+            assert!(b.x >= 0.0 && b.y >= 0.0 && b.x + b.y <= 1.0 + 1e-6);
+            mean += b;
+        }
+        mean /= n as f32;
+        // The centroid has barycentrics (1/3, 1/3).
+        assert!(
+            (mean - Vec2::splat(1.0 / 3.0)).abs().max_element() < 0.006,
+            "{mean}"
+        );
+    }
+
+    #[test]
+    fn cdf_sampling_picks_the_right_bucket() {
+        let cdf = [0.25, 0.25, 0.75, 1.0];
+        assert_eq!(sample_cdf(&cdf, 0.0), 0);
+        assert_eq!(sample_cdf(&cdf, 0.2499), 0);
+        assert_eq!(sample_cdf(&cdf, 0.25), 2); // the empty bucket 1 is never chosen
+        assert_eq!(sample_cdf(&cdf, 0.7), 2);
+        assert_eq!(sample_cdf(&cdf, 0.75), 3);
+        assert_eq!(sample_cdf(&cdf, 0.9999), 3);
+    }
+}

@@ -1,0 +1,97 @@
+//! The scene file as written: serde types for version 1 of `shared/specs/scene-format.md`.
+//!
+//! Only this module derives `Deserialize`. Unknown keys are errors, so a typo cannot
+//! silently render something else. Values are checked later, in `load`, where the
+//! field's path is known.
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    pub camera: CameraFile,
+    #[serde(default)]
+    pub render: RenderFile,
+    pub sky: Option<SkyFile>,
+    #[serde(default)]
+    pub materials: BTreeMap<String, MaterialFile>,
+    #[serde(default)]
+    pub objects: Vec<ObjectFile>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraFile {
+    pub position: [f32; 3],
+    pub look_at: [f32; 3],
+    pub up: Option<[f32; 3]>,
+    pub vfov: Option<f32>,
+    pub aperture: Option<f32>,
+    pub focus_distance: Option<f32>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderFile {
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+    pub spp: Option<u32>,
+    pub max_depth: Option<u32>,
+    pub seed: Option<u32>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SkyFile {
+    pub color: Option<[f32; 3]>,
+    pub zenith: Option<[f32; 3]>,
+    pub horizon: Option<[f32; 3]>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MaterialType {
+    Diffuse,
+    Conductor,
+    RoughConductor,
+    Dielectric,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialFile {
+    #[serde(rename = "type")]
+    pub kind: MaterialType,
+    pub albedo: Option<[f32; 3]>,
+    pub emission: Option<[f32; 3]>,
+    pub roughness: Option<f32>,
+    pub ior: Option<f32>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectFile {
+    pub mesh: Option<String>,
+    pub sphere: Option<SphereFile>,
+    pub material: Option<String>,
+    pub translate: Option<[f32; 3]>,
+    pub rotate: Option<[f32; 3]>,
+    pub scale: Option<ScaleFile>,
+    pub matrix: Option<[f32; 16]>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SphereFile {
+    pub center: [f32; 3],
+    pub radius: f32,
+    pub subdivisions: Option<u32>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+pub enum ScaleFile {
+    Uniform(f32),
+    Axes([f32; 3]),
+}

@@ -1,0 +1,502 @@
+//! From a file to a [`Scene`]: parse, check every value, read the meshes, and build.
+//! Each error names the file and the line or field at fault.
+
+use super::file::{MaterialFile, MaterialType, ObjectFile, ScaleFile, SceneFile};
+use super::obj::{FileSource, Fs, load_obj};
+use super::sphere::{default_subdivisions, icosphere};
+use super::{
+    Camera, Material, MaterialKind, Mesh, NO_NORMAL, RenderSettings, Scene, SceneError, Sky,
+    Triangle,
+};
+use crate::math::Aabb;
+use glam::{Mat3, Mat4, Vec3};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// Most pixels an image may have: 2^26 (8192 x 8192); the film alone then takes 768 MiB.
+pub const MAX_PIXELS: u64 = 1 << 26;
+/// Deepest sphere subdivision accepted: 20 * 4^10 = 21M triangles.
+pub const MAX_SPHERE_SUBDIVISIONS: u32 = 10;
+
+/// Loads a scene file (`.toml`) or a bare mesh (`.obj`, framed by an automatic camera).
+pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
+    load_scene_from(path, &Fs)
+}
+
+/// [`load_scene`] reading through `files`, so that built-in scenes load like any other.
+pub fn load_scene_from(path: &Path, files: &dyn FileSource) -> Result<Scene, SceneError> {
+    let is_obj = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    if is_obj {
+        return load_bare_obj(path, files);
+    }
+    let io = |source| SceneError::Io {
+        path: path.display().to_string(),
+        source,
+    };
+    let bytes = files.read(path).map_err(io)?;
+    let text = String::from_utf8(bytes)
+        .map_err(|e| io(std::io::Error::new(std::io::ErrorKind::InvalidData, e)))?;
+    parse_scene_from(&text, path, files)
+}
+
+/// Parses scene-file text; `path` names it in messages and anchors its relative paths.
+pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
+    parse_scene_from(text, path, &Fs)
+}
+
+fn parse_scene_from(text: &str, path: &Path, files: &dyn FileSource) -> Result<Scene, SceneError> {
+    let ctx = Ctx {
+        files,
+        path: path.display().to_string(),
+        dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+    };
+    let file: SceneFile = toml::from_str(text).map_err(|e| ctx.syntax(text, &e))?;
+    let camera = ctx.camera(&file)?;
+    let settings = ctx.settings(&file)?;
+    let sky = ctx.sky(&file)?;
+    let mut builder = Builder::default();
+    for (name, m) in &file.materials {
+        let mat = ctx.material(name, m)?;
+        builder
+            .named
+            .insert(name.clone(), builder.materials.len() as u32);
+        builder.materials.push(mat);
+    }
+    for (i, object) in file.objects.iter().enumerate() {
+        ctx.object(&mut builder, i, object)?;
+    }
+    Ok(builder.finish(Some(path.to_path_buf()), camera, sky, settings))
+}
+
+/// A bare OBJ: its own materials, a white sky, and a camera framing its bounds from the
+/// front (+Z) and slightly above.
+fn load_bare_obj(path: &Path, files: &dyn FileSource) -> Result<Scene, SceneError> {
+    let mut builder = Builder::default();
+    let obj = load_obj(path, files)?;
+    builder.append_obj(obj, Mat4::IDENTITY, None);
+    let bounds = Aabb::from_points(&builder.mesh.positions);
+    if bounds.is_empty() {
+        return Err(SceneError::Obj {
+            path: path.display().to_string(),
+            message: "the mesh has no faces".into(),
+        });
+    }
+    let vfov = 40.0f32;
+    let center = bounds.center();
+    let radius = (0.5 * bounds.extent().length()).max(1e-6);
+    let distance = 1.1 * radius / (0.5 * vfov.to_radians()).sin();
+    let position = center + distance * Vec3::new(0.0, 0.25, 1.0).normalize();
+    let camera = Camera::new(position, center, Vec3::Y, vfov, 0.0, None)
+        .expect("a camera offset from its target along +Z is never degenerate");
+    Ok(builder.finish(
+        Some(path.to_path_buf()),
+        camera,
+        Sky::Constant(Vec3::ONE),
+        RenderSettings::default(),
+    ))
+}
+
+/// Accumulates the world-space mesh and the material table while objects are read.
+#[derive(Default)]
+struct Builder {
+    mesh: Mesh,
+    materials: Vec<Material>,
+    named: HashMap<String, u32>,
+    default_material: Option<u32>,
+    degenerate: usize,
+    warnings: Vec<String>,
+}
+
+impl Builder {
+    fn default_material(&mut self) -> u32 {
+        *self.default_material.get_or_insert_with(|| {
+            self.materials.push(Material::default_diffuse());
+            self.materials.len() as u32 - 1
+        })
+    }
+
+    /// Appends a mesh transformed by `m`; `material` overrides the file's own materials.
+    fn append_obj(&mut self, obj: super::obj::ObjMesh, m: Mat4, material: Option<u32>) {
+        self.warnings.extend(obj.warnings);
+        let base_p = self.mesh.positions.len() as u32;
+        let base_n = self.mesh.normals.len() as u32;
+        let normal_matrix = Mat3::from_mat4(m).inverse().transpose();
+        self.mesh
+            .positions
+            .extend(obj.positions.iter().map(|&p| m.transform_point3(p)));
+        self.mesh.normals.extend(
+            obj.normals
+                .iter()
+                .map(|&n| (normal_matrix * n).normalize_or_zero()),
+        );
+        let local: Vec<u32> = obj
+            .materials
+            .into_iter()
+            .map(|mat| {
+                self.materials.push(mat);
+                self.materials.len() as u32 - 1
+            })
+            .collect();
+        for (p, n, mat) in obj.triangles {
+            let material = match (material, mat) {
+                (Some(m), _) => m,
+                (None, Some(i)) => local[i as usize],
+                (None, None) => self.default_material(),
+            };
+            let p = p.map(|i| i + base_p);
+            let mut n = if n[0] == NO_NORMAL {
+                n
+            } else {
+                n.map(|i| i + base_n)
+            };
+            let [a, b, c] = p.map(|i| self.mesh.positions[i as usize]);
+            let area2 = (b - a).cross(c - a).length();
+            if !(area2 > 0.0 && area2.is_finite()) {
+                self.degenerate += 1;
+                continue;
+            }
+            if n[0] != NO_NORMAL
+                && n.iter()
+                    .any(|&i| self.mesh.normals[i as usize] == Vec3::ZERO)
+            {
+                n = [NO_NORMAL; 3];
+            }
+            self.mesh.triangles.push(Triangle { p, n, material });
+        }
+    }
+
+    fn finish(
+        mut self,
+        path: Option<PathBuf>,
+        camera: Camera,
+        sky: Sky,
+        settings: RenderSettings,
+    ) -> Scene {
+        if self.degenerate > 0 {
+            self.warnings.push(format!(
+                "dropped {} degenerate (zero-area) triangle{}",
+                self.degenerate,
+                if self.degenerate == 1 { "" } else { "s" }
+            ));
+        }
+        Scene {
+            path,
+            camera,
+            sky,
+            settings,
+            materials: self.materials,
+            mesh: self.mesh,
+            warnings: self.warnings,
+        }
+    }
+}
+
+/// The file being read: names it in errors and resolves its relative paths.
+struct Ctx<'a> {
+    files: &'a dyn FileSource,
+    path: String,
+    dir: PathBuf,
+}
+
+impl Ctx<'_> {
+    fn invalid(&self, field: impl Into<String>, message: impl Into<String>) -> SceneError {
+        SceneError::Invalid {
+            path: self.path.clone(),
+            field: field.into(),
+            message: message.into(),
+        }
+    }
+
+    fn syntax(&self, text: &str, e: &toml::de::Error) -> SceneError {
+        let offset = e.span().map(|s| s.start).unwrap_or(0).min(text.len());
+        let before = &text[..offset];
+        let line = before.matches('\n').count() + 1;
+        let column = before.len() - before.rfind('\n').map(|i| i + 1).unwrap_or(0) + 1;
+        SceneError::Syntax {
+            path: self.path.clone(),
+            line,
+            column,
+            message: e.message().replace('\n', " ").trim().to_string(),
+        }
+    }
+
+    fn vec3(&self, field: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
+        let v = Vec3::from(v);
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.invalid(field, format!("must be finite, got {v}")))
+        }
+    }
+
+    fn color(&self, field: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
+        let v = self.vec3(field, v)?;
+        if v.min_element() < 0.0 {
+            return Err(self.invalid(field, format!("must not be negative, got {v}")));
+        }
+        Ok(v)
+    }
+
+    fn scalar(
+        &self,
+        field: &str,
+        x: f32,
+        ok: impl Fn(f32) -> bool,
+        range: &str,
+    ) -> Result<f32, SceneError> {
+        if x.is_finite() && ok(x) {
+            Ok(x)
+        } else {
+            Err(self.invalid(field, format!("must be {range}, got {x}")))
+        }
+    }
+
+    fn camera(&self, file: &SceneFile) -> Result<Camera, SceneError> {
+        let c = &file.camera;
+        let position = self.vec3("camera.position", c.position)?;
+        let look_at = self.vec3("camera.look_at", c.look_at)?;
+        let up = self.vec3("camera.up", c.up.unwrap_or([0.0, 1.0, 0.0]))?;
+        let vfov = self.scalar(
+            "camera.vfov",
+            c.vfov.unwrap_or(40.0),
+            |v| v > 0.0 && v < 180.0,
+            "in (0, 180)",
+        )?;
+        let aperture = self.scalar(
+            "camera.aperture",
+            c.aperture.unwrap_or(0.0),
+            |v| v >= 0.0,
+            "at least 0",
+        )?;
+        let focus = c
+            .focus_distance
+            .map(|f| self.scalar("camera.focus_distance", f, |v| v > 0.0, "positive"))
+            .transpose()?;
+        if position == look_at {
+            return Err(self.invalid("camera.look_at", "must differ from camera.position"));
+        }
+        Camera::new(position, look_at, up, vfov, aperture, focus).ok_or_else(|| {
+            self.invalid(
+                "camera.up",
+                "must not be zero or parallel to the view direction",
+            )
+        })
+    }
+
+    fn settings(&self, file: &SceneFile) -> Result<RenderSettings, SceneError> {
+        let r = &file.render;
+        let d = RenderSettings::default();
+        let s = RenderSettings {
+            width: r.width.unwrap_or(d.width),
+            height: r.height.unwrap_or(d.height),
+            spp: r.spp.unwrap_or(d.spp),
+            max_depth: r.max_depth.unwrap_or(d.max_depth),
+            seed: r.seed.unwrap_or(d.seed),
+        };
+        validate_settings(&s)
+            .map_err(|(field, message)| self.invalid(format!("render.{field}"), message))?;
+        Ok(s)
+    }
+
+    fn sky(&self, file: &SceneFile) -> Result<Sky, SceneError> {
+        let Some(sky) = &file.sky else {
+            return Ok(Sky::Constant(Vec3::ZERO));
+        };
+        match (sky.color, sky.zenith, sky.horizon) {
+            (Some(c), None, None) => Ok(Sky::Constant(self.color("sky.color", c)?)),
+            (None, Some(z), Some(h)) => Ok(Sky::Gradient {
+                zenith: self.color("sky.zenith", z)?,
+                horizon: self.color("sky.horizon", h)?,
+            }),
+            (None, None, None) => {
+                Err(self.invalid("sky", "needs `color`, or `zenith` and `horizon`"))
+            }
+            (Some(_), _, _) => {
+                Err(self.invalid("sky.color", "cannot be combined with `zenith` or `horizon`"))
+            }
+            (None, None, Some(_)) => Err(self.invalid("sky.zenith", "is required with `horizon`")),
+            (None, Some(_), None) => Err(self.invalid("sky.horizon", "is required with `zenith`")),
+        }
+    }
+
+    fn material(&self, name: &str, m: &MaterialFile) -> Result<Material, SceneError> {
+        let field = |key: &str| format!("materials.{name}.{key}");
+        let not_for = |key: &str| {
+            self.invalid(
+                field(key),
+                format!("is not a parameter of {:?} materials", m.kind),
+            )
+        };
+        let kind = match m.kind {
+            MaterialType::Diffuse => MaterialKind::Diffuse,
+            MaterialType::Conductor => MaterialKind::Conductor,
+            MaterialType::RoughConductor => MaterialKind::RoughConductor,
+            MaterialType::Dielectric => MaterialKind::Dielectric,
+        };
+        let mut mat = Material::diffuse(name, Vec3::splat(0.8));
+        mat.kind = kind;
+        if kind != MaterialKind::Diffuse {
+            mat.albedo = Vec3::ONE;
+        }
+        if let Some(a) = m.albedo {
+            if kind == MaterialKind::Dielectric {
+                return Err(not_for("albedo"));
+            }
+            mat.albedo = self.color(&field("albedo"), a)?;
+        }
+        if let Some(e) = m.emission {
+            mat.emission = self.color(&field("emission"), e)?;
+        }
+        match (kind, m.roughness) {
+            (MaterialKind::RoughConductor, Some(r)) => {
+                mat.roughness = self.scalar(
+                    &field("roughness"),
+                    r,
+                    |r| (0.0..=1.0).contains(&r),
+                    "in [0, 1]",
+                )?;
+            }
+            (MaterialKind::RoughConductor, None) => {
+                return Err(self.invalid(field("roughness"), "is required for rough_conductor"));
+            }
+            (_, Some(_)) => return Err(not_for("roughness")),
+            (_, None) => {}
+        }
+        match (kind, m.ior) {
+            (MaterialKind::Dielectric, Some(ior)) => {
+                mat.ior = self.scalar(&field("ior"), ior, |v| v > 0.0, "positive")?;
+            }
+            (_, Some(_)) if kind != MaterialKind::Dielectric => return Err(not_for("ior")),
+            _ => {}
+        }
+        Ok(mat)
+    }
+
+    fn object(&self, builder: &mut Builder, i: usize, o: &ObjectFile) -> Result<(), SceneError> {
+        let field = |key: &str| format!("objects[{i}].{key}");
+        let material = match &o.material {
+            Some(name) => Some(*builder.named.get(name).ok_or_else(|| {
+                self.invalid(field("material"), format!("unknown material `{name}`"))
+            })?),
+            None => None,
+        };
+        let transform = self.transform(o, &field)?;
+        match (&o.mesh, &o.sphere) {
+            (Some(mesh), None) => {
+                let obj = load_obj(&self.dir.join(mesh), self.files)?;
+                builder.append_obj(obj, transform, material);
+            }
+            (None, Some(s)) => {
+                let center = self.vec3(&field("sphere.center"), s.center)?;
+                let radius =
+                    self.scalar(&field("sphere.radius"), s.radius, |r| r > 0.0, "positive")?;
+                let level = match s.subdivisions {
+                    Some(l) if l > MAX_SPHERE_SUBDIVISIONS => {
+                        return Err(self.invalid(
+                            field("sphere.subdivisions"),
+                            format!("must be at most {MAX_SPHERE_SUBDIVISIONS}, got {l}"),
+                        ));
+                    }
+                    Some(l) => l,
+                    None => default_subdivisions(),
+                };
+                let (verts, faces) = icosphere(level);
+                let obj = super::obj::ObjMesh {
+                    positions: verts.iter().map(|&v| center + radius * v).collect(),
+                    normals: verts,
+                    triangles: faces.into_iter().map(|f| (f, f, None)).collect(),
+                    materials: Vec::new(),
+                    warnings: Vec::new(),
+                };
+                builder.append_obj(obj, transform, material);
+            }
+            (Some(_), Some(_)) => {
+                return Err(self.invalid(
+                    field("sphere"),
+                    "an object has either `mesh` or `sphere`, not both",
+                ));
+            }
+            (None, None) => {
+                return Err(self.invalid(format!("objects[{i}]"), "needs `mesh` or `sphere`"));
+            }
+        }
+        Ok(())
+    }
+
+    fn transform(
+        &self,
+        o: &ObjectFile,
+        field: &dyn Fn(&str) -> String,
+    ) -> Result<Mat4, SceneError> {
+        if let Some(m) = o.matrix {
+            if o.translate.is_some() || o.rotate.is_some() || o.scale.is_some() {
+                return Err(self.invalid(
+                    field("matrix"),
+                    "cannot be combined with translate, rotate or scale",
+                ));
+            }
+            if m.iter().any(|x| !x.is_finite()) {
+                return Err(self.invalid(field("matrix"), "must be finite"));
+            }
+            let mat = Mat4::from_cols_array(&m).transpose();
+            if m[12..] != [0.0, 0.0, 0.0, 1.0] {
+                return Err(self.invalid(
+                    field("matrix"),
+                    "last row must be [0, 0, 0, 1] (an affine transform)",
+                ));
+            }
+            if Mat3::from_mat4(mat).determinant() == 0.0 {
+                return Err(self.invalid(field("matrix"), "is singular"));
+            }
+            return Ok(mat);
+        }
+        let scale = match o.scale {
+            None => Vec3::ONE,
+            Some(ScaleFile::Uniform(s)) => Vec3::splat(s),
+            Some(ScaleFile::Axes(s)) => Vec3::from(s),
+        };
+        if !scale.is_finite() || scale.cmpeq(Vec3::ZERO).any() {
+            return Err(self.invalid(
+                field("scale"),
+                format!("must be finite and non-zero, got {scale}"),
+            ));
+        }
+        let rotate = self.vec3(&field("rotate"), o.rotate.unwrap_or([0.0; 3]))?;
+        let translate = self.vec3(&field("translate"), o.translate.unwrap_or([0.0; 3]))?;
+        let r = rotate * (std::f32::consts::PI / 180.0);
+        Ok(Mat4::from_translation(translate)
+            * Mat4::from_rotation_z(r.z)
+            * Mat4::from_rotation_y(r.y)
+            * Mat4::from_rotation_x(r.x)
+            * Mat4::from_scale(scale))
+    }
+}
+
+/// Checks render settings (also after command-line overrides); the error names the field.
+pub fn validate_settings(s: &RenderSettings) -> Result<(), (&'static str, String)> {
+    if s.width == 0 {
+        return Err(("width", "must be at least 1".into()));
+    }
+    if s.height == 0 {
+        return Err(("height", "must be at least 1".into()));
+    }
+    let pixels = s.width as u64 * s.height as u64;
+    if pixels > MAX_PIXELS {
+        return Err((
+            "width",
+            format!(
+                "{}x{} is too large: at most {MAX_PIXELS} pixels",
+                s.width, s.height
+            ),
+        ));
+    }
+    if s.spp == 0 {
+        return Err(("spp", "must be at least 1".into()));
+    }
+    if s.max_depth == 0 {
+        return Err(("max_depth", "must be at least 1".into()));
+    }
+    Ok(())
+}

@@ -1,0 +1,138 @@
+//! Scenes: the validated, render-ready description of what to draw.
+//!
+//! `file` holds the serde types of the TOML format; `load` turns a file (or a bare OBJ)
+//! into a [`Scene`], checking every value and naming the file and field of any error.
+//! Nothing here knows about BVHs or devices.
+
+pub mod builtin;
+pub mod camera;
+pub mod file;
+pub mod load;
+pub mod material;
+pub mod obj;
+pub mod sphere;
+
+pub use camera::Camera;
+pub use load::{load_scene, load_scene_from, parse_scene};
+pub use material::{Material, MaterialKind};
+
+use glam::Vec3;
+use std::path::PathBuf;
+
+/// Index value of a triangle corner that has no vertex normal.
+pub const NO_NORMAL: u32 = u32::MAX;
+
+/// One triangle of the scene mesh, by index into [`Mesh::positions`] and [`Mesh::normals`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Triangle {
+    pub p: [u32; 3],
+    /// Vertex normal indices, or `[NO_NORMAL; 3]` for flat shading.
+    pub n: [u32; 3],
+    pub material: u32,
+}
+
+/// Every triangle of the scene in world space, sharing vertices as the files did.
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    pub triangles: Vec<Triangle>,
+}
+
+impl Mesh {
+    pub fn vertices(&self, t: &Triangle) -> [Vec3; 3] {
+        t.p.map(|i| self.positions[i as usize])
+    }
+}
+
+/// Radiance of rays that leave the scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Sky {
+    Constant(Vec3),
+    /// `lerp(horizon, zenith, 0.5 * (dir.y + 1))` for a unit direction.
+    Gradient {
+        zenith: Vec3,
+        horizon: Vec3,
+    },
+}
+
+impl Sky {
+    /// mirror: shaders/pathtrace.wgsl `sky_radiance`
+    pub fn radiance(&self, dir: Vec3) -> Vec3 {
+        match *self {
+            Sky::Constant(c) => c,
+            Sky::Gradient { zenith, horizon } => horizon.lerp(zenith, 0.5 * (dir.y + 1.0)),
+        }
+    }
+
+    pub fn is_black(&self) -> bool {
+        match *self {
+            Sky::Constant(c) => c == Vec3::ZERO,
+            Sky::Gradient { zenith, horizon } => zenith == Vec3::ZERO && horizon == Vec3::ZERO,
+        }
+    }
+}
+
+/// How to render: the `[render]` table, after command-line overrides.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    /// Longest path in segments from the camera (1 = emitters seen directly).
+    pub max_depth: u32,
+    pub seed: u32,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            width: 640,
+            height: 480,
+            spp: 64,
+            max_depth: 8,
+            seed: 0,
+        }
+    }
+}
+
+/// A loaded scene, ready to be built into an acceleration structure and rendered.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Where it came from, for messages; `None` for scenes built in memory.
+    pub path: Option<PathBuf>,
+    pub camera: Camera,
+    pub sky: Sky,
+    pub settings: RenderSettings,
+    pub materials: Vec<Material>,
+    pub mesh: Mesh,
+    /// Problems that did not stop loading (a missing MTL file, dropped degenerate triangles).
+    pub warnings: Vec<String>,
+}
+
+/// Why a scene could not be loaded. Each message is one line naming the file and the
+/// line or field at fault.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("{path}: {source}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path}:{line}:{column}: {message}")]
+    Syntax {
+        path: String,
+        line: usize,
+        column: usize,
+        message: String,
+    },
+    #[error("{path}: {field}: {message}")]
+    Invalid {
+        path: String,
+        field: String,
+        message: String,
+    },
+    #[error("{path}: {message}")]
+    Obj { path: String, message: String },
+}

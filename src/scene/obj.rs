@@ -1,0 +1,172 @@
+//! Wavefront OBJ and MTL files, read through tobj and mapped onto meshtrace materials.
+
+use super::{Material, MaterialKind, SceneError};
+use glam::Vec3;
+use std::path::Path;
+
+/// Where scene files and meshes are read from: the file system, or the scenes built in.
+pub trait FileSource {
+    fn read(&self, path: &Path) -> std::io::Result<Vec<u8>>;
+}
+
+/// The file system.
+pub struct Fs;
+
+impl FileSource for Fs {
+    fn read(&self, path: &Path) -> std::io::Result<Vec<u8>> {
+        std::fs::read(path)
+    }
+}
+
+/// One OBJ file's geometry in its own space, with its materials already mapped.
+#[derive(Debug, Default)]
+pub struct ObjMesh {
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    /// Position indices, normal indices (or `NO_NORMAL`) and an index into `materials`
+    /// (or `None` for faces that name no material).
+    pub triangles: Vec<([u32; 3], [u32; 3], Option<u32>)>,
+    pub materials: Vec<Material>,
+    pub warnings: Vec<String>,
+}
+
+/// Reads an OBJ file, fan-triangulating polygons, and maps its MTL materials.
+pub fn load_obj(path: &Path, files: &dyn FileSource) -> Result<ObjMesh, SceneError> {
+    let shown = path.display().to_string();
+    let err = |message: String| SceneError::Obj {
+        path: shown.clone(),
+        message,
+    };
+    let bytes = files.read(path).map_err(|source| SceneError::Io {
+        path: shown.clone(),
+        source,
+    })?;
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: false,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let (models, materials) = tobj::load_obj_buf(&mut bytes.as_slice(), &options, |mtl| {
+        let mtl_bytes = files
+            .read(&dir.join(mtl))
+            .map_err(|_| tobj::LoadError::OpenFileFailed)?;
+        tobj::load_mtl_buf(&mut mtl_bytes.as_slice())
+    })
+    .map_err(|e| err(describe_tobj_error(&e)))?;
+    let mut out = ObjMesh::default();
+    match materials {
+        Ok(mtls) => out.materials = mtls.iter().map(map_mtl).collect(),
+        Err(e) => {
+            // tobj reports a file without `mtllib` as an empty success, so an error here
+            // means a named library could not be read.
+            out.warnings.push(format!(
+                "{shown}: material library could not be read ({}); its faces use the default material",
+                describe_tobj_error(&e)
+            ));
+        }
+    }
+    for model in &models {
+        let m = &model.mesh;
+        let base_p = out.positions.len() as u32;
+        let base_n = out.normals.len() as u32;
+        for (i, p) in m.positions.chunks_exact(3).enumerate() {
+            let v = Vec3::new(p[0], p[1], p[2]);
+            if !v.is_finite() {
+                return Err(err(format!(
+                    "object `{}`: vertex {} has a non-finite coordinate {v}",
+                    model.name,
+                    i + 1
+                )));
+            }
+            out.positions.push(v);
+        }
+        for n in m.normals.chunks_exact(3) {
+            out.normals.push(Vec3::new(n[0], n[1], n[2]));
+        }
+        let material = match m.material_id {
+            Some(id) if id < out.materials.len() => Some(id as u32),
+            Some(_) => None,
+            None => None,
+        };
+        let has_normals = m.normal_indices.len() == m.indices.len() && !m.normals.is_empty();
+        for (f, tri) in m.indices.chunks_exact(3).enumerate() {
+            let p = [tri[0] + base_p, tri[1] + base_p, tri[2] + base_p];
+            let n = if has_normals {
+                let ni = &m.normal_indices[3 * f..3 * f + 3];
+                [ni[0] + base_n, ni[1] + base_n, ni[2] + base_n]
+            } else {
+                [super::NO_NORMAL; 3]
+            };
+            out.triangles.push((p, n, material));
+        }
+    }
+    Ok(out)
+}
+
+/// The MTL mapping of the scene format: Kd, Ke, illum 3 / Pm (conductors, rough with Pr),
+/// illum 7 / d < 1 with Ni > 1 (dielectric).
+pub fn map_mtl(m: &tobj::Material) -> Material {
+    let param = |key: &str| -> Option<&str> { m.unknown_param.get(key).map(|s| s.trim()) };
+    let scalar = |key: &str| param(key).and_then(|s| s.parse::<f32>().ok());
+    let color = |key: &str| {
+        param(key).and_then(|s| {
+            let v: Vec<f32> = s
+                .split_whitespace()
+                .filter_map(|x| x.parse().ok())
+                .collect();
+            match v.as_slice() {
+                [r, g, b] => Some(Vec3::new(*r, *g, *b)),
+                [x] => Some(Vec3::splat(*x)),
+                _ => None,
+            }
+        })
+    };
+    let kd = m.diffuse.map(Vec3::from).unwrap_or(Vec3::splat(0.8));
+    let ks = m.specular.map(Vec3::from);
+    let illum = m.illumination_model;
+    let metallic = illum == Some(3) || scalar("Pm").is_some_and(|pm| pm >= 0.5);
+    let ior = m.optical_density.unwrap_or(1.0);
+    let glass = illum == Some(7) || (m.dissolve.is_some_and(|d| d < 1.0) && ior > 1.0);
+    let mut mat = Material::diffuse(&m.name, kd);
+    if glass {
+        mat.kind = MaterialKind::Dielectric;
+        mat.albedo = Vec3::ONE;
+        mat.ior = if ior > 0.0 { ior } else { 1.5 };
+    } else if metallic {
+        mat.albedo = ks.unwrap_or(kd);
+        match scalar("Pr") {
+            Some(r) if r > 0.0 => {
+                mat.kind = MaterialKind::RoughConductor;
+                mat.roughness = r.min(1.0);
+            }
+            _ => mat.kind = MaterialKind::Conductor,
+        }
+    }
+    mat.emission = color("Ke").unwrap_or(Vec3::ZERO).max(Vec3::ZERO);
+    mat
+}
+
+fn describe_tobj_error(e: &tobj::LoadError) -> String {
+    use tobj::LoadError::*;
+    match e {
+        OpenFileFailed => "cannot open file".into(),
+        ReadError => "read error".into(),
+        UnrecognizedCharacter => "unrecognized character".into(),
+        PositionParseError => "malformed vertex position (`v`)".into(),
+        NormalParseError => "malformed normal (`vn`)".into(),
+        TexcoordParseError => "malformed texture coordinate (`vt`)".into(),
+        FaceParseError => "malformed face (`f`)".into(),
+        MaterialParseError => "malformed material library".into(),
+        InvalidObjectName => "invalid object name".into(),
+        InvalidPolygon => "invalid polygon (fewer than 3 vertices)".into(),
+        FaceVertexOutOfBounds => "a face refers to a vertex that does not exist".into(),
+        FaceTexCoordOutOfBounds => {
+            "a face refers to a texture coordinate that does not exist".into()
+        }
+        FaceNormalOutOfBounds => "a face refers to a normal that does not exist".into(),
+        FaceColorOutOfBounds => "a face refers to a vertex colour that does not exist".into(),
+        other => format!("{other}"),
+    }
+}
