@@ -5,6 +5,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use meshtrace::bvh::BuildParams;
+use meshtrace::gpu::{self, GpuContext, GpuError};
 use meshtrace::render::{RenderJob, RenderScene, cpu};
 use meshtrace::scene::{self, Scene, builtin, load::validate_settings};
 use std::io::IsTerminal;
@@ -31,10 +32,14 @@ pub enum Command {
         /// Scene file, .obj mesh, or builtin:NAME.
         scene: PathBuf,
     },
+    /// List the Vulkan adapters; pick one with --adapter INDEX or a name substring.
+    Adapters,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Device {
+    /// The WGSL compute renderer on a Vulkan adapter.
+    Gpu,
     /// The CPU reference path tracer, parallel over all cores.
     Cpu,
 }
@@ -59,8 +64,12 @@ pub struct RenderArgs {
     /// Seed of the random sequences; the same seed gives the same image.
     #[arg(long)]
     pub seed: Option<u32>,
-    #[arg(long, value_enum, default_value_t = Device::Cpu)]
-    pub device: Device,
+    /// Renderer; by default the GPU, falling back to the CPU where no adapter exists.
+    #[arg(long, value_enum)]
+    pub device: Option<Device>,
+    /// GPU adapter: an index or a name substring from `meshtrace adapters` (or set WGPU_ADAPTER_NAME).
+    #[arg(long)]
+    pub adapter: Option<String>,
     /// Worker threads for the CPU path (default: one per core).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -112,18 +121,35 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     let total = settings.width as u64 * settings.height as u64 * settings.spp as u64;
     let bar = progress_bar(total, args.quiet);
     let start = Instant::now();
-    let (film, rays) = match args.device {
-        Device::Cpu => cpu::render(&rs, &job, &|n| bar.inc(n)),
+    let gpu = match args.device {
+        Some(Device::Cpu) => None,
+        Some(Device::Gpu) => Some(GpuContext::new(args.adapter.as_deref())?),
+        None => match GpuContext::new(args.adapter.as_deref()) {
+            Ok(ctx) => Some(ctx),
+            Err(GpuError::NoAdapter) => {
+                eprintln!(
+                    "notice: no Vulkan adapter found; rendering on the CPU (install mesa-vulkan-drivers for lavapipe)"
+                );
+                None
+            }
+            Err(e) => return Err(e.into()),
+        },
+    };
+    let (film, rays) = match &gpu {
+        Some(ctx) => gpu::render(ctx, &rs, &job, &|n| bar.inc(n))?,
+        None => cpu::render(&rs, &job, &|n| bar.inc(n)),
     };
     let seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
     film.save(&args.output)?;
     if !args.quiet {
         eprintln!(
-            "{}x{} at {} spp in {:.2} s ({:.2} Mrays/s) -> {}",
+            "{}x{} at {} spp on {} in {:.2} s ({:.2} Mrays/s) -> {}",
             settings.width,
             settings.height,
             settings.spp,
+            gpu.as_ref()
+                .map_or("the CPU".to_string(), |g| g.adapter.name.clone()),
             seconds,
             rays as f64 / seconds / 1e6,
             args.output.display()
@@ -186,4 +212,18 @@ fn peak_memory_kib() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     line.split_whitespace().nth(1)?.parse().ok()
+}
+
+pub fn adapters() -> Result<()> {
+    let list = gpu::list_adapters();
+    if list.is_empty() {
+        bail!("{}", GpuError::NoAdapter);
+    }
+    for a in list {
+        println!(
+            "{}  {}  ({}, {}, {})",
+            a.index, a.name, a.backend, a.device_type, a.driver
+        );
+    }
+    Ok(())
 }

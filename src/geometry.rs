@@ -5,6 +5,9 @@ use crate::math::Ray;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
+/// "No hit" and "unbounded ray": the largest finite float, as WGSL has no infinity literal.
+pub const T_INF: f32 = f32::MAX;
+
 /// A triangle's three corners in BVH leaf order, padded to 16-byte rows as WGSL lays out
 /// `array<vec4<f32>>` (48 bytes). mirror: shaders/types.wgsl `TriVerts`
 #[repr(C)]
@@ -64,8 +67,8 @@ pub fn intersect_triangle(ray: &Ray, tri: &TriVerts, t_max: f32) -> Option<TriHi
     (t > 0.0 && t < t_max).then_some(TriHit { t, u, v })
 }
 
-/// Slab test: the distance at which the ray enters the box, or infinity if it misses it
-/// before `t_max`. `inv_dir` is `1 / ray.dir` per component.
+/// Slab test: the distance at which the ray enters the box, or [`T_INF`] if it misses it
+/// before `t_max`. `inv_dir` is [`safe_inverse`] of the ray direction.
 /// mirror: shaders/intersect.wgsl `intersect_aabb`
 #[inline]
 pub fn intersect_aabb(origin: Vec3, inv_dir: Vec3, min: Vec3, max: Vec3, t_max: f32) -> f32 {
@@ -73,11 +76,22 @@ pub fn intersect_aabb(origin: Vec3, inv_dir: Vec3, min: Vec3, max: Vec3, t_max: 
     let t1 = (max - origin) * inv_dir;
     let t_near = t0.min(t1).max_element().max(0.0);
     let t_far = t0.max(t1).min_element().min(t_max);
-    if t_near <= t_far {
-        t_near
-    } else {
-        f32::INFINITY
-    }
+    if t_near <= t_far { t_near } else { T_INF }
+}
+
+/// `1 / d` per component, with zeros replaced by a tiny value of the same sign so that the
+/// slab test never meets `0 * inf`. mirror: shaders/intersect.wgsl `safe_inverse`
+#[inline]
+pub fn safe_inverse(d: Vec3) -> Vec3 {
+    const TINY: f32 = 1e-30;
+    let fix = |x: f32| {
+        if x.abs() < TINY {
+            if x >= 0.0 { TINY } else { -TINY }
+        } else {
+            x
+        }
+    };
+    Vec3::new(1.0 / fix(d.x), 1.0 / fix(d.y), 1.0 / fix(d.z))
 }
 
 /// The geometric normal, (v1 − v0) × (v2 − v0) normalised: it points out of the front face.

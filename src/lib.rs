@@ -8,6 +8,7 @@
 pub mod bvh;
 pub mod film;
 pub mod geometry;
+pub mod gpu;
 pub mod math;
 pub mod render;
 pub mod scene;

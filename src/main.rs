@@ -11,6 +11,7 @@ fn main() -> ExitCode {
     let result = match &args.command {
         cli::Command::Render(r) => cli::render(r),
         cli::Command::Info { scene } => cli::info(scene),
+        cli::Command::Adapters => cli::adapters(),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

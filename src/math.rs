@@ -79,7 +79,7 @@ impl Aabb {
 /// Orthonormal basis around a unit normal (Duff et al. 2017, "Building an Orthonormal Basis, Revisited").
 /// mirror: shaders/sampling.wgsl `onb_from_normal`
 pub fn onb_from_normal(n: Vec3) -> (Vec3, Vec3) {
-    let sign = 1.0f32.copysign(n.z);
+    let sign = if n.z >= 0.0 { 1.0 } else { -1.0 };
     let a = -1.0 / (sign + n.z);
     let b = n.x * n.y * a;
     let t = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);

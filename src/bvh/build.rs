@@ -196,7 +196,7 @@ fn find_split(input: &Input, order: &[u32], cbounds: &Aabb) -> Option<(f32, usiz
     let mut right_area = vec![0.0f32; nb];
     let mut right_count = vec![0u32; nb];
     for axis in 0..3 {
-        if !(extent[axis] > 0.0) {
+        if extent[axis].is_nan() || extent[axis] <= 0.0 {
             continue;
         }
         let (mut acc, mut cnt) = (Aabb::EMPTY, 0);

@@ -2,7 +2,7 @@
 //! mirror: shaders/traverse.wgsl
 
 use super::{BvhNode, STACK_SIZE};
-use crate::geometry::{TriVerts, intersect_aabb, intersect_triangle};
+use crate::geometry::{T_INF, TriVerts, intersect_aabb, intersect_triangle, safe_inverse};
 use crate::math::Ray;
 use glam::Vec3;
 
@@ -68,9 +68,8 @@ fn walk(
     if nodes.len() == 1 && root.count == 0 {
         return;
     }
-    let inv_dir = ray.dir.recip();
-    if intersect_aabb(ray.origin, inv_dir, root.min.into(), root.max.into(), t_max) == f32::INFINITY
-    {
+    let inv_dir = safe_inverse(ray.dir);
+    if intersect_aabb(ray.origin, inv_dir, root.min.into(), root.max.into(), t_max) == T_INF {
         return;
     }
     let mut stack = [0u32; STACK_SIZE];
@@ -104,7 +103,7 @@ fn walk(
             std::mem::swap(&mut ta, &mut tb);
             std::mem::swap(&mut a, &mut b);
         }
-        if ta == f32::INFINITY {
+        if ta == T_INF {
             if sp == 0 {
                 return;
             }
@@ -113,7 +112,7 @@ fn walk(
             continue;
         }
         node = a;
-        if tb != f32::INFINITY {
+        if tb != T_INF {
             stack[sp] = b;
             sp += 1;
         }

@@ -12,7 +12,7 @@ use super::sampling::{power_heuristic, sample_cdf, sample_uniform_triangle};
 use super::{RenderJob, RenderScene, TRI_SMOOTH};
 use crate::bvh::{Hit, traverse_any, traverse_closest};
 use crate::film::Film;
-use crate::geometry;
+use crate::geometry::{self, T_INF};
 use crate::math::{Ray, onb_from_normal};
 use crate::scene::MaterialKind;
 use glam::{Vec2, Vec3};
@@ -101,7 +101,7 @@ pub fn trace_path(scene: &RenderScene, mut ray: Ray, rng: &Rng, max_depth: u32) 
     let mut depth = 0u32;
     loop {
         rays += 1;
-        let Some(hit) = traverse_closest(nodes, tris, &ray, f32::INFINITY) else {
+        let Some(hit) = traverse_closest(nodes, tris, &ray, T_INF) else {
             radiance += beta * scene.sky.radiance(ray.dir);
             break;
         };

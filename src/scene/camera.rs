@@ -47,13 +47,18 @@ impl Camera {
         })
     }
 
+    /// tan(vfov / 2): the image plane's half height at unit distance.
+    pub fn tan_half_vfov(&self) -> f32 {
+        (0.5 * self.vfov.to_radians()).tan()
+    }
+
     /// The primary ray of one sample of pixel (`px`, `py`): a box filter (uniform jitter
     /// over the pixel) and, for a thin lens, a uniform point on the aperture.
     /// mirror: shaders/camera.wgsl `generate_camera_ray`
     pub fn generate_camera_ray(&self, px: u32, py: u32, width: u32, height: u32, rng: &Rng) -> Ray {
         let jx = rng.rng_1d(0, rng::DIM_PIXEL_X);
         let jy = rng.rng_1d(0, rng::DIM_PIXEL_Y);
-        let tan_half = (0.5 * self.vfov.to_radians()).tan();
+        let tan_half = self.tan_half_vfov();
         let aspect = width as f32 / height as f32;
         let sx = (2.0 * (px as f32 + jx) / width as f32 - 1.0) * tan_half * aspect;
         let sy = (1.0 - 2.0 * (py as f32 + jy) / height as f32) * tan_half;

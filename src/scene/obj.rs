@@ -48,24 +48,37 @@ pub fn load_obj(path: &Path, files: &dyn FileSource) -> Result<ObjMesh, SceneErr
         ignore_lines: true,
     };
     let dir = path.parent().unwrap_or(Path::new(""));
-    let (models, materials) = tobj::load_obj_buf(&mut bytes.as_slice(), &options, |mtl| {
-        let mtl_bytes = files
-            .read(&dir.join(mtl))
-            .map_err(|_| tobj::LoadError::OpenFileFailed)?;
-        tobj::load_mtl_buf(&mut mtl_bytes.as_slice())
-    })
-    .map_err(|e| err(describe_tobj_error(&e)))?;
     let mut out = ObjMesh::default();
-    match materials {
-        Ok(mtls) => out.materials = mtls.iter().map(map_mtl).collect(),
-        Err(e) => {
-            // tobj reports a file without `mtllib` as an empty success, so an error here
-            // means a named library could not be read.
-            out.warnings.push(format!(
-                "{shown}: material library could not be read ({}); its faces use the default material",
-                describe_tobj_error(&e)
-            ));
-        }
+    // tobj reports an unreadable library only when no library at all could be read, so
+    // every failure is noted here as it happens.
+    let failed_mtl = std::cell::RefCell::new(Vec::new());
+    // tobj 4 panics on some malformed lines (a one-number `Kd`); that is bad input, not a
+    // bug of ours, so it becomes an error naming the file.
+    let parsed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        tobj::load_obj_buf(&mut bytes.as_slice(), &options, |mtl| {
+            let result = files
+                .read(&dir.join(mtl))
+                .map_err(|_| tobj::LoadError::OpenFileFailed)
+                .and_then(|b| tobj::load_mtl_buf(&mut b.as_slice()));
+            if let Err(e) = &result {
+                failed_mtl.borrow_mut().push(format!(
+                    "{} ({})",
+                    dir.join(mtl).display(),
+                    describe_tobj_error(e)
+                ));
+            }
+            result
+        })
+    }))
+    .map_err(|_| err("malformed OBJ or MTL data (the parser rejected a line)".into()))?;
+    let (models, materials) = parsed.map_err(|e| err(describe_tobj_error(&e)))?;
+    for lib in failed_mtl.into_inner() {
+        out.warnings.push(format!(
+            "{shown}: material library {lib} could not be read; its materials fall back to the default"
+        ));
+    }
+    if let Ok(mtls) = materials {
+        out.materials = mtls.iter().map(map_mtl).collect();
     }
     for model in &models {
         let m = &model.mesh;
@@ -144,7 +157,12 @@ pub fn map_mtl(m: &tobj::Material) -> Material {
             _ => mat.kind = MaterialKind::Conductor,
         }
     }
-    mat.emission = color("Ke").unwrap_or(Vec3::ZERO).max(Vec3::ZERO);
+    mat.emission = m
+        .emissive
+        .map(Vec3::from)
+        .or_else(|| color("Ke"))
+        .unwrap_or(Vec3::ZERO)
+        .max(Vec3::ZERO);
     mat
 }
 

@@ -4,18 +4,21 @@ use glam::Vec3;
 use std::collections::HashMap;
 
 /// The subdivision level at which the largest gap between a flat triangle and the true
-/// sphere falls below 1/1000 of the radius (the spec's default).
+/// sphere falls below 1/1000 of the radius (the spec's default), measured on the mesh.
 pub fn default_subdivisions() -> u32 {
-    // Level 0's longest edge subtends ~63.4 degrees; each level halves it. A chord of angle
-    // a deviates from the sphere by 1 - cos(a / 2) (times the radius); the centroid of a
-    // triangle deviates a little more, so use the triangle's circumradius angle, a / sqrt(3).
-    let mut level = 0;
-    let mut angle = 1.1071487f32; // edge angle of the icosahedron, atan(2)
-    while 1.0 - (angle / 3f32.sqrt()).cos() >= 1e-3 {
-        angle *= 0.5;
-        level += 1;
-    }
-    level
+    (0..)
+        .find(|&level| max_deviation(level) < 1e-3)
+        .unwrap_or(0)
+}
+
+/// The largest distance, relative to the radius, between the unit sphere and the
+/// triangles of `icosphere(level)`; a flat triangle is farthest from it at its centroid
+/// (its closest point to the centre).
+fn max_deviation(level: u32) -> f32 {
+    let (v, f) = icosphere(level);
+    f.iter()
+        .map(|t| 1.0 - ((v[t[0] as usize] + v[t[1] as usize] + v[t[2] as usize]) / 3.0).length())
+        .fold(0.0, f32::max)
 }
 
 /// Unit-sphere vertices and triangles (counter-clockwise seen from outside) at `level`.

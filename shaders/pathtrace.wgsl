@@ -1,0 +1,174 @@
+// The path tracer. mirror: src/render/cpu.rs — every stage has a Rust twin of the same name.
+
+// mirror: src/render/cpu.rs `RR_DEPTH`
+const RR_DEPTH: u32 = 5u;
+
+struct SurfaceHit {
+    p: vec3<f32>,
+    ng: vec3<f32>,
+    ns: vec3<f32>,
+    material: u32,
+    front_face: bool,
+    tri: u32,
+}
+
+// mirror: src/scene/mod.rs `Sky::radiance`
+fn sky_radiance(dir: vec3<f32>) -> vec3<f32> {
+    if params.sky_gradient == 0u {
+        return params.sky_zenith;
+    }
+    return mix(params.sky_horizon, params.sky_zenith, 0.5 * (dir.y + 1.0));
+}
+
+// mirror: src/geometry.rs `geometric_normal`
+fn geometric_normal(tri: TriVerts) -> vec3<f32> {
+    return normalize(cross(tri.v1.xyz - tri.v0.xyz, tri.v2.xyz - tri.v0.xyz));
+}
+
+// mirror: src/geometry.rs `area`
+fn triangle_area(tri: TriVerts) -> f32 {
+    return 0.5 * length(cross(tri.v1.xyz - tri.v0.xyz, tri.v2.xyz - tri.v0.xyz));
+}
+
+// mirror: src/scene/material.rs `Material::is_emissive`
+fn is_emissive(m: Material) -> bool {
+    return max(max(m.emission.x, m.emission.y), m.emission.z) > 0.0;
+}
+
+// mirror: src/render/cpu.rs `surface_at`
+fn surface_at(ray: Ray, hit: Hit) -> SurfaceHit {
+    let tri = tris[hit.tri];
+    let sh = shading[hit.tri];
+    let ng = geometric_normal(tri);
+    var ns = ng;
+    if (sh.flags & TRI_SMOOTH) != 0u {
+        let w = 1.0 - hit.u - hit.v;
+        let n = w * sh.n0 + hit.u * sh.n1 + hit.v * sh.n2;
+        let len2 = dot(n, n);
+        ns = select(vec3<f32>(0.0), n * inverseSqrt(len2), len2 > 0.0);
+        if dot(ns, ng) < 0.0 {
+            ns = -ns;
+        }
+        if all(ns == vec3<f32>(0.0)) {
+            ns = ng;
+        }
+    }
+    return SurfaceHit(ray.origin + hit.t * ray.dir, ng, ns, sh.material, dot(ray.dir, ng) < 0.0, hit.tri);
+}
+
+// mirror: src/render/cpu.rs `offset_ray_origin`
+fn offset_ray_origin(p: vec3<f32>, ng: vec3<f32>, w: vec3<f32>) -> vec3<f32> {
+    let ap = abs(p);
+    let eps = 1e-5 * (1.0 + max(max(ap.x, ap.y), ap.z));
+    return select(p - eps * ng, p + eps * ng, dot(w, ng) >= 0.0);
+}
+
+// mirror: src/render/cpu.rs `light_pdf`
+fn light_pdf(tri: u32, dist: f32, cos_l: f32) -> f32 {
+    let pmf = shading[tri].emitter_pmf;
+    let area = triangle_area(tris[tri]);
+    return pmf * dist * dist / (cos_l * area);
+}
+
+fn max3(v: vec3<f32>) -> f32 {
+    return max(max(v.x, v.y), v.z);
+}
+
+// One path's radiance (xyz) and the number of rays it traced (w).
+// mirror: src/render/cpu.rs `trace_path`
+fn trace_path(ray_in: Ray, rng: Rng) -> vec4<f32> {
+    var ray = ray_in;
+    var radiance = vec3<f32>(0.0);
+    var beta = vec3<f32>(1.0);
+    var rays = 0u;
+    var prev_pdf = 0.0;
+    var prev_delta = true;
+    var eta_scale = 1.0;
+    var depth = 0u;
+    loop {
+        rays += 1u;
+        let hit = traverse_closest(ray, T_INF);
+        if hit.tri == NO_HIT {
+            radiance += beta * sky_radiance(ray.dir);
+            break;
+        }
+        let si = surface_at(ray, hit);
+        let mat = materials[si.material];
+        if si.front_face && is_emissive(mat) {
+            var w = 1.0;
+            if !prev_delta {
+                let cos_l = -dot(ray.dir, si.ng);
+                w = power_heuristic(prev_pdf, light_pdf(si.tri, hit.t, cos_l));
+            }
+            radiance += beta * w * mat.emission;
+        }
+        if depth + 1u >= params.max_depth {
+            break;
+        }
+        let wo_world = -ray.dir;
+        let flip = mat.kind != MAT_DIELECTRIC && dot(wo_world, si.ng) < 0.0;
+        let ng = select(si.ng, -si.ng, flip);
+        var ns = select(si.ns, -si.ns, flip);
+        if mat.kind != MAT_DIELECTRIC && dot(ns, wo_world) <= 0.0 {
+            ns = ng;
+        }
+        let frame = onb_from_normal(ns);
+        let wo = wo_world * frame;
+
+        // Next event estimation.
+        if !bsdf_is_delta(mat) && params.num_emitters > 0u {
+            let k = sample_cdf(rng_1d(rng, depth, DIM_LIGHT_PICK));
+            let light = emitters[k];
+            let lt = tris[light];
+            let bary = sample_uniform_triangle(vec2<f32>(rng_1d(rng, depth, DIM_LIGHT_U), rng_1d(rng, depth, DIM_LIGHT_V)));
+            let q = (1.0 - bary.x - bary.y) * lt.v0.xyz + bary.x * lt.v1.xyz + bary.y * lt.v2.xyz;
+            let origin = offset_ray_origin(si.p, ng, q - si.p);
+            let to_light = q - origin;
+            let dist = length(to_light);
+            let wi_world = to_light / dist;
+            let cos_l = -dot(wi_world, geometric_normal(lt));
+            if cos_l > 0.0 && dot(wi_world, ng) > 0.0 && dist > 0.0 {
+                let wi = wi_world * frame;
+                let f = bsdf_eval(mat, wo, wi);
+                if any(f != vec3<f32>(0.0)) {
+                    rays += 1u;
+                    if !traverse_any(Ray(origin, wi_world), dist * (1.0 - 1e-4)) {
+                        let lpdf = light_pdf(light, dist, cos_l);
+                        let w = power_heuristic(lpdf, bsdf_pdf(mat, wo, wi));
+                        let le = materials[shading[light].material].emission;
+                        radiance += beta * f * le * (w / lpdf);
+                    }
+                }
+            }
+        }
+
+        // BSDF sampling.
+        let bs = bsdf_sample(mat, wo, rng_1d(rng, depth, DIM_BSDF_LOBE),
+            vec2<f32>(rng_1d(rng, depth, DIM_BSDF_U), rng_1d(rng, depth, DIM_BSDF_V)));
+        if !bs.valid {
+            break;
+        }
+        let wi_world = frame * bs.wi;
+        let reflect = bs.wi.z * wo.z > 0.0;
+        if (dot(wi_world, si.ng) * dot(wo_world, si.ng) > 0.0) != reflect {
+            break;
+        }
+        beta *= bs.weight;
+        prev_pdf = bs.pdf;
+        prev_delta = bs.delta;
+        eta_scale *= bs.eta;
+        depth += 1u;
+        if depth >= RR_DEPTH {
+            let q = min(max3(beta) * eta_scale * eta_scale, 0.95);
+            if rng_1d(rng, depth, DIM_ROULETTE) >= q {
+                break;
+            }
+            beta /= q;
+        }
+        if all(beta == vec3<f32>(0.0)) {
+            break;
+        }
+        ray = Ray(offset_ray_origin(si.p, si.ng, wi_world), wi_world);
+    }
+    return vec4<f32>(radiance, f32(rays));
+}

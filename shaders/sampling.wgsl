@@ -1,0 +1,77 @@
+// Warps from the unit square. mirror: src/render/sampling.rs, src/math.rs
+
+const PI: f32 = 3.14159265358979;
+const FRAC_1_PI: f32 = 0.318309886183791;
+const FRAC_PI_2: f32 = 1.57079632679490;
+const FRAC_PI_4: f32 = 0.785398163397448;
+
+// mirror: src/math.rs `onb_from_normal`
+fn onb_from_normal(n: vec3<f32>) -> mat3x3<f32> {
+    let sgn = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (sgn + n.z);
+    let b = n.x * n.y * a;
+    let t = vec3<f32>(1.0 + sgn * n.x * n.x * a, sgn * b, -sgn * n.x);
+    let bt = vec3<f32>(b, sgn + n.y * n.y * a, -n.y);
+    return mat3x3<f32>(t, bt, n);
+}
+
+// mirror: src/render/sampling.rs `sample_concentric_disk`
+fn sample_concentric_disk(u: vec2<f32>) -> vec2<f32> {
+    let o = 2.0 * u - vec2<f32>(1.0);
+    if o.x == 0.0 && o.y == 0.0 {
+        return vec2<f32>(0.0);
+    }
+    var r: f32;
+    var theta: f32;
+    if abs(o.x) > abs(o.y) {
+        r = o.x;
+        theta = FRAC_PI_4 * (o.y / o.x);
+    } else {
+        r = o.y;
+        theta = FRAC_PI_2 - FRAC_PI_4 * (o.x / o.y);
+    }
+    return r * vec2<f32>(cos(theta), sin(theta));
+}
+
+// mirror: src/render/sampling.rs `sample_cosine_hemisphere`
+fn sample_cosine_hemisphere(u: vec2<f32>) -> vec3<f32> {
+    let d = sample_concentric_disk(u);
+    let z = sqrt(max(1.0 - d.x * d.x - d.y * d.y, 0.0));
+    return vec3<f32>(d.x, d.y, z);
+}
+
+// mirror: src/render/sampling.rs `cosine_hemisphere_pdf`
+fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
+    return max(cos_theta, 0.0) * FRAC_1_PI;
+}
+
+// mirror: src/render/sampling.rs `sample_uniform_triangle`
+fn sample_uniform_triangle(u: vec2<f32>) -> vec2<f32> {
+    let su = sqrt(u.x);
+    return vec2<f32>(1.0 - su, u.y * su);
+}
+
+// mirror: src/render/sampling.rs `power_heuristic`
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    let a2 = a * a;
+    let b2 = b * b;
+    if a2 + b2 == 0.0 {
+        return 0.0;
+    }
+    return a2 / (a2 + b2);
+}
+
+// The emitter whose CDF bucket holds `u`. mirror: src/render/sampling.rs `sample_cdf`
+fn sample_cdf(u: f32) -> u32 {
+    var lo = 0u;
+    var hi = params.num_emitters - 1u;
+    while lo < hi {
+        let mid = (lo + hi) / 2u;
+        if emitter_cdf[mid] <= u {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}

@@ -1,0 +1,132 @@
+// BVH traversal with a fixed stack, nearer child first. mirror: src/bvh/traverse.rs
+
+// mirror: src/bvh/mod.rs `STACK_SIZE`
+const STACK_SIZE: u32 = 64u;
+
+struct Hit {
+    t: f32,
+    u: f32,
+    v: f32,
+    // Leaf-order triangle index, or NO_HIT.
+    tri: u32,
+}
+
+// mirror: src/bvh/traverse.rs `traverse_closest`
+fn traverse_closest(ray: Ray, t_max_in: f32) -> Hit {
+    var best = Hit(t_max_in, 0.0, 0.0, NO_HIT);
+    let root = nodes[0];
+    if arrayLength(&nodes) == 1u && root.count == 0u {
+        return best;
+    }
+    let inv_dir = safe_inverse(ray.dir);
+    if intersect_aabb(ray.origin, inv_dir, root.min, root.max, best.t) == T_INF {
+        return best;
+    }
+    var stack: array<u32, STACK_SIZE>;
+    var sp = 0u;
+    var node = 0u;
+    loop {
+        let n = nodes[node];
+        if n.count > 0u {
+            for (var i = n.left_or_first; i < n.left_or_first + n.count; i++) {
+                let h = intersect_triangle(ray, tris[i], best.t);
+                if h.hit {
+                    best = Hit(h.t, h.u, h.v, i);
+                }
+            }
+            if sp == 0u {
+                break;
+            }
+            sp -= 1u;
+            node = stack[sp];
+            continue;
+        }
+        var a = node + 1u;
+        var b = n.left_or_first;
+        let ca = nodes[a];
+        let cb = nodes[b];
+        var ta = intersect_aabb(ray.origin, inv_dir, ca.min, ca.max, best.t);
+        var tb = intersect_aabb(ray.origin, inv_dir, cb.min, cb.max, best.t);
+        if tb < ta {
+            let t = ta;
+            ta = tb;
+            tb = t;
+            let k = a;
+            a = b;
+            b = k;
+        }
+        if ta == T_INF {
+            if sp == 0u {
+                break;
+            }
+            sp -= 1u;
+            node = stack[sp];
+            continue;
+        }
+        node = a;
+        if tb != T_INF {
+            stack[sp] = b;
+            sp += 1u;
+        }
+    }
+    return best;
+}
+
+// mirror: src/bvh/traverse.rs `traverse_any`
+fn traverse_any(ray: Ray, t_max: f32) -> bool {
+    let root = nodes[0];
+    if arrayLength(&nodes) == 1u && root.count == 0u {
+        return false;
+    }
+    let inv_dir = safe_inverse(ray.dir);
+    if intersect_aabb(ray.origin, inv_dir, root.min, root.max, t_max) == T_INF {
+        return false;
+    }
+    var stack: array<u32, STACK_SIZE>;
+    var sp = 0u;
+    var node = 0u;
+    loop {
+        let n = nodes[node];
+        if n.count > 0u {
+            for (var i = n.left_or_first; i < n.left_or_first + n.count; i++) {
+                if intersect_triangle(ray, tris[i], t_max).hit {
+                    return true;
+                }
+            }
+            if sp == 0u {
+                break;
+            }
+            sp -= 1u;
+            node = stack[sp];
+            continue;
+        }
+        var a = node + 1u;
+        var b = n.left_or_first;
+        let ca = nodes[a];
+        let cb = nodes[b];
+        var ta = intersect_aabb(ray.origin, inv_dir, ca.min, ca.max, t_max);
+        var tb = intersect_aabb(ray.origin, inv_dir, cb.min, cb.max, t_max);
+        if tb < ta {
+            let t = ta;
+            ta = tb;
+            tb = t;
+            let k = a;
+            a = b;
+            b = k;
+        }
+        if ta == T_INF {
+            if sp == 0u {
+                break;
+            }
+            sp -= 1u;
+            node = stack[sp];
+            continue;
+        }
+        node = a;
+        if tb != T_INF {
+            stack[sp] = b;
+            sp += 1u;
+        }
+    }
+    return false;
+}

@@ -1,0 +1,83 @@
+// Structs shared with the host. Each mirrors a #[repr(C)] Pod struct in Rust;
+// tests/layout.rs checks sizes and offsets against naga's layout of this file.
+
+// mirror: src/bvh/mod.rs `BvhNode` (32 bytes). Interior (count == 0): children at
+// index + 1 and left_or_first. Leaf: triangles left_or_first .. left_or_first + count.
+struct BvhNode {
+    min: vec3<f32>,
+    left_or_first: u32,
+    max: vec3<f32>,
+    count: u32,
+}
+
+// mirror: src/geometry.rs `TriVerts` (48 bytes)
+struct TriVerts {
+    v0: vec4<f32>,
+    v1: vec4<f32>,
+    v2: vec4<f32>,
+}
+
+// mirror: src/render/mod.rs `TriShading` (48 bytes)
+struct TriShading {
+    n0: vec3<f32>,
+    material: u32,
+    n1: vec3<f32>,
+    emitter_pmf: f32,
+    n2: vec3<f32>,
+    flags: u32,
+}
+
+const TRI_SMOOTH: u32 = 1u;
+
+// mirror: src/gpu/layout.rs `GpuMaterial` (48 bytes)
+struct Material {
+    albedo: vec3<f32>,
+    kind: u32,
+    emission: vec3<f32>,
+    roughness: f32,
+    ior: f32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// mirror: src/scene/material.rs `MaterialKind`
+const MAT_DIFFUSE: u32 = 0u;
+const MAT_CONDUCTOR: u32 = 1u;
+const MAT_ROUGH_CONDUCTOR: u32 = 2u;
+const MAT_DIELECTRIC: u32 = 3u;
+
+// mirror: src/gpu/layout.rs `GpuParams` (144 bytes): one dispatch's camera, sky and range.
+struct Params {
+    cam_position: vec3<f32>,
+    width: u32,
+    cam_forward: vec3<f32>,
+    height: u32,
+    cam_right: vec3<f32>,
+    max_depth: u32,
+    cam_up: vec3<f32>,
+    seed: u32,
+    sky_zenith: vec3<f32>,
+    // 0: constant sky (`sky_zenith`), 1: gradient from `sky_horizon` to `sky_zenith`.
+    sky_gradient: u32,
+    sky_horizon: vec3<f32>,
+    num_emitters: u32,
+    tan_half_vfov: f32,
+    aspect: f32,
+    aperture: f32,
+    focus_distance: f32,
+    // This dispatch traces samples sample_start .. sample_end of rows row_start .. row_end.
+    sample_start: u32,
+    sample_end: u32,
+    row_start: u32,
+    row_end: u32,
+}
+
+struct Ray {
+    origin: vec3<f32>,
+    dir: vec3<f32>,
+}
+
+// The largest finite float: "no hit" and "unbounded ray" (WGSL has no infinity literal).
+const T_INF: f32 = 3.40282347e38;
+const NO_HIT: u32 = 0xffffffffu;

@@ -1,0 +1,143 @@
+//! Adapters and devices: listing what Vulkan offers, choosing one, and opening it with its
+//! real limits (never wgpu's conservative defaults, which would cap storage bindings).
+
+use super::GpuError;
+use std::sync::{Arc, Mutex};
+
+/// One adapter as `meshtrace adapters` lists it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AdapterSummary {
+    pub index: usize,
+    pub name: String,
+    pub backend: String,
+    pub device_type: String,
+    pub driver: String,
+}
+
+fn instance() -> wgpu::Instance {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+    // Vulkan is the backend meshtrace is built and tested for (and the only one compiled in).
+    desc.backends = wgpu::Backends::VULKAN;
+    wgpu::Instance::new(desc)
+}
+
+fn adapters(instance: &wgpu::Instance) -> Vec<wgpu::Adapter> {
+    pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN))
+}
+
+fn summary(index: usize, a: &wgpu::Adapter) -> AdapterSummary {
+    let info = a.get_info();
+    let driver = [info.driver, info.driver_info]
+        .into_iter()
+        .filter(|s| !s.is_empty())
+        .collect::<Vec<_>>()
+        .join(" ");
+    AdapterSummary {
+        index,
+        name: info.name,
+        backend: format!("{:?}", info.backend),
+        device_type: format!("{:?}", info.device_type),
+        driver,
+    }
+}
+
+/// Every adapter wgpu finds, in the order `--adapter INDEX` counts them.
+pub fn list_adapters() -> Vec<AdapterSummary> {
+    adapters(&instance())
+        .iter()
+        .enumerate()
+        .map(|(i, a)| summary(i, a))
+        .collect()
+}
+
+/// An open device with its queue, and what went wrong on it asynchronously.
+pub struct GpuContext {
+    pub adapter: AdapterSummary,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub limits: wgpu::Limits,
+    fault: Arc<Mutex<Option<String>>>,
+}
+
+impl GpuContext {
+    /// Opens the adapter named by `spec` (an index or a case-insensitive name substring),
+    /// else by `WGPU_ADAPTER_NAME`, else the first discrete GPU, else the first adapter.
+    pub fn new(spec: Option<&str>) -> Result<Self, GpuError> {
+        let instance = instance();
+        let all = adapters(&instance);
+        if all.is_empty() {
+            return Err(GpuError::NoAdapter);
+        }
+        let env = std::env::var("WGPU_ADAPTER_NAME").ok();
+        let spec = spec.or(env.as_deref());
+        let index = match spec {
+            Some(s) => pick(&all, s)?,
+            None => all
+                .iter()
+                .position(|a| a.get_info().device_type == wgpu::DeviceType::DiscreteGpu)
+                .unwrap_or(0),
+        };
+        let adapter = &all[index];
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("meshtrace"),
+            required_features: wgpu::Features::empty(),
+            required_limits: limits.clone(),
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        }))
+        .map_err(|e| GpuError::Device(e.to_string()))?;
+        let fault = Arc::new(Mutex::new(None));
+        let f = fault.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            let mut slot = f.lock().unwrap_or_else(|p| p.into_inner());
+            slot.get_or_insert_with(|| e.to_string().replace('\n', " "));
+        }));
+        let f = fault.clone();
+        device.set_device_lost_callback(move |reason, message| {
+            if reason != wgpu::DeviceLostReason::Destroyed {
+                let mut slot = f.lock().unwrap_or_else(|p| p.into_inner());
+                slot.get_or_insert_with(|| format!("device lost: {message}"));
+            }
+        });
+        Ok(Self {
+            adapter: summary(index, adapter),
+            device,
+            queue,
+            limits,
+            fault,
+        })
+    }
+
+    /// The first error the device reported since it was opened, if any.
+    pub fn check(&self) -> Result<(), GpuError> {
+        let slot = self.fault.lock().unwrap_or_else(|p| p.into_inner());
+        match slot.as_ref() {
+            Some(message) => Err(GpuError::Fault(message.clone())),
+            None => Ok(()),
+        }
+    }
+
+    /// Blocks until the queue's work is done.
+    pub fn wait(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| GpuError::Fault(e.to_string()))?;
+        self.check()
+    }
+}
+
+fn pick(all: &[wgpu::Adapter], spec: &str) -> Result<usize, GpuError> {
+    if let Ok(i) = spec.parse::<usize>() {
+        return if i < all.len() {
+            Ok(i)
+        } else {
+            Err(GpuError::NoSuchAdapter(spec.to_string(), all.len()))
+        };
+    }
+    let needle = spec.to_lowercase();
+    all.iter()
+        .position(|a| a.get_info().name.to_lowercase().contains(&needle))
+        .ok_or_else(|| GpuError::NoSuchAdapter(spec.to_string(), all.len()))
+}

@@ -1,0 +1,92 @@
+//! Host-side twins of the WGSL uniform and material structs (`shaders/types.wgsl`). The
+//! scene tables' structs (`BvhNode`, `TriVerts`, `TriShading`) live beside the code that
+//! builds them; `tests/layout.rs` checks all of them against naga's layout.
+
+use crate::render::RenderScene;
+use crate::scene::{Material, RenderSettings, Sky};
+use bytemuck::{Pod, Zeroable};
+
+/// One dispatch's parameters (144 bytes). mirror: shaders/types.wgsl `Params`
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuParams {
+    pub cam_position: [f32; 3],
+    pub width: u32,
+    pub cam_forward: [f32; 3],
+    pub height: u32,
+    pub cam_right: [f32; 3],
+    pub max_depth: u32,
+    pub cam_up: [f32; 3],
+    pub seed: u32,
+    pub sky_zenith: [f32; 3],
+    pub sky_gradient: u32,
+    pub sky_horizon: [f32; 3],
+    pub num_emitters: u32,
+    pub tan_half_vfov: f32,
+    pub aspect: f32,
+    pub aperture: f32,
+    pub focus_distance: f32,
+    pub sample_start: u32,
+    pub sample_end: u32,
+    pub row_start: u32,
+    pub row_end: u32,
+}
+
+impl GpuParams {
+    /// The parameters of a render of `scene` with `settings`, covering every row and no
+    /// samples yet (`sample_*` and `row_*` are set per dispatch).
+    pub fn new(scene: &RenderScene, settings: &RenderSettings) -> Self {
+        let c = &scene.camera;
+        let (zenith, horizon, gradient) = match scene.sky {
+            Sky::Constant(c) => (c, c, 0),
+            Sky::Gradient { zenith, horizon } => (zenith, horizon, 1),
+        };
+        Self {
+            cam_position: c.position.into(),
+            width: settings.width,
+            cam_forward: c.forward.into(),
+            height: settings.height,
+            cam_right: c.right.into(),
+            max_depth: settings.max_depth,
+            cam_up: c.up.into(),
+            seed: settings.seed,
+            sky_zenith: zenith.into(),
+            sky_gradient: gradient,
+            sky_horizon: horizon.into(),
+            num_emitters: scene.emitters.len() as u32,
+            tan_half_vfov: c.tan_half_vfov(),
+            aspect: settings.width as f32 / settings.height as f32,
+            aperture: c.aperture,
+            focus_distance: c.focus_distance,
+            sample_start: 0,
+            sample_end: 0,
+            row_start: 0,
+            row_end: settings.height,
+        }
+    }
+}
+
+/// A material as the shaders read it (48 bytes). mirror: shaders/types.wgsl `Material`
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuMaterial {
+    pub albedo: [f32; 3],
+    pub kind: u32,
+    pub emission: [f32; 3],
+    pub roughness: f32,
+    pub ior: f32,
+    pub _pad: [u32; 3],
+}
+
+impl From<&Material> for GpuMaterial {
+    fn from(m: &Material) -> Self {
+        Self {
+            albedo: m.albedo.into(),
+            kind: m.kind as u32,
+            emission: m.emission.into(),
+            roughness: m.roughness,
+            ior: m.ior,
+            _pad: [0; 3],
+        }
+    }
+}

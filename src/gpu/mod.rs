@@ -1,0 +1,40 @@
+//! The GPU renderer: the WGSL path tracer in `shaders/`, run as a compute shader through
+//! wgpu on Vulkan (a real GPU, or lavapipe on the CPU). Only this module imports wgpu.
+//!
+//! The host uploads the tables of [`RenderScene`](crate::render::RenderScene) unchanged,
+//! so the GPU traces exactly the paths the CPU reference traces for the same
+//! (pixel, sample, seed). `context` opens devices, `layout` holds the uniform structs,
+//! `shader` joins the WGSL files, `renderer` runs the dispatch loop, and `kernels` runs
+//! the shader unit-test entry points.
+
+mod context;
+pub mod kernels;
+pub mod layout;
+mod renderer;
+pub mod shader;
+
+pub use context::{AdapterSummary, GpuContext, list_adapters};
+pub use renderer::{GpuScene, render};
+
+/// What can go wrong on the GPU path; each message says what to do about it.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    #[error(
+        "no Vulkan adapter found; install a Vulkan driver (for a CPU-only machine, Mesa's lavapipe: `apt-get install mesa-vulkan-drivers`) or use --device cpu"
+    )]
+    NoAdapter,
+    #[error("no adapter matches `{0}` (there are {1}); run `meshtrace adapters` to list them")]
+    NoSuchAdapter(String, usize),
+    #[error("cannot open the GPU device: {0}")]
+    Device(String),
+    #[error(
+        "the {what} need {bytes} bytes but this adapter allows {limit} per storage buffer; use --device cpu or a smaller scene"
+    )]
+    TooLarge {
+        what: &'static str,
+        bytes: u64,
+        limit: u64,
+    },
+    #[error("GPU error: {0}")]
+    Fault(String),
+}

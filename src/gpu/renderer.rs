@@ -1,0 +1,321 @@
+//! The dispatch loop: uploads a scene, traces batches of samples, accumulates, reads back.
+
+use super::layout::{GpuMaterial, GpuParams};
+use super::{GpuContext, GpuError, shader};
+use crate::film::Film;
+use crate::render::{RenderJob, RenderScene};
+use glam::Vec3;
+use wgpu::util::DeviceExt;
+
+/// Paths traced per dispatch: about one sample per pixel of a 1080p image, so that no
+/// dispatch runs long enough (~100 ms on a desktop GPU) for a driver watchdog to kill it.
+pub const PATHS_PER_DISPATCH: u64 = 1 << 21;
+const WORKGROUP: u32 = 8;
+
+/// A scene uploaded to one device: its buffers, the scene bind group's layout, and the
+/// uniform buffer of per-dispatch parameters.
+pub struct GpuScene {
+    buffers: Vec<wgpu::Buffer>,
+    pub layout: wgpu::BindGroupLayout,
+}
+
+fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// The byte stride between per-dispatch parameter blocks in the uniform buffer.
+fn params_stride(ctx: &GpuContext) -> u64 {
+    let align = ctx.limits.min_uniform_buffer_offset_alignment as u64;
+    (size_of::<GpuParams>() as u64).div_ceil(align) * align
+}
+
+impl GpuScene {
+    /// Uploads the scene's tables, checking each against the adapter's binding limit.
+    pub fn new(ctx: &GpuContext, scene: &RenderScene) -> Result<Self, GpuError> {
+        let materials: Vec<GpuMaterial> = scene.materials.iter().map(GpuMaterial::from).collect();
+        // wgpu rejects empty bindings: an empty table gets one unused zero element.
+        fn bytes<T: bytemuck::Pod + Default>(v: &[T]) -> Vec<u8> {
+            if v.is_empty() {
+                bytemuck::bytes_of(&T::default()).to_vec()
+            } else {
+                bytemuck::cast_slice(v).to_vec()
+            }
+        }
+        let tables: [(&'static str, Vec<u8>); 6] = [
+            ("BVH nodes", bytes(&scene.bvh.nodes)),
+            ("triangles", bytes(&scene.tris)),
+            ("triangle shading data", bytes(&scene.shading)),
+            ("materials", bytes(&materials)),
+            ("emitters", bytes(&scene.emitters)),
+            ("emitter CDF", bytes(&scene.emitter_cdf)),
+        ];
+        let limit = ctx.limits.max_storage_buffer_binding_size;
+        let mut buffers = Vec::with_capacity(tables.len());
+        for (what, data) in &tables {
+            if data.len() as u64 > limit {
+                return Err(GpuError::TooLarge {
+                    what,
+                    bytes: data.len() as u64,
+                    limit,
+                });
+            }
+            buffers.push(
+                ctx.device
+                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some(what),
+                        contents: data,
+                        usage: wgpu::BufferUsages::STORAGE,
+                    }),
+            );
+        }
+        let mut entries = vec![wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: true,
+                min_binding_size: wgpu::BufferSize::new(size_of::<GpuParams>() as u64),
+            },
+            count: None,
+        }];
+        entries.extend((1..=6).map(|b| storage_entry(b, true)));
+        let layout = ctx
+            .device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("scene"),
+                entries: &entries,
+            });
+        ctx.check()?;
+        Ok(Self { buffers, layout })
+    }
+
+    /// The scene bind group, with `params` (one block per dispatch, at `params_stride`).
+    pub fn bind_group(&self, ctx: &GpuContext, params: &wgpu::Buffer) -> wgpu::BindGroup {
+        let mut entries = vec![wgpu::BindGroupEntry {
+            binding: 0,
+            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: params,
+                offset: 0,
+                size: wgpu::BufferSize::new(size_of::<GpuParams>() as u64),
+            }),
+        }];
+        entries.extend(
+            self.buffers
+                .iter()
+                .enumerate()
+                .map(|(i, b)| wgpu::BindGroupEntry {
+                    binding: i as u32 + 1,
+                    resource: b.as_entire_binding(),
+                }),
+        );
+        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("scene"),
+            layout: &self.layout,
+            entries: &entries,
+        })
+    }
+}
+
+/// Uploads per-dispatch parameter blocks into one uniform buffer.
+pub fn params_buffer(ctx: &GpuContext, blocks: &[GpuParams]) -> wgpu::Buffer {
+    let stride = params_stride(ctx) as usize;
+    let mut data = vec![0u8; stride * blocks.len().max(1)];
+    for (i, p) in blocks.iter().enumerate() {
+        data[i * stride..i * stride + size_of::<GpuParams>()]
+            .copy_from_slice(bytemuck::bytes_of(p));
+    }
+    ctx.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("dispatch parameters"),
+            contents: &data,
+            usage: wgpu::BufferUsages::UNIFORM,
+        })
+}
+
+/// Builds a compute pipeline over the scene layout plus one group of storage buffers
+/// (`outputs` read-write ones after `inputs` read-only ones).
+pub fn pipeline(
+    ctx: &GpuContext,
+    scene: &GpuScene,
+    source: &str,
+    entry: &str,
+    inputs: u32,
+    outputs: u32,
+) -> Result<(wgpu::ComputePipeline, wgpu::BindGroupLayout), GpuError> {
+    let io_entries: Vec<_> = (0..inputs + outputs)
+        .map(|b| storage_entry(b, b < inputs))
+        .collect();
+    let io_layout = ctx
+        .device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("io"),
+            entries: &io_entries,
+        });
+    let module = ctx
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("meshtrace"),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+    let layout = ctx
+        .device
+        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(entry),
+            bind_group_layouts: &[Some(&scene.layout), Some(&io_layout)],
+            immediate_size: 0,
+        });
+    let pipeline = ctx
+        .device
+        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: Some(&layout),
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+    ctx.check()?;
+    Ok((pipeline, io_layout))
+}
+
+/// Copies a storage buffer back to the host.
+pub fn read_back(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+    let size = buffer.size();
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = ctx.device.create_command_encoder(&Default::default());
+    enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+    ctx.queue.submit([enc.finish()]);
+    let (tx, rx) = std::sync::mpsc::channel();
+    staging.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send(r);
+    });
+    ctx.wait()?;
+    rx.recv()
+        .map_err(|e| GpuError::Fault(e.to_string()))?
+        .map_err(|e| GpuError::Fault(e.to_string()))?;
+    let data = staging
+        .get_mapped_range(..)
+        .map_err(|e| GpuError::Fault(e.to_string()))?
+        .to_vec();
+    staging.unmap();
+    Ok(data)
+}
+
+/// The dispatches of a job: sample ranges over row bands, each at most
+/// [`PATHS_PER_DISPATCH`] paths, in an order that keeps every pixel's samples in sequence.
+pub fn plan_dispatches(base: &GpuParams, job: &RenderJob) -> Vec<GpuParams> {
+    let (w, h) = (job.settings.width as u64, job.settings.height as u64);
+    let rows = (PATHS_PER_DISPATCH / w).clamp(1, h);
+    let spp_step = if rows == h {
+        (PATHS_PER_DISPATCH / (w * h)).max(1) as u32
+    } else {
+        1
+    };
+    let mut out = Vec::new();
+    let mut s = job.samples.start;
+    while s < job.samples.end {
+        let s_end = (s + spp_step).min(job.samples.end);
+        let mut r = 0;
+        while r < h {
+            let r_end = (r + rows).min(h);
+            out.push(GpuParams {
+                sample_start: s,
+                sample_end: s_end,
+                row_start: r as u32,
+                row_end: r_end as u32,
+                ..*base
+            });
+            r = r_end;
+        }
+        s = s_end;
+    }
+    out
+}
+
+/// Renders the job's sample range on the GPU. `progress` is told the samples each
+/// dispatch finished. Returns the film and the number of rays traced.
+pub fn render(
+    ctx: &GpuContext,
+    scene: &RenderScene,
+    job: &RenderJob,
+    progress: &dyn Fn(u64),
+) -> Result<(Film, u64), GpuError> {
+    let (w, h) = (job.settings.width, job.settings.height);
+    let pixels = w as u64 * h as u64;
+    let accum_bytes = pixels * 16;
+    let limit = ctx.limits.max_storage_buffer_binding_size;
+    if accum_bytes > limit {
+        return Err(GpuError::TooLarge {
+            what: "film",
+            bytes: accum_bytes,
+            limit,
+        });
+    }
+    let gpu_scene = GpuScene::new(ctx, scene)?;
+    let blocks = plan_dispatches(&GpuParams::new(scene, &job.settings), job);
+    let params = params_buffer(ctx, &blocks);
+    let scene_group = gpu_scene.bind_group(ctx, &params);
+    let (pipeline, io_layout) =
+        pipeline(ctx, &gpu_scene, &shader::render_source(), "render", 0, 1)?;
+    let accum = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("accumulation"),
+        size: accum_bytes,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let io_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("accumulation"),
+        layout: &io_layout,
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: accum.as_entire_binding(),
+        }],
+    });
+    let stride = params_stride(ctx);
+    for (i, b) in blocks.iter().enumerate() {
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("render"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&pipeline);
+            pass.set_bind_group(0, &scene_group, &[(i as u64 * stride) as u32]);
+            pass.set_bind_group(1, &io_group, &[]);
+            pass.dispatch_workgroups(
+                w.div_ceil(WORKGROUP),
+                (b.row_end - b.row_start).div_ceil(WORKGROUP),
+                1,
+            );
+        }
+        ctx.queue.submit([enc.finish()]);
+        ctx.wait()?;
+        progress(
+            (b.sample_end - b.sample_start) as u64 * w as u64 * (b.row_end - b.row_start) as u64,
+        );
+    }
+    let data = read_back(ctx, &accum)?;
+    let sums: &[[f32; 4]] = bytemuck::cast_slice(&data);
+    let mut film = Film::new(w, h);
+    film.samples = job.samples.len() as u32;
+    let mut rays = 0u64;
+    for (dst, s) in film.sum.iter_mut().zip(sums) {
+        *dst = Vec3::new(s[0], s[1], s[2]);
+        rays += s[3] as u64;
+    }
+    Ok((film, rays))
+}

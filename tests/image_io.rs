@@ -1,0 +1,320 @@
+//! The film's image files: what each format keeps of the radiance, atomic writes, merging
+//! of sample ranges, and the sRGB transfer function.
+
+use glam::Vec3;
+use meshtrace::film::{Film, FilmError, Format, linear_to_srgb8, read_linear, srgb8_to_linear};
+use std::path::{Path, PathBuf};
+
+/// A fresh, empty directory for one test; removed by `Drop`.
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new(name: &str) -> Self {
+        let dir =
+            std::env::temp_dir().join(format!("meshtrace-test-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Self(dir)
+    }
+
+    fn path(&self) -> &Path {
+        &self.0
+    }
+
+    fn entries(&self) -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(&self.0)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+const VALUES: [f32; 11] = [0.0, 0.5, 1.0, 3.7, 1e-3, 0.18, 0.02, 2.0, 0.75, 10.0, 0.04];
+
+/// A 7x5 film with one sample per pixel, cycling through `VALUES` per channel.
+fn test_film() -> Film {
+    let (w, h) = (7, 5);
+    let mut film = Film::new(w, h);
+    for (i, px) in film.sum.iter_mut().enumerate() {
+        let v = |c: usize| VALUES[(3 * i + c) % VALUES.len()];
+        *px = Vec3::new(v(0), v(1), v(2));
+    }
+    film.samples = 1;
+    film
+}
+
+fn save_and_read(film: &Film, dir: &TempDir, name: &str) -> Vec<Vec3> {
+    let path = dir.path().join(name);
+    film.save(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let (w, h, pixels) = read_linear(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+    assert_eq!((w, h), (film.width, film.height), "{name}: size");
+    assert_eq!(pixels.len(), (w * h) as usize);
+    pixels
+}
+
+#[test]
+fn exr_is_exact() {
+    let dir = TempDir::new("exr");
+    let film = test_film();
+    let pixels = save_and_read(&film, &dir, "out.exr");
+    assert_eq!(pixels, film.mean());
+}
+
+#[test]
+fn exr_keeps_the_mean_of_many_samples() {
+    let dir = TempDir::new("exr-mean");
+    let mut film = test_film();
+    for s in &mut film.sum {
+        *s *= 4.0;
+    }
+    film.samples = 4;
+    let pixels = save_and_read(&film, &dir, "mean.exr");
+    assert_eq!(pixels, test_film().mean());
+}
+
+#[test]
+fn hdr_is_within_rgbe_precision() {
+    let dir = TempDir::new("hdr");
+    let film = test_film();
+    let pixels = save_and_read(&film, &dir, "out.hdr");
+    for (i, (got, want)) in pixels.iter().zip(film.mean()).enumerate() {
+        // RGBE shares one exponent: each channel is within 1/128 of the largest one.
+        let tol = want.max_element() / 128.0;
+        assert!(
+            (*got - want).abs().max_element() <= tol,
+            "pixel {i}: got {got}, wrote {want}"
+        );
+        if want == Vec3::ZERO {
+            assert_eq!(*got, Vec3::ZERO, "pixel {i}: black stays black");
+        }
+    }
+}
+
+#[test]
+fn eight_bit_formats_are_srgb_quantised_and_clamped() {
+    let dir = TempDir::new("8bit");
+    let film = test_film();
+    for name in ["out.png", "out.bmp", "OUT.PNG"] {
+        let pixels = save_and_read(&film, &dir, name);
+        for (i, (got, want)) in pixels.iter().zip(film.mean()).enumerate() {
+            let expected = want.to_array().map(|x| srgb8_to_linear(linear_to_srgb8(x)));
+            assert_eq!(got.to_array(), expected, "{name} pixel {i}");
+            for c in 0..3 {
+                if want[c] >= 1.0 {
+                    assert_eq!(got[c], 1.0, "{name} pixel {i}: {} clamps to 1", want[c]);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn jpeg_is_close() {
+    let dir = TempDir::new("jpeg");
+    // A smooth image (JPEG's domain): a gradient in each channel, plus one clamped value.
+    let (w, h) = (16, 16);
+    let mut film = Film::new(w, h);
+    for y in 0..h {
+        for x in 0..w {
+            let fx = x as f32 / (w - 1) as f32;
+            let fy = y as f32 / (h - 1) as f32;
+            film.sum[(y * w + x) as usize] = Vec3::new(fx, fy, 0.5 * (fx + fy)) * 2.0;
+        }
+    }
+    film.samples = 2;
+    for name in ["out.jpg", "out.jpeg"] {
+        let pixels = save_and_read(&film, &dir, name);
+        let mean = film.mean();
+        let err: f32 = pixels
+            .iter()
+            .zip(&mean)
+            .map(|(a, b)| (*a - b.clamp(Vec3::ZERO, Vec3::ONE)).abs().element_sum())
+            .sum::<f32>()
+            / (3 * pixels.len()) as f32;
+        assert!(err < 0.02, "{name}: mean abs error {err}");
+    }
+}
+
+#[test]
+fn format_from_extension() {
+    let f = |p: &str| Format::from_path(Path::new(p)).ok();
+    assert_eq!(f("a.exr"), Some(Format::Exr));
+    assert_eq!(f("a.HDR"), Some(Format::Hdr));
+    assert_eq!(f("dir.x/a.png"), Some(Format::Png));
+    assert_eq!(f("a.jpg"), Some(Format::Jpeg));
+    assert_eq!(f("a.JPEG"), Some(Format::Jpeg));
+    assert_eq!(f("a.bmp"), Some(Format::Bmp));
+    assert_eq!(f("a.tga"), None);
+    assert_eq!(f("png"), None);
+    assert_eq!(f("a.png.txt"), None);
+}
+
+#[test]
+fn unknown_extension_is_an_error_naming_the_path() {
+    let dir = TempDir::new("unknown");
+    for name in ["out.tga", "noext"] {
+        let path = dir.path().join(name);
+        let err = test_film().save(&path).unwrap_err();
+        match &err {
+            FilmError::UnknownFormat { path: p } => assert_eq!(*p, path.display().to_string()),
+            other => panic!("expected UnknownFormat, got {other:?}"),
+        }
+        let msg = err.to_string();
+        assert_eq!(
+            msg,
+            format!(
+                "{}: unknown image format; use .exr, .hdr, .png, .jpg or .bmp",
+                path.display()
+            )
+        );
+        let err = read_linear(&path).unwrap_err();
+        assert!(matches!(err, FilmError::UnknownFormat { .. }), "{err:?}");
+    }
+    assert!(dir.entries().is_empty(), "{:?}", dir.entries());
+}
+
+#[test]
+fn write_into_missing_directory_fails_and_leaves_nothing() {
+    let dir = TempDir::new("missing-dir");
+    let path = dir.path().join("no_such_dir").join("out.png");
+    let err = test_film().save(&path).unwrap_err();
+    match &err {
+        FilmError::Io { path: p, message } => {
+            assert_eq!(*p, path.display().to_string());
+            assert!(!message.is_empty());
+        }
+        other => panic!("expected Io, got {other:?}"),
+    }
+    assert!(err.to_string().starts_with(&path.display().to_string()));
+    assert!(!path.exists());
+    assert!(dir.entries().is_empty(), "{:?}", dir.entries());
+}
+
+#[test]
+fn failed_encode_leaves_no_file() {
+    let dir = TempDir::new("bad-film");
+    // A film whose pixel count does not match its size cannot be encoded.
+    let film = Film {
+        width: 4,
+        height: 4,
+        sum: vec![Vec3::ONE; 3],
+        samples: 1,
+    };
+    for name in ["bad.png", "bad.exr"] {
+        let path = dir.path().join(name);
+        let err = film.save(&path).unwrap_err();
+        assert!(matches!(err, FilmError::Io { .. }), "{err:?}");
+        assert!(!path.exists());
+    }
+    assert!(dir.entries().is_empty(), "{:?}", dir.entries());
+}
+
+#[test]
+fn no_temporary_file_remains_after_save() {
+    let dir = TempDir::new("tmp-files");
+    let film = test_film();
+    let names = ["a.exr", "a.hdr", "a.png", "a.jpg", "a.bmp"];
+    for name in names {
+        film.save(&dir.path().join(name)).unwrap();
+    }
+    // overwriting an existing image also goes through a temporary
+    film.save(&dir.path().join("a.png")).unwrap();
+    let mut expected: Vec<String> = names.iter().map(|s| s.to_string()).collect();
+    expected.sort();
+    let entries = dir.entries();
+    assert!(
+        !entries
+            .iter()
+            .any(|n| n.starts_with('.') || n.ends_with(".tmp")),
+        "{entries:?}"
+    );
+    assert_eq!(entries, expected);
+}
+
+#[test]
+fn merge_of_sample_halves_equals_all_samples() {
+    let (w, h, n) = (6u32, 4u32, 8u32);
+    // Sample k of pixel i: dyadic values, so every order of addition is exact.
+    let sample = |i: usize, k: u32| {
+        Vec3::new(
+            (i % 5) as f32 * 0.25 + k as f32 * 0.5,
+            (k % 3) as f32 * 0.125,
+            (i as f32) * 0.0625 + (k * k) as f32,
+        )
+    };
+    let render = |range: std::ops::Range<u32>| {
+        let mut film = Film::new(w, h);
+        for k in range.clone() {
+            for (i, px) in film.sum.iter_mut().enumerate() {
+                *px += sample(i, k);
+            }
+        }
+        film.samples = range.len() as u32;
+        film
+    };
+    let all = render(0..n);
+    let mut merged = render(0..3);
+    merged.merge(&render(3..n));
+    assert_eq!(merged.samples, n);
+    assert_eq!(merged, all);
+    assert_eq!(merged.mean(), all.mean());
+    // and the mean is the mean of the samples
+    let mean0: Vec3 = (0..n).map(|k| sample(0, k)).sum::<Vec3>() / n as f32;
+    assert_eq!(all.mean()[0], mean0);
+}
+
+#[test]
+#[should_panic]
+fn merge_of_different_sizes_panics() {
+    let mut a = Film::new(2, 2);
+    a.merge(&Film::new(2, 3));
+}
+
+#[test]
+fn empty_film_is_black() {
+    let film = Film::new(3, 2);
+    assert_eq!(film.samples, 0);
+    assert_eq!(film.sum.len(), 6);
+    assert_eq!(film.mean(), vec![Vec3::ZERO; 6]);
+}
+
+#[test]
+fn srgb_round_trips_every_code() {
+    for v in 0..=255u8 {
+        let x = srgb8_to_linear(v);
+        assert!((0.0..=1.0).contains(&x), "{v} -> {x}");
+        assert_eq!(linear_to_srgb8(x), v, "code {v} via {x}");
+    }
+    assert_eq!(srgb8_to_linear(0), 0.0);
+    assert_eq!(srgb8_to_linear(255), 1.0);
+    // strictly increasing
+    for v in 0..255u8 {
+        assert!(srgb8_to_linear(v) < srgb8_to_linear(v + 1));
+    }
+}
+
+#[test]
+fn srgb_encoding_values() {
+    assert_eq!(linear_to_srgb8(0.0), 0);
+    assert_eq!(linear_to_srgb8(1.0), 255);
+    assert_eq!(linear_to_srgb8(3.7), 255);
+    assert_eq!(linear_to_srgb8(f32::INFINITY), 255);
+    assert_eq!(linear_to_srgb8(-1.0), 0);
+    assert_eq!(linear_to_srgb8(f32::NAN), 0);
+    // mid grey: 0.5 linear is 0.7354 sRGB -> 188 (187.5 rounds up)
+    assert_eq!(linear_to_srgb8(0.5), 188);
+    // 0.18 linear -> 0.4614 sRGB -> 118
+    assert_eq!(linear_to_srgb8(0.18), 118);
+    // the linear segment: 0.001 * 12.92 * 255 = 3.29 -> 3
+    assert_eq!(linear_to_srgb8(1e-3), 3);
+    assert!((srgb8_to_linear(188) - 0.5029).abs() < 1e-4);
+    assert!((srgb8_to_linear(10) - 10.0 / 255.0 / 12.92).abs() < 1e-9);
+}
