@@ -1,0 +1,479 @@
+#!/usr/bin/env python3
+"""Render one of meshtrace's scene files (TOML, version 1) with Mitsuba 3.
+
+The scene is translated into the equivalent Mitsuba scene (see
+shared/specs/scene-format.md):
+  * meshes: each OBJ is parsed here (fan triangulation, negative indices, usemtl/mtllib)
+    and written as a plain triangle OBJ per material into a temporary folder, then loaded
+    with Mitsuba's `obj` shape (`face_normals` when the faces have no `vn`);
+    the object's transform (scale, rotate X then Y then Z, translate, or `matrix`)
+    becomes `to_world`;
+  * spheres: Mitsuba's analytic `sphere` (meshtrace tessellates it: expect tiny
+    differences at silhouettes);
+  * diffuse -> twosided(diffuse); conductor -> twosided(conductor, material none);
+    rough_conductor -> twosided(roughconductor ggx, alpha = roughness^2, material none);
+    dielectric -> dielectric(int_ior = ior, ext_ior = 1); emission -> `area` emitter;
+  * sky colour -> `constant`; sky gradient -> `envmap` of a lat-long bitmap whose rows
+    hold lerp(horizon, zenith, 0.5 * (dir.y + 1)) (depends on dir.y only, so Mitsuba's
+    azimuth convention does not matter);
+  * camera -> `perspective` (or `thinlens`), fov_axis "y", fov = vfov;
+  * film `hdrfilm` rgb float32 with a **box** pixel filter, sampler `independent`,
+    integrator `path` (max_depth from the file, rr_depth 5).
+
+High sample counts are rendered in passes (at most --lanes samples in flight), each
+with its own seed, and averaged; this equals one render at the full count because the
+box filter weighs every sample alike.
+
+Usage:
+  python3 tools/mitsuba_render.py SCENE.toml [--spp N] [--seed S] [--width W]
+        [--height H] [--max-depth D] [-o out.exr] [--variant llvm_ad_rgb]
+"""
+import argparse
+import glob
+import math
+import os
+import sys
+import tempfile
+import time
+import tomllib
+
+import numpy as np
+
+
+# ---------------------------------------------------------------- Mitsuba set-up
+
+def setup_mitsuba(variant=None):
+    """Import mitsuba and pick a variant: llvm_ad_rgb when libLLVM >= 16 is found
+    (DRJIT_LIBLLVM_PATH, else /usr/lib/*/libLLVM-1[6-9]*.so ...), else scalar_rgb."""
+    if "DRJIT_LIBLLVM_PATH" not in os.environ:
+        cands = []
+        for pat in ("/usr/lib/*/libLLVM-2[0-9]*.so*", "/usr/lib/*/libLLVM-1[6-9]*.so*",
+                    "/usr/lib/*/libLLVM.so.2[0-9]*", "/usr/lib/*/libLLVM.so.1[6-9]*",
+                    "/usr/lib/llvm-*/lib/libLLVM*.so*"):
+            cands += sorted(glob.glob(pat), reverse=True)
+        for c in cands:
+            base = os.path.basename(c)
+            digits = "".join(ch if ch.isdigit() else " " for ch in base).split()
+            if digits and int(digits[0]) >= 16:
+                os.environ["DRJIT_LIBLLVM_PATH"] = c
+                break
+    import mitsuba as mi
+    wanted = [variant] if variant else ["llvm_ad_rgb", "scalar_rgb"]
+    err = None
+    for v in wanted:
+        try:
+            mi.set_variant(v)
+            if v.startswith("llvm"):
+                import drjit as dr
+                # force the JIT to initialise now, so a missing libLLVM fails here
+                _ = dr.llvm.Float([1.0]) + 1.0
+                dr.eval(_)
+            return mi
+        except Exception as e:  # noqa: BLE001
+            err = e
+            print("mitsuba_render: variant %s unavailable: %s" % (v, e), file=sys.stderr)
+    raise SystemExit("mitsuba_render: no usable Mitsuba variant (%s)" % err)
+
+
+# ---------------------------------------------------------------- scene parsing
+
+class SceneError(Exception):
+    pass
+
+
+def check_keys(table, allowed, where):
+    for k in table:
+        if k not in allowed:
+            raise SceneError("unknown key '%s' in %s" % (k, where))
+
+
+def vec3(x, where):
+    if isinstance(x, (int, float)):
+        return [float(x)] * 3
+    if not (isinstance(x, list) and len(x) == 3):
+        raise SceneError("%s must be a list of 3 numbers" % where)
+    return [float(v) for v in x]
+
+
+def object_matrix(obj, where):
+    """4x4 to_world (row-major, numpy) of an object: scale, rotate X, Y, Z, translate."""
+    if "matrix" in obj:
+        if any(k in obj for k in ("translate", "rotate", "scale")):
+            raise SceneError("%s: `matrix` excludes translate/rotate/scale" % where)
+        m = obj["matrix"]
+        if not (isinstance(m, list) and len(m) == 16):
+            raise SceneError("%s: matrix must have 16 numbers" % where)
+        return np.array(m, dtype=np.float64).reshape(4, 4)
+    s = vec3(obj.get("scale", 1.0), where + ".scale")
+    r = vec3(obj.get("rotate", [0.0, 0.0, 0.0]), where + ".rotate")
+    t = vec3(obj.get("translate", [0.0, 0.0, 0.0]), where + ".translate")
+
+    def rot(axis, deg):
+        a = math.radians(deg)
+        c, sn = math.cos(a), math.sin(a)
+        if deg % 90 == 0:  # exact for right angles
+            c, sn = [(1, 0), (0, 1), (-1, 0), (0, -1)][int(deg // 90) % 4]
+        m = np.eye(4)
+        i, j = [(1, 2), (2, 0), (0, 1)][axis]
+        m[i, i], m[i, j], m[j, i], m[j, j] = c, -sn, sn, c
+        return m
+
+    S = np.diag([s[0], s[1], s[2], 1.0])
+    T = np.eye(4)
+    T[:3, 3] = t
+    return T @ rot(2, r[2]) @ rot(1, r[1]) @ rot(0, r[0]) @ S
+
+
+def read_mtl(path):
+    mats = {}
+    cur = None
+    try:
+        with open(path, encoding="utf-8", errors="replace") as fh:
+            for line in fh:
+                tok = line.split()
+                if not tok or tok[0].startswith("#"):
+                    continue
+                if tok[0] == "newmtl":
+                    cur = " ".join(tok[1:])
+                    mats[cur] = {}
+                elif cur is not None and len(tok) >= 2:
+                    vals = []
+                    for x in tok[1:]:
+                        try:
+                            vals.append(float(x))
+                        except ValueError:
+                            break
+                    if vals:
+                        mats[cur][tok[0]] = vals
+    except OSError as e:
+        print("mitsuba_render: warning: cannot read %s: %s" % (path, e), file=sys.stderr)
+    return mats
+
+
+def mtl_to_material(m):
+    """Our material table from MTL entries (scene-format.md, 'OBJ and MTL')."""
+    def rgb(key, default):
+        v = m.get(key)
+        if v is None:
+            return default
+        return [v[0]] * 3 if len(v) < 3 else v[:3]
+    kd = rgb("Kd", [0.8, 0.8, 0.8])
+    ke = rgb("Ke", [0.0, 0.0, 0.0])
+    illum = int(m["illum"][0]) if "illum" in m else None
+    pm = m.get("Pm", [0.0])[0]
+    pr = m.get("Pr", [0.0])[0]
+    d = m.get("d", [1.0])[0]
+    ni = m.get("Ni", [1.5])[0]
+    out = {"emission": ke}
+    if illum == 7 or (illum != 3 and pm < 0.5 and d < 1.0 and ni > 1.0):
+        out.update(type="dielectric", ior=ni if "Ni" in m else 1.5)
+    elif illum == 3 or pm >= 0.5:
+        alb = rgb("Ks", kd) if "Ks" in m else kd
+        if pr > 0:
+            out.update(type="rough_conductor", albedo=alb, roughness=pr)
+        else:
+            out.update(type="conductor", albedo=alb)
+    else:
+        out.update(type="diffuse", albedo=kd)
+    return out
+
+
+DEFAULT_MATERIAL = {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}
+
+
+def split_obj(path, tmpdir, stem):
+    """Parse an OBJ; write one triangle OBJ per (material, has-normals) group.
+    Returns [(file, material_name or None, has_vn, mtl_materials)]."""
+    vs, vns = [], []
+    groups = {}          # (mtl name, has_vn) -> list of triangles [(vi, ni), ...]
+    mtl = {}
+    cur = None
+    base = os.path.dirname(path)
+
+    def idx(s, n):
+        i = int(s)
+        return i - 1 if i > 0 else n + i
+
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        for line in fh:
+            tok = line.split()
+            if not tok:
+                continue
+            k = tok[0]
+            if k == "v":
+                vs.append(tok[1:4])
+            elif k == "vn":
+                vns.append(tok[1:4])
+            elif k == "usemtl":
+                cur = " ".join(tok[1:]) if len(tok) > 1 else None
+            elif k == "mtllib":
+                for name in tok[1:]:
+                    mtl.update(read_mtl(os.path.join(base, name)))
+            elif k == "f":
+                corners = []
+                for c in tok[1:]:
+                    parts = c.split("/")
+                    vi = idx(parts[0], len(vs))
+                    ni = idx(parts[2], len(vns)) if len(parts) > 2 and parts[2] else None
+                    corners.append((vi, ni))
+                if len(corners) < 3:
+                    continue
+                has_vn = all(c[1] is not None for c in corners)
+                g = groups.setdefault((cur, has_vn), [])
+                for i in range(1, len(corners) - 1):
+                    g.append((corners[0], corners[i], corners[i + 1]))
+    out = []
+    for gi, ((mname, has_vn), tris) in enumerate(groups.items()):
+        fn = os.path.join(tmpdir, "%s_%d.obj" % (stem, gi))
+        used_v = sorted({c[0] for t in tris for c in t})
+        vmap = {v: i + 1 for i, v in enumerate(used_v)}
+        with open(fn, "w") as fh:
+            fh.write("".join("v %s %s %s\n" % tuple(vs[v]) for v in used_v))
+            if has_vn:
+                used_n = sorted({c[1] for t in tris for c in t})
+                nmap = {n: i + 1 for i, n in enumerate(used_n)}
+                fh.write("".join("vn %s %s %s\n" % tuple(vns[n]) for n in used_n))
+                fh.write("".join("f %d//%d %d//%d %d//%d\n" % (
+                    vmap[a[0]], nmap[a[1]], vmap[b[0]], nmap[b[1]], vmap[c[0]], nmap[c[1]])
+                    for a, b, c in tris))
+            else:
+                fh.write("".join("f %d %d %d\n" % (vmap[a[0]], vmap[b[0]], vmap[c[0]])
+                                 for a, b, c in tris))
+        out.append((fn, mname, has_vn, mtl))
+    return out
+
+
+def rgb_spec(v):
+    return {"type": "rgb", "value": [float(x) for x in v]}
+
+
+def mitsuba_bsdf(mat, where):
+    t = mat.get("type", "diffuse")
+    allowed = {"type", "emission"}
+    if t == "diffuse":
+        allowed |= {"albedo"}
+        b = {"type": "twosided", "bsdf": {"type": "diffuse",
+                                          "reflectance": rgb_spec(vec3(mat.get("albedo", 0.8), where))}}
+    elif t == "conductor":
+        allowed |= {"albedo"}
+        b = {"type": "twosided", "bsdf": {
+            "type": "conductor", "material": "none",
+            "specular_reflectance": rgb_spec(vec3(mat.get("albedo", 1.0), where))}}
+    elif t == "rough_conductor":
+        allowed |= {"albedo", "roughness"}
+        r = float(mat.get("roughness", 0.5))
+        b = {"type": "twosided", "bsdf": {
+            "type": "roughconductor", "material": "none", "distribution": "ggx",
+            "alpha": max(r * r, 1e-4), "sample_visible": True,
+            "specular_reflectance": rgb_spec(vec3(mat.get("albedo", 1.0), where))}}
+    elif t == "dielectric":
+        allowed |= {"ior"}
+        b = {"type": "dielectric", "int_ior": float(mat.get("ior", 1.5)), "ext_ior": 1.0}
+    else:
+        raise SceneError("%s: unknown material type '%s'" % (where, t))
+    check_keys(mat, allowed, where)
+    return b
+
+
+def emission_of(mat, where):
+    e = vec3(mat.get("emission", [0.0, 0.0, 0.0]), where + ".emission")
+    if max(e) <= 0.0:
+        return None
+    return {"type": "area", "radiance": rgb_spec(e)}
+
+
+def gradient_envmap(mi, zenith, horizon, width=64, height=1024):
+    """Lat-long bitmap for Mitsuba's envmap: row j covers theta = pi*(j+0.5)/height
+    measured from +Y (Mitsuba: uv.y = acos(dir.y)/pi), so dir.y = cos(theta)."""
+    theta = (np.arange(height) + 0.5) / height * math.pi
+    t = 0.5 * (np.cos(theta) + 1.0)
+    z, h = np.array(zenith), np.array(horizon)
+    rows = h[None, :] * (1.0 - t[:, None]) + z[None, :] * t[:, None]
+    img = np.repeat(rows[:, None, :], width, axis=1).astype(np.float32)
+    return {"type": "envmap", "bitmap": mi.Bitmap(img, mi.Bitmap.PixelFormat.RGB)}
+
+
+def build_scene_dict(mi, path, args, tmpdir):
+    with open(path, "rb") as fh:
+        doc = tomllib.load(fh)
+    check_keys(doc, {"camera", "render", "sky", "materials", "objects"}, "scene")
+    base = os.path.dirname(os.path.abspath(path))
+
+    render = doc.get("render", {})
+    check_keys(render, {"width", "height", "spp", "max_depth", "seed"}, "[render]")
+    width = args.width or int(render.get("width", 640))
+    height = args.height or int(render.get("height", 480))
+    spp = args.spp or int(render.get("spp", 64))
+    max_depth = args.max_depth if args.max_depth is not None else int(render.get("max_depth", 8))
+    seed = args.seed if args.seed is not None else int(render.get("seed", 0))
+
+    cam = doc.get("camera")
+    if cam is None:
+        raise SceneError("missing [camera]")
+    check_keys(cam, {"position", "look_at", "up", "vfov", "aperture", "focus_distance"}, "[camera]")
+    pos = vec3(cam["position"], "camera.position")
+    at = vec3(cam["look_at"], "camera.look_at")
+    up = vec3(cam.get("up", [0.0, 1.0, 0.0]), "camera.up")
+    vfov = float(cam.get("vfov", 40.0))
+    aperture = float(cam.get("aperture", 0.0))
+    focus = float(cam.get("focus_distance", math.dist(pos, at)))
+    # Mitsuba's look_at: image x grows towards cross(forward, up), as in meshtrace.
+    sensor = {
+        "type": "thinlens" if aperture > 0 else "perspective",
+        "fov_axis": "y",
+        "fov": vfov,
+        "near_clip": 1e-4,
+        "far_clip": 1e7,
+        "to_world": mi.ScalarTransform4f().look_at(origin=pos, target=at, up=up),
+        "sampler": {"type": "independent", "sample_count": spp},
+        "film": {"type": "hdrfilm", "width": width, "height": height,
+                 "pixel_format": "rgb", "component_format": "float32",
+                 "rfilter": {"type": "box"}},
+    }
+    if aperture > 0:
+        sensor["aperture_radius"] = aperture / 2.0
+        sensor["focus_distance"] = focus
+
+    scene = {"type": "scene",
+             "integrator": {"type": "path", "max_depth": max_depth, "rr_depth": 5,
+                            "hide_emitters": False},
+             "sensor": sensor}
+
+    sky = doc.get("sky")
+    if sky is not None:
+        check_keys(sky, {"color", "zenith", "horizon"}, "[sky]")
+        if "color" in sky:
+            if "zenith" in sky or "horizon" in sky:
+                raise SceneError("[sky]: `color` excludes zenith/horizon")
+            c = vec3(sky["color"], "sky.color")
+            if max(c) > 0:
+                scene["sky"] = {"type": "constant", "radiance": rgb_spec(c)}
+        elif "zenith" in sky or "horizon" in sky:
+            z = vec3(sky.get("zenith", [0.0, 0.0, 0.0]), "sky.zenith")
+            h = vec3(sky.get("horizon", [0.0, 0.0, 0.0]), "sky.horizon")
+            if z == h:
+                if max(z) > 0:
+                    scene["sky"] = {"type": "constant", "radiance": rgb_spec(z)}
+            else:
+                scene["sky"] = gradient_envmap(mi, z, h)
+
+    materials = doc.get("materials", {})
+    for name, mat in materials.items():
+        mitsuba_bsdf(mat, "[materials.%s]" % name)  # validate early
+
+    def shape_with(shape, mat, where):
+        shape["bsdf"] = mitsuba_bsdf(mat, where)
+        em = emission_of(mat, where)
+        if em is not None:
+            shape["emitter"] = em
+        return shape
+
+    n_shapes = 0
+    for oi, obj in enumerate(doc.get("objects", [])):
+        where = "objects[%d]" % oi
+        check_keys(obj, {"mesh", "sphere", "material", "translate", "rotate", "scale", "matrix"},
+                   where)
+        mname = obj.get("material")
+        if mname is not None and mname not in materials:
+            raise SceneError("%s: unknown material '%s'" % (where, mname))
+        M = object_matrix(obj, where)
+        if ("mesh" in obj) == ("sphere" in obj):
+            raise SceneError("%s: needs exactly one of `mesh` and `sphere`" % where)
+        if "sphere" in obj:
+            sp = obj["sphere"]
+            check_keys(sp, {"center", "radius", "subdivisions"}, where + ".sphere")
+            c = vec3(sp["center"], where + ".sphere.center")
+            r = float(sp["radius"])
+            if "subdivisions" in sp:
+                print("mitsuba_render: note: %s uses an analytic sphere (subdivisions ignored)"
+                      % where, file=sys.stderr)
+            L = M[:3, :3]
+            sv = np.linalg.svd(L, compute_uv=False)
+            if sv.max() - sv.min() > 1e-9 * max(sv.max(), 1.0):
+                raise SceneError("%s: non-uniform transform of a sphere is not supported by "
+                                 "this tool" % where)
+            to_world = M @ np.array([[r, 0, 0, c[0]], [0, r, 0, c[1]], [0, 0, r, c[2]],
+                                     [0, 0, 0, 1.0]])
+            shape = {"type": "sphere", "to_world": mi.ScalarTransform4f(to_world.tolist())}
+            mat = materials[mname] if mname is not None else DEFAULT_MATERIAL
+            scene["shape_%d" % n_shapes] = shape_with(shape, mat, where)
+            n_shapes += 1
+            continue
+        mesh_path = os.path.join(base, obj["mesh"])
+        if not os.path.exists(mesh_path):
+            raise SceneError("%s: mesh file not found: %s" % (where, mesh_path))
+        for fn, obj_mtl, has_vn, mtl in split_obj(mesh_path, tmpdir, "o%d" % oi):
+            if mname is not None:
+                mat = materials[mname]
+            elif obj_mtl is not None and obj_mtl in mtl:
+                mat = mtl_to_material(mtl[obj_mtl])
+            else:
+                mat = DEFAULT_MATERIAL
+            shape = {"type": "obj", "filename": fn, "face_normals": not has_vn,
+                     "to_world": mi.ScalarTransform4f(M.tolist())}
+            scene["shape_%d" % n_shapes] = shape_with(shape, mat, where)
+            n_shapes += 1
+    return scene, dict(width=width, height=height, spp=spp, seed=seed, max_depth=max_depth)
+
+
+# ---------------------------------------------------------------- rendering
+
+def pass_seed(seed, k):
+    """Seed of pass k: pass 0 uses `seed` itself (so a one-pass render with seed s is
+    Mitsuba's render with seed s); later passes are spread far from small seeds."""
+    return (seed + k * 2654435761) % (1 << 32)
+
+
+def render(mi, scene, width, height, spp, seed, lanes, verbose=True):
+    per_pass = max(1, min(spp, lanes // (width * height)))
+    acc = np.zeros((height, width, 3), dtype=np.float64)
+    done, k = 0, 0
+    t0 = time.time()
+    while done < spp:
+        n = min(per_pass, spp - done)
+        img = mi.render(scene, spp=n, seed=pass_seed(seed, k))
+        acc += np.array(img, dtype=np.float64)[:, :, :3] * n
+        done += n
+        k += 1
+        if verbose and (k == 1 or k % 8 == 0 or done == spp):
+            print("  %d/%d spp, %.1f s" % (done, spp, time.time() - t0), file=sys.stderr)
+    return (acc / spp).astype(np.float32), time.time() - t0
+
+
+def write_exr(mi, img, path):
+    d = os.path.dirname(os.path.abspath(path))
+    os.makedirs(d, exist_ok=True)
+    mi.Bitmap(np.ascontiguousarray(img, dtype=np.float32), mi.Bitmap.PixelFormat.RGB).write(path)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("scene")
+    ap.add_argument("--spp", type=int)
+    ap.add_argument("--seed", type=int)
+    ap.add_argument("--width", type=int)
+    ap.add_argument("--height", type=int)
+    ap.add_argument("--max-depth", type=int)
+    ap.add_argument("-o", "--output", default="mitsuba.exr")
+    ap.add_argument("--variant", help="Mitsuba variant (default: llvm_ad_rgb, else scalar_rgb)")
+    ap.add_argument("--lanes", type=int, default=1 << 23,
+                    help="samples per pass at most (memory); default 2^23")
+    args = ap.parse_args()
+    mi = setup_mitsuba(args.variant)
+    with tempfile.TemporaryDirectory(prefix="mitsuba_render_") as tmp:
+        try:
+            d, opts = build_scene_dict(mi, args.scene, args, tmp)
+        except (SceneError, KeyError, ValueError, TypeError) as e:
+            raise SystemExit("mitsuba_render: %s: %s" % (args.scene, e))
+        scene = mi.load_dict(d)
+    print("mitsuba_render: %s, %dx%d, %d spp, max_depth %d, seed %d, variant %s"
+          % (args.scene, opts["width"], opts["height"], opts["spp"], opts["max_depth"],
+             opts["seed"], mi.variant()), file=sys.stderr)
+    img, secs = render(mi, scene, opts["width"], opts["height"], opts["spp"], opts["seed"],
+                       args.lanes)
+    write_exr(mi, img, args.output)
+    print("mitsuba_render: wrote %s (%.1f s)" % (args.output, secs), file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()
