@@ -110,8 +110,9 @@ fn ggx_d(h: vec3<f32>, alpha: f32) -> f32 {
     if h.z <= 0.0 {
         return 0.0;
     }
+    // (h.z^2 (a^2 - 1) + 1) rewritten for a unit h, which avoids cancellation near the peak.
     let a2 = alpha * alpha;
-    let d = h.z * h.z * (a2 - 1.0) + 1.0;
+    let d = h.x * h.x + h.y * h.y + a2 * h.z * h.z;
     return a2 / (PI * d * d);
 }
 
@@ -120,8 +121,7 @@ fn ggx_g1(w: vec3<f32>, alpha: f32) -> f32 {
     if w.z <= 0.0 {
         return 0.0;
     }
-    let z2 = w.z * w.z;
-    let tan2 = max(1.0 - z2, 0.0) / z2;
+    let tan2 = (w.x * w.x + w.y * w.y) / (w.z * w.z);
     return 2.0 / (1.0 + sqrt(1.0 + alpha * alpha * tan2));
 }
 

@@ -47,7 +47,7 @@ const MAT_CONDUCTOR: u32 = 1u;
 const MAT_ROUGH_CONDUCTOR: u32 = 2u;
 const MAT_DIELECTRIC: u32 = 3u;
 
-// mirror: src/gpu/layout.rs `GpuParams` (144 bytes): one dispatch's camera, sky and range.
+// mirror: src/gpu/layout.rs `GpuParams` (128 bytes): one dispatch's camera, sky and range.
 struct Params {
     cam_position: vec3<f32>,
     width: u32,

@@ -6,7 +6,7 @@ use crate::render::RenderScene;
 use crate::scene::{Material, RenderSettings, Sky};
 use bytemuck::{Pod, Zeroable};
 
-/// One dispatch's parameters (144 bytes). mirror: shaders/types.wgsl `Params`
+/// One dispatch's parameters (128 bytes). mirror: shaders/types.wgsl `Params`
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuParams {

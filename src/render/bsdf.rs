@@ -158,8 +158,9 @@ pub fn ggx_d(h: Vec3, alpha: f32) -> f32 {
     if h.z <= 0.0 {
         return 0.0;
     }
+    // (h.z^2 (a^2 - 1) + 1) rewritten for a unit h, which avoids cancellation near the peak.
     let a2 = alpha * alpha;
-    let d = h.z * h.z * (a2 - 1.0) + 1.0;
+    let d = h.x * h.x + h.y * h.y + a2 * h.z * h.z;
     a2 / (PI * d * d)
 }
 
@@ -168,8 +169,7 @@ pub fn ggx_g1(w: Vec3, alpha: f32) -> f32 {
     if w.z <= 0.0 {
         return 0.0;
     }
-    let z2 = w.z * w.z;
-    let tan2 = (1.0 - z2).max(0.0) / z2;
+    let tan2 = (w.x * w.x + w.y * w.y) / (w.z * w.z);
     2.0 / (1.0 + (1.0 + alpha * alpha * tan2).sqrt())
 }
 

@@ -256,7 +256,7 @@ pub fn render(
 
 /// The sum of one pixel's samples over the job's range, accumulated in sample order in f32
 /// as the GPU accumulates them; non-finite samples are dropped.
-/// mirror: shaders/pathtrace.wgsl `render_sample`
+/// mirror: shaders/render.wgsl `render`
 pub fn render_pixel(scene: &RenderScene, job: &RenderJob, x: u32, y: u32) -> (Vec3, u64) {
     let s = &job.settings;
     let pixel = y * s.width + x;

@@ -1,0 +1,164 @@
+//! The BVH against brute force: for 100k random rays, closest hit over the tree equals the
+//! closest hit over every triangle, and any-hit agrees with it; and the tree's invariants.
+
+mod common;
+
+use glam::Vec3;
+use meshtrace::bvh::{BuildParams, Bvh, traverse_any, traverse_closest, validate};
+use meshtrace::geometry::{T_INF, TriVerts, intersect_triangle};
+use meshtrace::math::{Aabb, Ray};
+use meshtrace::render::rng::pcg4d;
+use meshtrace::scene::{self, sphere::icosphere};
+use rayon::prelude::*;
+
+/// Deterministic uniform floats in [0, 1) for test case `i`, stream `k`.
+fn rand(i: u32, k: u32) -> f32 {
+    (pcg4d([i, k, 0x5eed, 1])[0] >> 8) as f32 / 16_777_216.0
+}
+
+fn rand3(i: u32, k: u32) -> Vec3 {
+    Vec3::new(rand(i, k), rand(i, k + 1), rand(i, k + 2))
+}
+
+/// A soup of random triangles of mixed sizes plus a finely tessellated sphere.
+fn generated_mesh() -> Vec<[Vec3; 3]> {
+    let mut tris = Vec::new();
+    for i in 0..4_000 {
+        let c = rand3(i, 0) * 10.0 - 5.0;
+        let size = 0.02 + 0.5 * rand(i, 3).powi(3);
+        tris.push([
+            c,
+            c + (rand3(i, 4) - 0.5) * size,
+            c + (rand3(i, 7) - 0.5) * size,
+        ]);
+    }
+    let (v, f) = icosphere(4);
+    tris.extend(
+        f.iter()
+            .map(|t| t.map(|k| v[k as usize] * 2.0 + Vec3::new(1.0, 0.5, -1.0))),
+    );
+    tris
+}
+
+/// Rays from around the bounds towards random points inside them (most hit something).
+fn rays(bounds: Aabb, n: u32) -> Vec<Ray> {
+    let e = bounds.extent();
+    (0..n)
+        .map(|i| {
+            let origin = bounds.min - 0.25 * e + 1.5 * e * rand3(i, 100);
+            let target = bounds.min + e * rand3(i, 103);
+            Ray::new(origin, (target - origin).normalize())
+        })
+        .collect()
+}
+
+fn check(name: &str, corners: &[[Vec3; 3]]) {
+    let bounds: Vec<Aabb> = corners.iter().map(|c| Aabb::from_points(c)).collect();
+    let bvh = Bvh::build(&bounds, &BuildParams::default()).expect("the tree fits the stack");
+    validate(&bvh, &bounds).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let tris: Vec<TriVerts> = bvh
+        .order
+        .iter()
+        .map(|&i| TriVerts::new(corners[i as usize]))
+        .collect();
+    let all = bounds.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+    let rays = rays(all, 100_000);
+    let mismatches: Vec<String> = rays
+        .par_iter()
+        .enumerate()
+        .filter_map(|(i, ray)| {
+            let mut best: Option<(f32, u32)> = None;
+            for (k, t) in tris.iter().enumerate() {
+                if let Some(h) = intersect_triangle(ray, t, best.map_or(T_INF, |b| b.0)) {
+                    best = Some((h.t, k as u32));
+                }
+            }
+            let hit = traverse_closest(&bvh.nodes, &tris, ray, T_INF);
+            let any = traverse_any(&bvh.nodes, &tris, ray, T_INF);
+            let same = match (best, hit) {
+                (None, None) => true,
+                // The same distance from a different triangle: a ray through a shared edge.
+                (Some((t, k)), Some(h)) => h.tri == k || h.t == t,
+                _ => false,
+            };
+            let any_ok = any == best.is_some();
+            (!same || !any_ok)
+                .then(|| format!("ray {i}: brute force {best:?}, bvh {hit:?}, any-hit {any}"))
+        })
+        .collect();
+    let hits = rays.len();
+    assert!(
+        mismatches.is_empty(),
+        "{name}: {} of {hits} rays disagree, first: {}",
+        mismatches.len(),
+        mismatches[0]
+    );
+    // A shorter ray must stop at the hit: any-hit with t_max just short of the closest hit is false.
+    for ray in rays.iter().take(10_000) {
+        if let Some(h) = traverse_closest(&bvh.nodes, &tris, ray, T_INF) {
+            assert!(
+                !traverse_any(&bvh.nodes, &tris, ray, h.t * 0.999),
+                "{name}: any-hit beyond t_max"
+            );
+            assert!(traverse_any(&bvh.nodes, &tris, ray, h.t * 1.001 + 1e-6));
+        }
+    }
+}
+
+#[test]
+fn closest_hit_matches_brute_force_on_a_generated_mesh() {
+    check("generated", &generated_mesh());
+}
+
+#[test]
+fn closest_hit_matches_brute_force_on_the_stanford_bunny() {
+    let Some(path) = common::shared_mesh("stanford-bunny.obj") else {
+        return;
+    };
+    let scene = scene::load_scene(&path).expect("the bunny loads");
+    let corners: Vec<[Vec3; 3]> = scene
+        .mesh
+        .triangles
+        .iter()
+        .map(|t| scene.mesh.vertices(t))
+        .collect();
+    assert!(corners.len() > 69_000);
+    check("bunny", &corners);
+}
+
+#[test]
+fn sah_leaves_vary_in_size_and_the_tree_costs_less_than_a_flat_list() {
+    let corners = generated_mesh();
+    let bounds: Vec<Aabb> = corners.iter().map(|c| Aabb::from_points(c)).collect();
+    let bvh = Bvh::build(&bounds, &BuildParams::default()).unwrap();
+    let s = &bvh.stats;
+    // The SAH chooses leaf sizes: more than one size occurs, none beyond the cap.
+    assert!(
+        s.leaf_sizes.iter().filter(|&&n| n > 0).count() > 1,
+        "{:?}",
+        s.leaf_sizes
+    );
+    assert!(s.leaf_sizes.len() <= BuildParams::default().max_leaf_size + 1);
+    assert_eq!(
+        s.leaf_sizes
+            .iter()
+            .enumerate()
+            .map(|(k, n)| k * n)
+            .sum::<usize>(),
+        corners.len()
+    );
+    // One leaf holding everything would cost N; a good tree costs a tiny fraction of that.
+    assert!(
+        s.sah_cost < corners.len() as f32 / 200.0,
+        "SAH cost {}",
+        s.sah_cost
+    );
+    // 32 bins may only do slightly better than 16.
+    let precise = Bvh::build(&bounds, &BuildParams::precise()).unwrap();
+    assert!(
+        s.sah_cost <= precise.stats.sah_cost * 1.05,
+        "{} vs {}",
+        s.sah_cost,
+        precise.stats.sah_cost
+    );
+}

@@ -1,0 +1,1305 @@
+//! Every WGSL stage against its Rust twin, through the test kernels of `shaders/tests.wgsl`:
+//! thousands of deterministic random cases per kernel, each compared with the CPU function
+//! of the same name. Skipped without a GPU (see `common::gpu`).
+//!
+//! Run with `--nocapture` to see the cases, maximum errors and agreement of each kernel.
+
+mod common;
+
+use glam::{Vec2, Vec3};
+use meshtrace::bvh::{BuildParams, traverse_any, traverse_closest};
+use meshtrace::geometry::{T_INF, TriVerts, intersect_aabb, intersect_triangle, safe_inverse};
+use meshtrace::gpu::GpuContext;
+use meshtrace::gpu::kernels::run_test_kernel;
+use meshtrace::math::Ray;
+use meshtrace::render::bsdf::{bsdf_eval, bsdf_pdf, bsdf_sample, fresnel_dielectric, ggx_alpha};
+use meshtrace::render::cpu::trace_path;
+use meshtrace::render::rng::{DIMS_PER_BOUNCE, Rng, pcg4d, u32_to_unit};
+use meshtrace::render::sampling::{
+    cosine_hemisphere_pdf, power_heuristic, sample_cdf, sample_concentric_disk,
+    sample_cosine_hemisphere, sample_uniform_triangle,
+};
+use meshtrace::render::{RenderScene, TRI_SMOOTH};
+use meshtrace::scene::{
+    Camera, Material, MaterialKind, Mesh, NO_NORMAL, RenderSettings, Sky, Triangle,
+};
+use std::time::Instant;
+
+// ---------------------------------------------------------------------------------------
+// Deterministic random inputs, bit conversions, running a kernel.
+
+/// SplitMix64: a tiny deterministic generator for test inputs.
+struct SplitMix(u64);
+
+impl SplitMix {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    fn u32(&mut self) -> u32 {
+        (self.next_u64() >> 32) as u32
+    }
+
+    /// Uniform in [0, 1), 24 bits.
+    fn unit(&mut self) -> f32 {
+        u32_to_unit(self.u32())
+    }
+
+    fn range(&mut self, a: f32, b: f32) -> f32 {
+        a + (b - a) * self.unit()
+    }
+
+    fn below(&mut self, n: usize) -> usize {
+        ((self.u32() as u64 * n as u64) >> 32) as usize
+    }
+
+    fn chance(&mut self, p: f32) -> bool {
+        self.unit() < p
+    }
+
+    fn vec3(&mut self, a: f32, b: f32) -> Vec3 {
+        Vec3::new(self.range(a, b), self.range(a, b), self.range(a, b))
+    }
+
+    fn unit_vector(&mut self) -> Vec3 {
+        loop {
+            let v = self.vec3(-1.0, 1.0);
+            let l2 = v.length_squared();
+            if l2 > 1e-4 && l2 <= 1.0 {
+                return v / l2.sqrt();
+            }
+        }
+    }
+}
+
+fn b(x: f32) -> u32 {
+    x.to_bits()
+}
+
+fn f(x: u32) -> f32 {
+    f32::from_bits(x)
+}
+
+fn v3(w: [u32; 4]) -> Vec3 {
+    Vec3::new(f(w[0]), f(w[1]), f(w[2]))
+}
+
+fn word(v: Vec3, w: u32) -> [u32; 4] {
+    [b(v.x), b(v.y), b(v.z), w]
+}
+
+type Case = [[u32; 4]; 2];
+
+/// Runs `entry` over `cases` (two input words each) and returns two output words per case.
+fn run(
+    ctx: &GpuContext,
+    scene: &RenderScene,
+    settings: &RenderSettings,
+    entry: &str,
+    cases: &[Case],
+) -> Vec<Case> {
+    let input: Vec<[u32; 4]> = cases.iter().flatten().copied().collect();
+    let start = Instant::now();
+    let out = run_test_kernel(ctx, scene, settings, entry, &input)
+        .unwrap_or_else(|e| panic!("{entry}: {e}"));
+    eprintln!(
+        "{entry}: {} cases on the GPU in {:.2} s",
+        cases.len(),
+        start.elapsed().as_secs_f64()
+    );
+    assert_eq!(out.len(), input.len(), "{entry}: output length");
+    out.chunks(2).map(|c| [c[0], c[1]]).collect()
+}
+
+/// Relative difference with a floor on the magnitude: `|a - b| / max(|a|, |b|, floor)`.
+/// With `floor = abs / rel`, `err <= rel` means `|a - b| <= rel * max(|a|, |b|) + abs`
+/// (near enough). Equal values (infinities included) give 0, NaN or one infinity gives inf.
+fn rel(a: f32, b: f32, floor: f32) -> f64 {
+    if a == b {
+        return 0.0;
+    }
+    if !(a.is_finite() && b.is_finite()) {
+        return f64::INFINITY;
+    }
+    (a as f64 - b as f64).abs() / (a.abs().max(b.abs()).max(floor)) as f64
+}
+
+fn rel3(a: Vec3, b: Vec3, floor: f32) -> f64 {
+    (0..3).map(|i| rel(a[i], b[i], floor)).fold(0.0, f64::max)
+}
+
+/// The largest error seen for one quantity, with the case it came from. Each error is
+/// checked against a tolerance, fixed or given per case (for ill-conditioned cases).
+struct Worst {
+    what: &'static str,
+    limit: f64,
+    /// The largest error / tolerance (must stay <= 1) and the largest raw error.
+    max_ratio: f64,
+    max: f64,
+    at: String,
+    n: usize,
+    /// Whether some case had a tolerance above `limit`.
+    widened: bool,
+}
+
+impl Worst {
+    fn new(what: &'static str, limit: f64) -> Self {
+        Self {
+            what,
+            limit,
+            max_ratio: 0.0,
+            max: 0.0,
+            at: String::new(),
+            n: 0,
+            widened: false,
+        }
+    }
+
+    fn add(&mut self, err: f64, case: impl FnOnce() -> String) {
+        self.add_tol(err, self.limit, case);
+    }
+
+    fn add_tol(&mut self, err: f64, tol: f64, case: impl FnOnce() -> String) {
+        self.n += 1;
+        self.widened |= tol > self.limit;
+        let err = if err.is_nan() { f64::INFINITY } else { err };
+        self.max = self.max.max(err);
+        if err / tol > self.max_ratio {
+            self.max_ratio = err / tol;
+            self.at = format!("{} (error {err:.3e}, tolerance {tol:.3e})", case());
+        }
+    }
+
+    fn report(&self) -> String {
+        format!(
+            "{}: max error {:.3e} (tolerance {:.0e}{}; max error/tolerance {:.3}) over {} values",
+            self.what,
+            self.max,
+            self.limit,
+            if self.widened {
+                ", widened where ill-conditioned"
+            } else {
+                ""
+            },
+            self.max_ratio,
+            self.n
+        )
+    }
+
+    fn check(&self, entry: &str) {
+        eprintln!("{entry}: {}", self.report());
+        assert!(
+            self.max_ratio <= 1.0,
+            "{entry}: {}; worst case: {}",
+            self.report(),
+            self.at
+        );
+    }
+}
+
+/// A count of cases of some kind that may occur, bounded by a fraction of all cases.
+struct Tally {
+    what: &'static str,
+    max_fraction: f64,
+    count: usize,
+    examples: Vec<String>,
+}
+
+impl Tally {
+    fn new(what: &'static str, max_fraction: f64) -> Self {
+        Self {
+            what,
+            max_fraction,
+            count: 0,
+            examples: Vec::new(),
+        }
+    }
+
+    fn add(&mut self, case: impl FnOnce() -> String) {
+        self.count += 1;
+        if self.examples.len() < 3 {
+            self.examples.push(case());
+        }
+    }
+
+    fn check(&self, entry: &str, total: usize) {
+        let frac = self.count as f64 / total as f64;
+        eprintln!(
+            "{entry}: {}: {} of {total} ({:.4}%, limit {:.4}%)",
+            self.what,
+            self.count,
+            100.0 * frac,
+            100.0 * self.max_fraction
+        );
+        for e in &self.examples {
+            eprintln!("  e.g. {e}");
+        }
+        assert!(
+            frac <= self.max_fraction,
+            "{entry}: {}: {} of {total} cases exceed {:.4}%; e.g.\n{}",
+            self.what,
+            self.count,
+            100.0 * self.max_fraction,
+            self.examples.join("\n")
+        );
+    }
+}
+
+/// Hard failures: any one fails the test (the first few are shown).
+struct Failures {
+    entry: &'static str,
+    list: Vec<String>,
+    count: usize,
+}
+
+impl Failures {
+    fn new(entry: &'static str) -> Self {
+        Self {
+            entry,
+            list: Vec::new(),
+            count: 0,
+        }
+    }
+
+    fn add(&mut self, msg: impl FnOnce() -> String) {
+        self.count += 1;
+        if self.list.len() < 5 {
+            self.list.push(msg());
+        }
+    }
+
+    fn check(&self, total: usize) {
+        assert!(
+            self.count == 0,
+            "{}: {} of {total} cases differ from the CPU; first:\n{}",
+            self.entry,
+            self.count,
+            self.list.join("\n")
+        );
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Scenes.
+
+// The mesh scene's materials: 0 and 1 diffuse, 2 a smooth conductor, then:
+/// Rough conductors of roughness `ROUGHNESS[k]` are material `M_ROUGH + k`.
+const M_ROUGH: u32 = 3;
+const ROUGHNESS: [f32; 5] = [0.02, 0.1, 0.3, 0.6, 1.0];
+const M_DIELECTRIC: u32 = M_ROUGH + ROUGHNESS.len() as u32;
+const M_EMITTERS: u32 = M_DIELECTRIC + 1;
+const EMISSIONS: [[f32; 3]; 3] = [[10.0, 10.0, 10.0], [1.0, 0.5, 0.2], [50.0, 40.0, 30.0]];
+
+fn material(name: &str, kind: MaterialKind, albedo: Vec3, roughness: f32) -> Material {
+    Material {
+        name: name.to_string(),
+        kind,
+        albedo,
+        emission: Vec3::ZERO,
+        roughness,
+        ior: 1.5,
+    }
+}
+
+fn mesh_materials() -> Vec<Material> {
+    let mut m = vec![
+        material("white", MaterialKind::Diffuse, Vec3::splat(0.8), 0.0),
+        material("blue", MaterialKind::Diffuse, Vec3::new(0.2, 0.5, 0.9), 0.0),
+        material(
+            "gold",
+            MaterialKind::Conductor,
+            Vec3::new(0.9, 0.7, 0.3),
+            0.0,
+        ),
+    ];
+    for r in ROUGHNESS {
+        m.push(material(
+            "rough",
+            MaterialKind::RoughConductor,
+            Vec3::new(0.95, 0.6, 0.5),
+            r,
+        ));
+    }
+    m.push(material("glass", MaterialKind::Dielectric, Vec3::ONE, 0.0));
+    for e in EMISSIONS {
+        let mut l = material("light", MaterialKind::Diffuse, Vec3::splat(0.5), 0.0);
+        l.emission = Vec3::from(e);
+        m.push(l);
+    }
+    m
+}
+
+/// Appends a smooth-shaded icosphere (normals from the centre).
+fn add_sphere(mesh: &mut Mesh, centre: Vec3, radius: f32, level: u32, material: u32) {
+    let (verts, faces) = meshtrace::scene::sphere::icosphere(level);
+    let base_p = mesh.positions.len() as u32;
+    let base_n = mesh.normals.len() as u32;
+    for v in &verts {
+        mesh.positions.push(centre + radius * *v);
+        mesh.normals.push(*v);
+    }
+    for t in faces {
+        mesh.triangles.push(Triangle {
+            p: t.map(|i| base_p + i),
+            n: t.map(|i| base_n + i),
+            material,
+        });
+    }
+}
+
+/// A soup of 2,500 random triangles of every material (every 40th one an emitter of one
+/// of three powers), a smooth glass icosphere and a smooth rough-metal one: 4,100
+/// triangles, under a gradient sky.
+fn mesh_scene() -> (RenderScene, RenderSettings) {
+    let mut rng = SplitMix(0x5eed_0001);
+    let mut mesh = Mesh::default();
+    for i in 0..2500 {
+        let c = rng.vec3(-2.5, 2.5);
+        let size = rng.range(0.05, 0.6);
+        let base = mesh.positions.len() as u32;
+        for _ in 0..3 {
+            mesh.positions.push(c + size * rng.vec3(-1.0, 1.0));
+        }
+        let material = if i % 40 == 0 {
+            M_EMITTERS + (i / 40) % EMISSIONS.len() as u32
+        } else {
+            rng.below(M_EMITTERS as usize) as u32
+        };
+        mesh.triangles.push(Triangle {
+            p: [base, base + 1, base + 2],
+            n: [NO_NORMAL; 3],
+            material,
+        });
+    }
+    add_sphere(&mut mesh, Vec3::new(0.3, -0.2, 0.4), 0.9, 3, M_DIELECTRIC);
+    add_sphere(&mut mesh, Vec3::new(-1.2, 1.0, -0.8), 0.6, 2, M_ROUGH + 2);
+    let camera = Camera::new(
+        Vec3::new(0.5, 0.8, 7.0),
+        Vec3::ZERO,
+        Vec3::Y,
+        45.0,
+        0.0,
+        None,
+    )
+    .unwrap();
+    let settings = RenderSettings {
+        width: 160,
+        height: 120,
+        spp: 1,
+        max_depth: 10,
+        seed: 1234,
+    };
+    let sky = Sky::Gradient {
+        zenith: Vec3::new(0.3, 0.5, 0.9),
+        horizon: Vec3::new(1.0, 0.9, 0.8),
+    };
+    let scene = common::scene(mesh, mesh_materials(), camera, sky, settings);
+    let rs = RenderScene::new(&scene, &BuildParams::default()).expect("BVH");
+    assert!(rs.tris.len() > 4000);
+    assert!(rs.emitters.len() >= 50, "{} emitters", rs.emitters.len());
+    assert!(rs.shading.iter().any(|s| s.flags & TRI_SMOOTH != 0));
+    (rs, settings)
+}
+
+fn cornell() -> (RenderScene, RenderSettings) {
+    let scene = meshtrace::scene::builtin::load_builtin("cornell").expect("cornell");
+    let settings = scene.settings;
+    (
+        RenderScene::new(&scene, &BuildParams::default()).expect("BVH"),
+        settings,
+    )
+}
+
+/// (t, u, v, cosine between ray and plane) of the ray's meeting with the triangle's plane,
+/// in f64: the reference that says whether a case is close to an edge or grazing.
+fn plane_hit_f64(ray: &Ray, tri: &TriVerts) -> (f64, f64, f64, f64) {
+    let [v0, v1, v2] = tri.corners().map(|c| c.as_dvec3());
+    let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+    let e1 = v1 - v0;
+    let e2 = v2 - v0;
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    let s = o - v0;
+    let u = s.dot(p) / det;
+    let q = s.cross(e1);
+    let v = d.dot(q) / det;
+    let t = e2.dot(q) / det;
+    let cos = det.abs() / (e1.cross(e2).length() * d.length()).max(f64::MIN_POSITIVE);
+    (t, u, v, cos)
+}
+
+/// Whether barycentrics (u, v) lie within `eps` of the triangle's boundary.
+fn near_edge(u: f64, v: f64, eps: f64) -> bool {
+    u.abs() < eps || v.abs() < eps || (1.0 - u - v).abs() < eps || (1.0 - u).abs() < eps
+}
+
+// ---------------------------------------------------------------------------------------
+// The tests.
+
+#[test]
+fn rng_matches_bit_for_bit() {
+    let Some(ctx) = common::gpu("rng_matches_bit_for_bit") else {
+        return;
+    };
+    let (rs, settings) = cornell();
+    let mut r = SplitMix(1);
+    let mut cases: Vec<Case> = Vec::new();
+    // Structured keys: the first pixels, samples and every (bounce, dim) a path uses.
+    for pixel in 0..4u32 {
+        for sample in 0..4u32 {
+            for key in 0..12 * DIMS_PER_BOUNCE {
+                cases.push([[pixel * 1000, sample, 0, key], [0; 4]]);
+            }
+        }
+    }
+    let edge = [
+        0,
+        1,
+        15,
+        16,
+        0x7fff_ffff,
+        0x8000_0000,
+        u32::MAX - 1,
+        u32::MAX,
+    ];
+    while cases.len() < 20_000 {
+        let mut k = [r.u32(), r.u32(), r.u32(), r.u32()];
+        if r.chance(0.1) {
+            k[r.below(4)] = edge[r.below(edge.len())];
+        }
+        cases.push([k, [0; 4]]);
+    }
+    let out = run(&ctx, &rs, &settings, "test_rng", &cases);
+    let mut fail = Failures::new("test_rng");
+    for (c, o) in cases.iter().zip(&out) {
+        let k = c[0];
+        let rng = Rng::new(k[0], k[1], k[2]);
+        let (bounce, dim) = (k[3] / DIMS_PER_BOUNCE, k[3] % DIMS_PER_BOUNCE);
+        let h = pcg4d([k[0], k[1], k[3], k[2]]);
+        let want = [
+            [
+                rng.rng_u32(bounce, dim),
+                rng.rng_1d(bounce, dim).to_bits(),
+                h[1],
+                h[2],
+            ],
+            h,
+        ];
+        if *o != want {
+            fail.add(|| format!("key {k:?}: GPU {o:x?}, CPU {want:x?}"));
+        }
+    }
+    eprintln!(
+        "test_rng: {} cases, {} differ (bit-exact required)",
+        cases.len(),
+        fail.count
+    );
+    fail.check(cases.len());
+}
+
+#[test]
+fn intersect_triangle_matches() {
+    let Some(ctx) = common::gpu("intersect_triangle_matches") else {
+        return;
+    };
+    let (rs, settings) = mesh_scene();
+    let mut r = SplitMix(2);
+    let mut cases: Vec<Case> = Vec::new();
+    while cases.len() < 20_000 {
+        let i = r.below(rs.tris.len());
+        let [a, bb, c] = rs.tris[i].corners();
+        let centroid = (a + bb + c) / 3.0;
+        let bary = sample_uniform_triangle(Vec2::new(r.unit(), r.unit()));
+        let p = (1.0 - bary.x - bary.y) * a + bary.x * bb + bary.y * c;
+        // Scaling about the centroid by s in [0, 2) puts the target inside for s <= 1.
+        let mut target = centroid + r.range(0.0, 2.0) * (p - centroid);
+        if r.chance(0.03) {
+            // Exactly on a vertex or an edge's midpoint.
+            target = [a, bb, c, 0.5 * (a + bb), 0.5 * (bb + c), 0.5 * (c + a)][r.below(6)];
+        }
+        let dir_unit = r.unit_vector();
+        let dist = r.range(0.01, 5.0);
+        let scale = r.range(0.1, 10.0);
+        let mut dir = dir_unit * scale;
+        let origin = target - dir_unit * dist;
+        if r.chance(0.01) {
+            // Parallel to the triangle's plane.
+            let n = (bb - a).cross(c - a);
+            dir = dir - dir.dot(n) / n.length_squared() * n;
+        }
+        let t_max = if r.chance(0.2) {
+            r.range(0.0, 2.0 * dist / scale)
+        } else {
+            T_INF
+        };
+        cases.push([word(origin, i as u32), word(dir, b(t_max))]);
+    }
+    let out = run(&ctx, &rs, &settings, "test_intersect_triangle", &cases);
+    let mut fail = Failures::new("test_intersect_triangle");
+    let mut boundary = Tally::new("hit/miss differs within 1e-5 of an edge or t_max", 1e-3);
+    let mut t_err = Worst::new("t (relative)", 1e-5);
+    let mut uv_err = Worst::new("u, v (relative, abs 1e-6)", 1e-5);
+    let mut hits = 0;
+    for (c, o) in cases.iter().zip(&out) {
+        let ray = Ray::new(v3(c[0]), v3(c[1]));
+        let tri = &rs.tris[c[0][3] as usize];
+        let t_max = f(c[1][3]);
+        let cpu = intersect_triangle(&ray, tri, t_max);
+        let gpu_hit = o[0][0] == 1;
+        let (gt, gu, gv) = (f(o[0][1]), f(o[0][2]), f(o[0][3]));
+        let show = || {
+            format!(
+                "ray {:?} tri {} t_max {t_max}: CPU {cpu:?}, GPU hit {gpu_hit} t {gt} u {gu} v {gv}",
+                ray, c[0][3]
+            )
+        };
+        hits += cpu.is_some() as usize;
+        match cpu {
+            Some(h) if gpu_hit => {
+                // Grazing rays amplify rounding by 1 / cos: scale the error by cos.
+                let cos = plane_hit_f64(&ray, tri).3.min(1.0);
+                t_err.add(rel(h.t, gt, 0.0) * cos, show);
+                uv_err.add(rel(h.u, gu, 0.1).max(rel(h.v, gv, 0.1)) * cos, show);
+            }
+            None if !gpu_hit => {}
+            _ => {
+                let (t, u, v, cos) = plane_hit_f64(&ray, tri);
+                let eps = 1e-5 / cos.max(1e-6);
+                let at_edge = near_edge(u, v, eps);
+                let at_t = (t - t_max as f64).abs() < eps * t.abs() || t.abs() < eps;
+                if at_edge || at_t {
+                    boundary.add(show);
+                } else {
+                    fail.add(show);
+                }
+            }
+        }
+    }
+    eprintln!(
+        "test_intersect_triangle: {} cases, {hits} CPU hits",
+        cases.len()
+    );
+    fail.check(cases.len());
+    boundary.check("test_intersect_triangle", cases.len());
+    t_err.check("test_intersect_triangle");
+    uv_err.check("test_intersect_triangle");
+    assert!(
+        hits > cases.len() / 3 && hits < 2 * cases.len() / 3,
+        "{hits}"
+    );
+}
+
+#[test]
+fn intersect_aabb_matches() {
+    let Some(ctx) = common::gpu("intersect_aabb_matches") else {
+        return;
+    };
+    let (rs, settings) = mesh_scene();
+    let nodes = &rs.bvh.nodes;
+    let mut r = SplitMix(3);
+    let mut cases: Vec<Case> = Vec::new();
+    while cases.len() < 20_000 {
+        let i = r.below(nodes.len());
+        let bx = nodes[i].bounds();
+        let target = bx.center() + bx.extent() * r.vec3(-0.65, 0.65);
+        let mut dir = r.unit_vector();
+        if r.chance(0.15) {
+            // Axis-parallel rays: one or two zero components.
+            dir[r.below(3)] = 0.0;
+            if r.chance(0.5) {
+                dir[r.below(3)] = 0.0;
+            }
+            if dir == Vec3::ZERO {
+                dir = Vec3::X;
+            }
+        }
+        if r.chance(0.05) {
+            dir[r.below(3)] = -0.0;
+        }
+        dir *= r.range(0.2, 5.0);
+        let dist = if r.chance(0.2) {
+            0.0 // starts inside the box (or on its boundary)
+        } else {
+            r.range(0.0, 3.0)
+        };
+        let origin = target - dir * dist;
+        let t_max = if r.chance(0.3) {
+            r.range(0.0, 2.0 * dist)
+        } else {
+            T_INF
+        };
+        cases.push([word(origin, i as u32), word(dir, b(t_max))]);
+    }
+    let out = run(&ctx, &rs, &settings, "test_intersect_aabb", &cases);
+    let mut fail = Failures::new("test_intersect_aabb");
+    let mut boundary = Tally::new("hit/miss differs where t_near ~ t_far", 1e-3);
+    let mut t_err = Worst::new("t_near (relative, abs 1e-6)", 1e-5);
+    let mut hits = 0;
+    for (c, o) in cases.iter().zip(&out) {
+        let n = &nodes[c[0][3] as usize];
+        let (origin, dir, t_max) = (v3(c[0]), v3(c[1]), f(c[1][3]));
+        let cpu = intersect_aabb(origin, safe_inverse(dir), n.min.into(), n.max.into(), t_max);
+        let gpu = f(o[0][0]);
+        let show = || {
+            format!(
+                "origin {origin} dir {dir} t_max {t_max} box {:?}..{:?}: CPU {cpu}, GPU {gpu}",
+                n.min, n.max
+            )
+        };
+        hits += (cpu != T_INF) as usize;
+        if (cpu == T_INF) != (gpu == T_INF) {
+            // f64 slab test: is the ray grazing the box, or ending at its entry?
+            let inv = safe_inverse(dir).as_dvec3();
+            let t0 = (Vec3::from(n.min).as_dvec3() - origin.as_dvec3()) * inv;
+            let t1 = (Vec3::from(n.max).as_dvec3() - origin.as_dvec3()) * inv;
+            let near = t0.min(t1).max_element().max(0.0);
+            let far = t0.max(t1).min_element().min(t_max as f64);
+            if (far - near).abs() <= 1e-5 * near.abs().max(1e-1) {
+                boundary.add(show);
+            } else {
+                fail.add(show);
+            }
+        } else if cpu != T_INF {
+            t_err.add(rel(cpu, gpu, 0.1), show);
+        }
+    }
+    eprintln!(
+        "test_intersect_aabb: {} cases, {hits} CPU hits",
+        cases.len()
+    );
+    fail.check(cases.len());
+    boundary.check("test_intersect_aabb", cases.len());
+    t_err.check("test_intersect_aabb");
+    assert!(
+        hits > cases.len() / 4 && hits < 3 * cases.len() / 4,
+        "{hits}"
+    );
+}
+
+/// Rays through the mesh scene: aimed at random triangles, random, from outside, and short.
+fn traversal_rays(rs: &RenderScene, r: &mut SplitMix, n: usize) -> Vec<Case> {
+    let root = rs.bvh.nodes[0].bounds();
+    let mut cases = Vec::with_capacity(n);
+    while cases.len() < n {
+        let kind = r.below(10);
+        let origin = if kind < 8 {
+            root.center() + root.extent() * r.vec3(-0.6, 0.6)
+        } else {
+            root.center() + r.unit_vector() * root.extent().length()
+        };
+        let dir = if kind < 5 {
+            let tri = rs.tris[r.below(rs.tris.len())].corners();
+            let bary = sample_uniform_triangle(Vec2::new(r.unit(), r.unit()));
+            let p = (1.0 - bary.x - bary.y) * tri[0] + bary.x * tri[1] + bary.y * tri[2];
+            (p - origin) * r.range(0.5, 2.0)
+        } else if kind < 8 {
+            r.unit_vector()
+        } else {
+            root.center() + root.extent() * r.vec3(-0.5, 0.5) - origin
+        };
+        let t_max = if r.chance(0.15) {
+            r.range(0.0, 3.0)
+        } else {
+            T_INF
+        };
+        cases.push([word(origin, 0), word(dir, b(t_max))]);
+    }
+    cases
+}
+
+#[test]
+fn traverse_matches() {
+    let Some(ctx) = common::gpu("traverse_matches") else {
+        return;
+    };
+    let (rs, settings) = mesh_scene();
+    let (nodes, tris) = (&rs.bvh.nodes, &rs.tris);
+    let mut r = SplitMix(4);
+    let cases = traversal_rays(&rs, &mut r, 20_000);
+    let out = run(&ctx, &rs, &settings, "test_traverse", &cases);
+    let mut fail = Failures::new("test_traverse");
+    let mut edge = Tally::new("hit/miss differs within 1e-5 of an edge", 1e-3);
+    let mut other_tri = Tally::new("another triangle at the same t (1e-5)", 2e-3);
+    let mut t_err = Worst::new("t (relative)", 1e-5);
+    let mut uv_err = Worst::new("u, v (relative, abs 1e-6)", 1e-5);
+    let mut any_edge = Tally::new("any-hit differs within 1e-5 of an edge", 1e-3);
+    let mut hits = 0;
+    let near_edge_of = |ray: &Ray, tri: u32| {
+        let (_, u, v, cos) = plane_hit_f64(ray, &tris[tri as usize]);
+        near_edge(u, v, 1e-5 / cos.max(1e-6))
+    };
+    for (c, o) in cases.iter().zip(&out) {
+        let ray = Ray::new(v3(c[0]), v3(c[1]));
+        let t_max = f(c[1][3]);
+        let cpu = traverse_closest(nodes, tris, &ray, t_max);
+        let cpu_any = traverse_any(nodes, tris, &ray, t_max);
+        let (gtri, gt, gu, gv) = (o[0][0], f(o[0][1]), f(o[0][2]), f(o[0][3]));
+        let gpu_any = o[1][0] == 1;
+        let show = || {
+            format!(
+                "ray {ray:?} t_max {t_max}: CPU {cpu:?} any {cpu_any}; GPU tri {gtri} t {gt} u {gu} v {gv} any {gpu_any}"
+            )
+        };
+        hits += cpu.is_some() as usize;
+        match cpu {
+            None if gtri == u32::MAX => {
+                if gt != t_max {
+                    fail.add(|| format!("miss reports t {gt}: {}", show()));
+                }
+            }
+            Some(h) if gtri == h.tri => {
+                let cos = plane_hit_f64(&ray, &tris[h.tri as usize]).3.min(1.0);
+                t_err.add(rel(h.t, gt, 0.0) * cos, show);
+                uv_err.add(rel(h.u, gu, 0.1).max(rel(h.v, gv, 0.1)) * cos, show);
+            }
+            Some(h) if gtri != u32::MAX => {
+                if rel(h.t, gt, 0.0) <= 1e-5 {
+                    other_tri.add(show);
+                } else if near_edge_of(&ray, h.tri) || near_edge_of(&ray, gtri) {
+                    // One device slipped through an edge the other hit, reaching another
+                    // triangle behind it.
+                    edge.add(show);
+                } else {
+                    fail.add(show);
+                }
+            }
+            Some(h) => {
+                if near_edge_of(&ray, h.tri) {
+                    edge.add(show);
+                } else {
+                    fail.add(show);
+                }
+            }
+            None => {
+                if near_edge_of(&ray, gtri) {
+                    edge.add(show);
+                } else {
+                    fail.add(show);
+                }
+            }
+        }
+        if cpu_any != cpu.is_some() {
+            fail.add(|| format!("CPU any-hit disagrees with closest: {}", show()));
+        }
+        if gpu_any != cpu_any {
+            // Only where the closest hit already differed at an edge.
+            let edgy = cpu.is_some_and(|h| near_edge_of(&ray, h.tri))
+                || (gtri != u32::MAX && near_edge_of(&ray, gtri));
+            if edgy {
+                any_edge.add(show);
+            } else {
+                fail.add(|| format!("any-hit differs: {}", show()));
+            }
+        }
+    }
+    eprintln!("test_traverse: {} cases, {hits} CPU hits", cases.len());
+    fail.check(cases.len());
+    edge.check("test_traverse", cases.len());
+    other_tri.check("test_traverse", cases.len());
+    any_edge.check("test_traverse", cases.len());
+    t_err.check("test_traverse");
+    uv_err.check("test_traverse");
+    assert!(hits > cases.len() / 3, "{hits}");
+}
+
+#[test]
+fn sampling_matches() {
+    let Some(ctx) = common::gpu("sampling_matches") else {
+        return;
+    };
+    let (rs, settings) = cornell();
+    let mut r = SplitMix(5);
+    let special = [0.0, 0.25, 0.5, 0.75, 1.0 - 1.0 / 16_777_216.0, 0.5 + 1e-7];
+    let mut cases: Vec<Case> = Vec::new();
+    for a in special {
+        for bb in special {
+            cases.push([[b(a), b(bb), b(a), b(bb)], [0; 4]]);
+        }
+    }
+    while cases.len() < 20_000 {
+        let mut u = [r.unit(), r.unit(), r.unit(), r.unit()];
+        if r.chance(0.05) {
+            u[r.below(4)] = special[r.below(special.len())];
+        }
+        cases.push([u.map(b), [0; 4]]);
+    }
+    let out = run(&ctx, &rs, &settings, "test_sampling", &cases);
+    let mut errs = [
+        Worst::new("sample_concentric_disk (abs)", 1e-5),
+        Worst::new("sample_uniform_triangle (abs)", 1e-5),
+        Worst::new("sample_cosine_hemisphere x, y (abs)", 1e-5),
+        // z = sqrt(1 - x^2 - y^2) amplifies rounding without bound at the disk's rim, where
+        // z^2 is tiny; there z^2 is compared: min(|dz|, |d(z^2)|), as |d(z^2)| = |dz| (z + z').
+        Worst::new("sample_cosine_hemisphere z (abs, of z or z^2)", 1e-5),
+        // The pdf of the GPU's own z, by the Rust function.
+        Worst::new("cosine_hemisphere_pdf (abs)", 1e-6),
+    ];
+    let abs = |a: &[f32], bb: &[f32]| {
+        a.iter()
+            .zip(bb)
+            .map(|(x, y)| rel(*x, *y, 1.0))
+            .fold(0.0, f64::max)
+    };
+    for (c, o) in cases.iter().zip(&out) {
+        let u = c[0].map(f);
+        let g = [o[0].map(f), o[1].map(f)];
+        let d = sample_concentric_disk(Vec2::new(u[0], u[1]));
+        let t = sample_uniform_triangle(Vec2::new(u[2], u[3]));
+        let h = sample_cosine_hemisphere(Vec2::new(u[0], u[1]));
+        let show = || format!("u {u:?}: GPU {g:?}, CPU {d} {t} {h}");
+        errs[0].add(abs(&g[0][..2], &d.to_array()), show);
+        errs[1].add(abs(&g[0][2..], &t.to_array()), show);
+        errs[2].add(abs(&g[1][..2], &h.to_array()[..2]), show);
+        let (gz, cz) = (g[1][2] as f64, h.z as f64);
+        errs[3].add((gz - cz).abs().min((gz * gz - cz * cz).abs()), show);
+        errs[4].add(abs(&g[1][3..], &[cosine_hemisphere_pdf(g[1][2])]), show);
+    }
+    eprintln!("test_sampling: {} cases", cases.len());
+    for e in &errs {
+        e.check("test_sampling");
+    }
+}
+
+#[test]
+fn light_pick_matches() {
+    let Some(ctx) = common::gpu("light_pick_matches") else {
+        return;
+    };
+    let (rs, settings) = mesh_scene();
+    let mut pmfs: Vec<f32> = rs.emitter_cdf.windows(2).map(|w| w[1] - w[0]).collect();
+    pmfs.sort_by(f32::total_cmp);
+    assert!(
+        pmfs[pmfs.len() - 1] > 10.0 * pmfs[0],
+        "emitters should differ in power: {pmfs:?}"
+    );
+    let mut r = SplitMix(6);
+    let mut us: Vec<f32> = vec![0.0, 1.0 - 1.0 / 16_777_216.0, 0.5];
+    // Every bucket boundary exactly, and the floats either side of it.
+    for &c in &rs.emitter_cdf {
+        us.extend([c, f(b(c) - 1), f(b(c) + 1)].iter().filter(|&&u| u < 1.0));
+    }
+    while us.len() < 20_000 {
+        us.push(r.unit());
+    }
+    let cases: Vec<Case> = us.iter().map(|&u| [[b(u), 0, 0, 0], [0; 4]]).collect();
+    let out = run(&ctx, &rs, &settings, "test_light_pick", &cases);
+    let mut fail = Failures::new("test_light_pick");
+    let mut ph = Worst::new("power_heuristic (relative)", 1e-6);
+    let mut picked = vec![0usize; rs.emitters.len()];
+    for (&u, o) in us.iter().zip(&out) {
+        let k = sample_cdf(&rs.emitter_cdf, u);
+        picked[k] += 1;
+        let want_ph = power_heuristic(u, 1.0 - u);
+        if o[0][0] as usize != k || o[0][1] != rs.emitters[k] {
+            fail.add(|| {
+                format!(
+                    "u {u} ({:#x}): GPU picks {} (triangle {}), CPU {k} (triangle {})",
+                    b(u),
+                    o[0][0],
+                    o[0][1],
+                    rs.emitters[k]
+                )
+            });
+        }
+        ph.add(rel(want_ph, f(o[0][2]), 0.0), || {
+            format!("u {u}: GPU {}, CPU {want_ph}", f(o[0][2]))
+        });
+    }
+    eprintln!(
+        "test_light_pick: {} cases over {} emitters, {} picks differ",
+        us.len(),
+        rs.emitters.len(),
+        fail.count
+    );
+    fail.check(us.len());
+    ph.check("test_light_pick");
+    assert!(picked.iter().all(|&n| n > 0), "every emitter is tested");
+}
+
+/// A `wo` for material `m`: two-sided kinds mostly see it from above (15% from below, which
+/// they must refuse); the dielectric sees both sides equally, grazing ones included.
+fn random_wo(r: &mut SplitMix, kind: MaterialKind) -> Vec3 {
+    let mut wo = r.unit_vector();
+    if r.chance(0.1) {
+        // Grazing: |wo.z| small (total internal reflection from inside the dielectric).
+        wo.z *= 0.01;
+        wo = wo.normalize();
+    }
+    let below = if kind == MaterialKind::Dielectric {
+        r.chance(0.5)
+    } else {
+        r.chance(0.15)
+    };
+    wo.z = if below { -wo.z.abs() } else { wo.z.abs() };
+    wo
+}
+
+/// How much GGX's D(h) amplifies a relative rounding error in h.z, for h the half vector of
+/// (wo, wi): |d ln D / d ln h.z| = 4 h.z^2 (1 - a^2) / (h.z^2 (a^2 - 1) + 1). It is ~4 / a^2
+/// at the peak: 4e6 at the smallest alpha (1e-3), where float32 D is only good to ~10%.
+fn ggx_condition(m: &Material, wo: Vec3, wi: Vec3) -> f64 {
+    if m.kind != MaterialKind::RoughConductor {
+        return 0.0;
+    }
+    let h = (wo.as_dvec3() + wi.as_dvec3()).normalize();
+    let a2 = (ggx_alpha(m.roughness) as f64).powi(2);
+    let d = h.z * h.z * (a2 - 1.0) + 1.0;
+    4.0 * h.z * h.z * (1.0 - a2) / d
+}
+
+/// The relative tolerance of GGX quantities: 1e-3, plus four float32 rounding errors in h.z
+/// amplified by the condition number.
+fn ggx_tolerance(m: &Material, wo: Vec3, wi: Vec3) -> f64 {
+    1e-3 + ggx_condition(m, wo, wi) * 4.0 * f32::EPSILON as f64 / 2.0
+}
+
+fn material_label(m: &Material) -> String {
+    match m.kind {
+        MaterialKind::RoughConductor => format!("RoughConductor r={}", m.roughness),
+        MaterialKind::Dielectric => format!("Dielectric ior={}", m.ior),
+        k => format!("{k:?}"),
+    }
+}
+
+#[test]
+fn bsdf_sample_matches() {
+    let Some(ctx) = common::gpu("bsdf_sample_matches") else {
+        return;
+    };
+    let (rs, settings) = mesh_scene();
+    let mats = &rs.materials;
+    let tested: Vec<u32> = (0..M_EMITTERS).collect();
+    let mut r = SplitMix(7);
+    let mut cases: Vec<Case> = Vec::new();
+    while cases.len() < 24_000 {
+        let m = tested[cases.len() % tested.len()];
+        let wo = random_wo(&mut r, mats[m as usize].kind);
+        let u = [r.unit(), r.unit(), r.unit(), 0.0];
+        cases.push([word(wo, m), u.map(b)]);
+    }
+    let out = run(&ctx, &rs, &settings, "test_bsdf_sample", &cases);
+    let mut fail = Failures::new("test_bsdf_sample");
+    let mut boundary = Tally::new(
+        "validity or lobe differs within 1e-5 of its threshold",
+        1e-3,
+    );
+    // Per material: wi, weight, pdf, and the GPU pdf against the CPU's bsdf_pdf of the GPU wi.
+    let mut errs: Vec<[Worst; 4]> = tested
+        .iter()
+        .map(|_| {
+            [
+                Worst::new("wi (abs)", 1e-4),
+                Worst::new("weight (relative)", 1e-3),
+                Worst::new("pdf (relative)", 1e-3),
+                Worst::new("pdf vs bsdf_pdf(wo, GPU wi) (relative)", 1e-3),
+            ]
+        })
+        .collect();
+    let mut valid = 0;
+    // Coverage: two-sided kinds refusing wo.z <= 0, dielectric reflection from outside,
+    // refraction both ways, total internal reflection.
+    let (mut refused, mut reflected, mut refracted_in, mut refracted_out, mut tir) =
+        (0, 0, 0, 0, 0);
+    for (c, o) in cases.iter().zip(&out) {
+        let m = &mats[c[0][3] as usize];
+        let wo = v3(c[0]);
+        let u = c[1].map(f);
+        let cpu = bsdf_sample(m, wo, u[0], Vec2::new(u[1], u[2]));
+        match (m.kind, cpu) {
+            (MaterialKind::Dielectric, Some(s)) if s.pdf == 1.0 && wo.z < 0.0 => tir += 1,
+            (MaterialKind::Dielectric, Some(s)) if s.wi.z * wo.z > 0.0 => reflected += 1,
+            (MaterialKind::Dielectric, Some(_)) if wo.z > 0.0 => refracted_in += 1,
+            (MaterialKind::Dielectric, Some(_)) => refracted_out += 1,
+            (_, None) if wo.z <= 0.0 => refused += 1,
+            _ => {}
+        }
+        let (gwi, gpdf, gweight) = (v3(o[0]), f(o[0][3]), v3(o[1]));
+        let (gvalid, gdelta) = (o[1][3] & 1 != 0, o[1][3] & 2 != 0);
+        let show = || {
+            format!(
+                "{:?} r {} wo {wo} u {u:?}: CPU {cpu:?}; GPU valid {gvalid} delta {gdelta} wi {gwi} weight {gweight} pdf {gpdf}",
+                m.kind, m.roughness
+            )
+        };
+        valid += cpu.is_some() as usize;
+        let Some(s) = cpu else {
+            if gvalid {
+                if m.kind == MaterialKind::RoughConductor && gwi.z.abs() < 1e-5 {
+                    boundary.add(show);
+                } else {
+                    fail.add(show);
+                }
+            }
+            continue;
+        };
+        if !gvalid {
+            if m.kind == MaterialKind::RoughConductor && s.wi.z.abs() < 1e-5 {
+                boundary.add(show);
+            } else {
+                fail.add(show);
+            }
+            continue;
+        }
+        if gdelta != s.delta {
+            fail.add(show);
+            continue;
+        }
+        if m.kind == MaterialKind::Dielectric && (gwi.z > 0.0) != (s.wi.z > 0.0) {
+            // Reflection on one device, refraction on the other: u_lobe at the Fresnel term.
+            let fr = fresnel_dielectric(wo.z, m.ior).0;
+            if (u[0] - fr).abs() < 1e-5 {
+                boundary.add(show);
+            } else {
+                fail.add(show);
+            }
+            continue;
+        }
+        let e = &mut errs[c[0][3] as usize];
+        let tol = ggx_tolerance(m, wo, s.wi);
+        e[0].add((gwi - s.wi).abs().max_element() as f64, show);
+        e[1].add_tol(rel3(s.weight, gweight, 1e-6), tol, show);
+        e[2].add_tol(rel(s.pdf, gpdf, 1e-6), tol, show);
+        if !s.delta {
+            e[3].add_tol(rel(bsdf_pdf(m, wo, gwi), gpdf, 1e-6), tol, show);
+        }
+    }
+    eprintln!(
+        "test_bsdf_sample: {} cases over {} materials, {valid} valid samples; {refused} wo below \
+         refused; dielectric: {reflected} reflected, {refracted_in} refracted in, \
+         {refracted_out} refracted out, {tir} totally reflected inside",
+        cases.len(),
+        tested.len()
+    );
+    assert!(refused > 100 && reflected > 100 && refracted_in > 100);
+    assert!(refracted_out > 100 && tir > 20);
+    fail.check(cases.len());
+    boundary.check("test_bsdf_sample", cases.len());
+    for (&m, e) in tested.iter().zip(&errs) {
+        eprintln!("test_bsdf_sample: {}", material_label(&mats[m as usize]));
+        for w in e {
+            w.check("test_bsdf_sample");
+        }
+    }
+}
+
+#[test]
+fn bsdf_eval_matches() {
+    let Some(ctx) = common::gpu("bsdf_eval_matches") else {
+        return;
+    };
+    let (rs, settings) = mesh_scene();
+    let mats = &rs.materials;
+    let tested: Vec<u32> = (0..M_EMITTERS).collect();
+    let mut r = SplitMix(8);
+    let mut cases: Vec<Case> = Vec::new();
+    while cases.len() < 24_000 {
+        let m = tested[cases.len() % tested.len()];
+        let mat = &mats[m as usize];
+        let wo = random_wo(&mut r, mat.kind);
+        // Half the directions from the BSDF itself, so that glossy peaks are covered.
+        let sampled = bsdf_sample(mat, wo, r.unit(), Vec2::new(r.unit(), r.unit()));
+        let wi = match sampled {
+            Some(s) if r.chance(0.5) => s.wi,
+            _ => {
+                let mut wi = r.unit_vector();
+                if r.chance(0.8) {
+                    wi.z = wi.z.abs();
+                }
+                wi
+            }
+        };
+        cases.push([word(wo, m), word(wi, 0)]);
+    }
+    let out = run(&ctx, &rs, &settings, "test_bsdf_eval", &cases);
+    let mut errs: Vec<[Worst; 2]> = tested
+        .iter()
+        .map(|_| {
+            [
+                Worst::new("bsdf_eval (relative, abs 1e-6)", 1e-3),
+                Worst::new("bsdf_pdf (relative, abs 1e-6)", 1e-3),
+            ]
+        })
+        .collect();
+    let mut nonzero = 0;
+    for (c, o) in cases.iter().zip(&out) {
+        let m = &mats[c[0][3] as usize];
+        let (wo, wi) = (v3(c[0]), v3(c[1]));
+        let fc = bsdf_eval(m, wo, wi);
+        let pdf = bsdf_pdf(m, wo, wi);
+        let (gf, gpdf) = (v3(o[0]), f(o[0][3]));
+        nonzero += (fc != Vec3::ZERO) as usize;
+        let show = || {
+            format!(
+                "{:?} r {} wo {wo} wi {wi}: CPU f {fc} pdf {pdf}; GPU f {gf} pdf {gpdf}",
+                m.kind, m.roughness
+            )
+        };
+        let tol = ggx_tolerance(m, wo, wi);
+        let e = &mut errs[c[0][3] as usize];
+        e[0].add_tol(rel3(fc, gf, 1e-3), tol, show);
+        e[1].add_tol(rel(pdf, gpdf, 1e-3), tol, show);
+    }
+    eprintln!(
+        "test_bsdf_eval: {} cases, {nonzero} with nonzero f",
+        cases.len()
+    );
+    for (&m, e) in tested.iter().zip(&errs) {
+        eprintln!("test_bsdf_eval: {}", material_label(&mats[m as usize]));
+        for w in e {
+            w.check("test_bsdf_eval");
+        }
+    }
+}
+
+#[test]
+fn camera_ray_matches() {
+    let Some(ctx) = common::gpu("camera_ray_matches") else {
+        return;
+    };
+    let (mut rs, _) = cornell();
+    let settings = RenderSettings {
+        width: 320,
+        height: 200,
+        spp: 1,
+        max_depth: 8,
+        seed: 77,
+    };
+    let pinhole = Camera::new(
+        Vec3::new(0.3, 0.2, 3.9),
+        Vec3::new(0.0, -0.1, 0.0),
+        Vec3::Y,
+        39.3,
+        0.0,
+        None,
+    )
+    .unwrap();
+    let lens = Camera::new(
+        Vec3::new(-1.0, 0.5, 4.5),
+        Vec3::ZERO,
+        Vec3::new(0.1, 1.0, 0.0),
+        60.0,
+        0.25,
+        Some(3.0),
+    )
+    .unwrap();
+    for (name, cam) in [("pinhole", pinhole), ("thin lens", lens)] {
+        rs.camera = cam.clone();
+        let mut r = SplitMix(9);
+        let mut cases: Vec<Case> = Vec::new();
+        for (x, y) in [(0, 0), (319, 199), (0, 199), (319, 0)] {
+            cases.push([[x, y, 0, 0], [0; 4]]);
+        }
+        while cases.len() < 12_000 {
+            let (x, y) = (r.below(320) as u32, r.below(200) as u32);
+            cases.push([[x, y, r.u32() % 4096, 0], [0; 4]]);
+        }
+        let out = run(&ctx, &rs, &settings, "test_camera_ray", &cases);
+        let mut origin_err = Worst::new("origin (abs)", 1e-5);
+        let mut dir_err = Worst::new("dir (abs)", 1e-5);
+        for (c, o) in cases.iter().zip(&out) {
+            let [x, y, sample, _] = c[0];
+            let rng = Rng::new(y * settings.width + x, sample, settings.seed);
+            let ray = cam.generate_camera_ray(x, y, settings.width, settings.height, &rng);
+            let show = || {
+                format!(
+                    "{name} ({x}, {y}) sample {sample}: CPU {ray:?}, GPU {:?} {:?}",
+                    v3(o[0]),
+                    v3(o[1])
+                )
+            };
+            origin_err.add((v3(o[0]) - ray.origin).abs().max_element() as f64, show);
+            dir_err.add((v3(o[1]) - ray.dir).abs().max_element() as f64, show);
+        }
+        eprintln!("test_camera_ray ({name}): {} cases", cases.len());
+        origin_err.check("test_camera_ray");
+        dir_err.check("test_camera_ray");
+    }
+}
+
+/// Replays (pixel, sample) paths on both devices; returns the fraction whose radiance
+/// agrees (relative 1e-3 per channel, plus abs 1e-4) and the fraction with equal ray counts.
+fn replay_paths(
+    ctx: &GpuContext,
+    name: &str,
+    rs: &RenderScene,
+    settings: &RenderSettings,
+    n: usize,
+    seed: u64,
+) -> (f64, f64) {
+    let mut r = SplitMix(seed);
+    let cases: Vec<Case> = (0..n)
+        .map(|_| {
+            let (x, y) = (
+                r.below(settings.width as usize) as u32,
+                r.below(settings.height as usize) as u32,
+            );
+            [[x, y, r.u32() % 1024, 0], [0; 4]]
+        })
+        .collect();
+    let out = run(ctx, rs, settings, "test_trace_path", &cases);
+    let start = Instant::now();
+    let mut radiance_ok = 0;
+    let mut rays_ok = 0;
+    let mut nonzero = 0;
+    let mut examples = Vec::new();
+    let mut max_rays = 0;
+    for (c, o) in cases.iter().zip(&out) {
+        let [x, y, sample, _] = c[0];
+        let rng = Rng::new(y * settings.width + x, sample, settings.seed);
+        let ray = rs
+            .camera
+            .generate_camera_ray(x, y, settings.width, settings.height, &rng);
+        let (l, rays) = trace_path(rs, ray, &rng, settings.max_depth);
+        let (gl, grays) = (v3(o[0]), f(o[0][3]));
+        let close =
+            (0..3).all(|i| (l[i] - gl[i]).abs() <= 1e-3 * l[i].abs().max(gl[i].abs()) + 1e-4);
+        radiance_ok += close as usize;
+        rays_ok += (grays == rays as f32) as usize;
+        nonzero += (l != Vec3::ZERO) as usize;
+        max_rays = max_rays.max(rays);
+        if (!close || grays != rays as f32) && examples.len() < 3 {
+            examples.push(format!(
+                "({x}, {y}) sample {sample}: CPU {l} {rays} rays, GPU {gl} {grays} rays"
+            ));
+        }
+    }
+    let (a, rr) = (radiance_ok as f64 / n as f64, rays_ok as f64 / n as f64);
+    eprintln!(
+        "test_trace_path ({name}): {n} paths ({nonzero} nonzero, up to {max_rays} rays; CPU {:.2} s): radiance agrees on {:.3}%, ray counts on {:.3}%",
+        start.elapsed().as_secs_f64(),
+        100.0 * a,
+        100.0 * rr
+    );
+    for e in &examples {
+        eprintln!("  differs: {e}");
+    }
+    assert!(nonzero > n / 2, "{name}: most paths should carry light");
+    (a, rr)
+}
+
+#[test]
+fn trace_path_matches_on_cornell() {
+    let Some(ctx) = common::gpu("trace_path_matches_on_cornell") else {
+        return;
+    };
+    let (rs, settings) = cornell();
+    let (radiance, rays) = replay_paths(&ctx, "cornell", &rs, &settings, 10_000, 10);
+    assert!(radiance >= 0.99, "radiance agrees on only {radiance}");
+    assert!(rays >= 0.99, "ray counts agree on only {rays}");
+}
+
+#[test]
+fn trace_path_matches_on_mesh_scene() {
+    let Some(ctx) = common::gpu("trace_path_matches_on_mesh_scene") else {
+        return;
+    };
+    // Glass, metals, smooth normals, many emitters and a gradient sky.
+    let (rs, settings) = mesh_scene();
+    let (radiance, rays) = replay_paths(&ctx, "mesh", &rs, &settings, 10_000, 11);
+    assert!(radiance >= 0.99, "radiance agrees on only {radiance}");
+    assert!(rays >= 0.99, "ray counts agree on only {rays}");
+}
