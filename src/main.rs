@@ -7,6 +7,13 @@ use clap::Parser;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    if std::env::var_os("NODEVICE_SELECT").is_none() {
+        // Mesa's implicit device-select Vulkan layer only reorders adapters (meshtrace picks
+        // its own) and, on a headless machine, prints "XDG_RUNTIME_DIR is invalid" errors
+        // while probing for a Wayland display; this variable turns it off.
+        // SAFETY: nothing else runs yet, so no thread can read the environment concurrently.
+        unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
+    }
     let args = cli::Cli::parse();
     let result = match &args.command {
         cli::Command::Render(r) => cli::render(r),

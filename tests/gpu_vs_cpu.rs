@@ -1,0 +1,162 @@
+//! The GPU renderer against the CPU reference on whole images, and GPU determinism.
+
+mod common;
+
+use meshtrace::bvh::BuildParams;
+use meshtrace::film::Film;
+use meshtrace::render::{RenderJob, RenderScene, cpu};
+use meshtrace::scene::{RenderSettings, builtin};
+
+fn cornell(width: u32, spp: u32, seed: u32) -> (RenderScene, RenderSettings) {
+    let scene = builtin::load_builtin("cornell").unwrap();
+    let rs = RenderScene::new(&scene, &BuildParams::default()).unwrap();
+    let settings = RenderSettings {
+        width,
+        height: width,
+        spp,
+        max_depth: 8,
+        seed,
+    };
+    (rs, settings)
+}
+
+fn channels(film: &Film) -> Vec<f64> {
+    film.mean()
+        .iter()
+        .flat_map(|p| p.to_array())
+        .map(f64::from)
+        .collect()
+}
+
+/// Different seeds: the GPU and CPU images are independent draws of the same estimator.
+/// The bound: with d_i = G_i - C_i over N independent pixel channels, mean(d) has standard
+/// error sd(d) / sqrt(N), so a correct renderer keeps |mean(d)| under 5 of them. The mean
+/// absolute difference |G - C| is compared with that of two CPU images, |C' - C|, which
+/// estimates the same quantity from noise alone; the two may differ by 5 standard errors of
+/// a difference of means (sqrt(2) sd(|d|) / sqrt(N)).
+#[test]
+fn gpu_and_cpu_agree_within_noise() {
+    let Some(ctx) = common::gpu("gpu_and_cpu_agree_within_noise") else {
+        return;
+    };
+    let (rs, s) = cornell(64, 32, 1);
+    let gpu = channels(
+        &meshtrace::gpu::render(&ctx, &rs, &RenderJob::new(s), &|_| {})
+            .unwrap()
+            .0,
+    );
+    let cpu_a = channels(
+        &cpu::render(
+            &rs,
+            &RenderJob::new(RenderSettings { seed: 2, ..s }),
+            &|_| {},
+        )
+        .0,
+    );
+    let cpu_b = channels(
+        &cpu::render(
+            &rs,
+            &RenderJob::new(RenderSettings { seed: 3, ..s }),
+            &|_| {},
+        )
+        .0,
+    );
+    let n = gpu.len() as f64;
+    let stats = |x: &[f64]| {
+        let m = x.iter().sum::<f64>() / n;
+        let sd = (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+        (m, sd)
+    };
+    let d: Vec<f64> = gpu.iter().zip(&cpu_a).map(|(g, c)| g - c).collect();
+    let (mean_d, sd_d) = stats(&d);
+    assert!(
+        mean_d.abs() < 5.0 * sd_d / n.sqrt(),
+        "mean difference {mean_d} vs standard error {}",
+        sd_d / n.sqrt()
+    );
+    let abs_gc: Vec<f64> = d.iter().map(|v| v.abs()).collect();
+    let abs_cc: Vec<f64> = cpu_b
+        .iter()
+        .zip(&cpu_a)
+        .map(|(b, a)| (b - a).abs())
+        .collect();
+    let (m_gc, sd_gc) = stats(&abs_gc);
+    let (m_cc, _) = stats(&abs_cc);
+    let bound = m_cc + 5.0 * 2f64.sqrt() * sd_gc / n.sqrt();
+    eprintln!("mean |G - C| = {m_gc:.5}, mean |C' - C| = {m_cc:.5}, bound {bound:.5}");
+    assert!(
+        m_gc <= bound,
+        "mean |G - C| = {m_gc} exceeds the noise bound {bound}"
+    );
+}
+
+/// The same seed: the GPU replays the CPU's paths, so pixels agree to float rounding except
+/// where rounding sends a path another way.
+#[test]
+fn gpu_replays_the_cpu_paths() {
+    let Some(ctx) = common::gpu("gpu_replays_the_cpu_paths") else {
+        return;
+    };
+    let (rs, s) = cornell(64, 8, 5);
+    let job = RenderJob::new(s);
+    let gpu = channels(&meshtrace::gpu::render(&ctx, &rs, &job, &|_| {}).unwrap().0);
+    let cpu = channels(&cpu::render(&rs, &job, &|_| {}).0);
+    let close = gpu
+        .iter()
+        .zip(&cpu)
+        .filter(|(g, c)| (*g - *c).abs() <= 1e-3 * c.abs() + 1e-5)
+        .count();
+    let frac = close as f64 / gpu.len() as f64;
+    eprintln!("{:.4}% of pixel channels agree to 1e-3", 100.0 * frac);
+    assert!(frac >= 0.99, "only {frac} of pixel channels agree");
+}
+
+/// Two GPU renders with the same seed on the same adapter are bit-identical.
+#[test]
+fn gpu_renders_are_deterministic() {
+    let Some(ctx) = common::gpu("gpu_renders_are_deterministic") else {
+        return;
+    };
+    let (rs, s) = cornell(48, 8, 9);
+    let job = RenderJob::new(s);
+    let a = meshtrace::gpu::render(&ctx, &rs, &job, &|_| {}).unwrap();
+    let b = meshtrace::gpu::render(&ctx, &rs, &job, &|_| {}).unwrap();
+    let bits = |f: &Film| {
+        f.sum
+            .iter()
+            .flat_map(|p| p.to_array().map(f32::to_bits))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(bits(&a.0), bits(&b.0));
+    assert_eq!(a.1, b.1, "ray counts");
+}
+
+/// Renders of disjoint sample ranges merge into the full render, bit for bit on the CPU.
+#[test]
+fn sample_ranges_merge_into_the_full_render() {
+    let (rs, s) = cornell(32, 8, 4);
+    let full = cpu::render(&rs, &RenderJob::new(s), &|_| {}).0;
+    let mut first = cpu::render(
+        &rs,
+        &RenderJob {
+            settings: s,
+            samples: 0..3,
+        },
+        &|_| {},
+    )
+    .0;
+    let second = cpu::render(
+        &rs,
+        &RenderJob {
+            settings: s,
+            samples: 3..8,
+        },
+        &|_| {},
+    )
+    .0;
+    first.merge(&second);
+    assert_eq!(first.samples, full.samples);
+    for (a, b) in first.sum.iter().zip(&full.sum) {
+        assert!((*a - *b).abs().max_element() <= 1e-5 * b.abs().max_element().max(1.0));
+    }
+}
