@@ -70,6 +70,41 @@ fn light_pdf(tri: u32, dist: f32, cos_l: f32) -> f32 {
     return pmf * dist * dist / (cos_l * area);
 }
 
+// mirror: src/render/cpu.rs `LightSample` (valid stands for the Option around it)
+struct LightSample {
+    origin: vec3<f32>,
+    wi: vec3<f32>,
+    t_max: f32,
+    le: vec3<f32>,
+    pdf: f32,
+    valid: bool,
+}
+
+// mirror: src/render/cpu.rs `sample_light`
+fn sample_light(p: vec3<f32>, ng: vec3<f32>, rng: Rng, depth: u32) -> LightSample {
+    var none = LightSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, false);
+    let k = sample_cdf(rng_1d(rng, depth, DIM_LIGHT_PICK));
+    let light = emitters[k];
+    let u = vec2<f32>(rng_1d(rng, depth, DIM_LIGHT_U), rng_1d(rng, depth, DIM_LIGHT_V));
+    if light == SKY_EMITTER {
+        let wi = sample_uniform_sphere(u);
+        return LightSample(offset_ray_origin(p, ng, wi), wi, T_INF, sky_radiance(wi), params.sky_pmf * UNIFORM_SPHERE_PDF, true);
+    }
+    let tri = tris[light];
+    let bary = sample_uniform_triangle(u);
+    let q = (1.0 - bary.x - bary.y) * tri.v0.xyz + bary.x * tri.v1.xyz + bary.y * tri.v2.xyz;
+    let origin = offset_ray_origin(p, ng, q - p);
+    let to_light = q - origin;
+    let dist = length(to_light);
+    let wi = to_light / dist;
+    let cos_l = -dot(wi, geometric_normal(tri));
+    if !(cos_l > 0.0 && dist > 0.0) {
+        return none;
+    }
+    let le = materials[shading[light].material].emission;
+    return LightSample(origin, wi, dist * (1.0 - 1e-4), le, light_pdf(light, dist, cos_l), true);
+}
+
 fn max3(v: vec3<f32>) -> f32 {
     return max(max(v.x, v.y), v.z);
 }
@@ -89,7 +124,11 @@ fn trace_path(ray_in: Ray, rng: Rng) -> vec4<f32> {
         rays += 1u;
         let hit = traverse_closest(ray, T_INF);
         if hit.tri == NO_HIT {
-            radiance += beta * sky_radiance(ray.dir);
+            var w = 1.0;
+            if !prev_delta && params.sky_pmf != 0.0 {
+                w = power_heuristic(prev_pdf, params.sky_pmf * UNIFORM_SPHERE_PDF);
+            }
+            radiance += beta * w * sky_radiance(ray.dir);
             break;
         }
         let si = surface_at(ray, hit);
@@ -117,26 +156,15 @@ fn trace_path(ray_in: Ray, rng: Rng) -> vec4<f32> {
 
         // Next event estimation.
         if !bsdf_is_delta(mat) && params.num_emitters > 0u {
-            let k = sample_cdf(rng_1d(rng, depth, DIM_LIGHT_PICK));
-            let light = emitters[k];
-            let lt = tris[light];
-            let bary = sample_uniform_triangle(vec2<f32>(rng_1d(rng, depth, DIM_LIGHT_U), rng_1d(rng, depth, DIM_LIGHT_V)));
-            let q = (1.0 - bary.x - bary.y) * lt.v0.xyz + bary.x * lt.v1.xyz + bary.y * lt.v2.xyz;
-            let origin = offset_ray_origin(si.p, ng, q - si.p);
-            let to_light = q - origin;
-            let dist = length(to_light);
-            let wi_world = to_light / dist;
-            let cos_l = -dot(wi_world, geometric_normal(lt));
-            if cos_l > 0.0 && dot(wi_world, ng) > 0.0 && dist > 0.0 {
-                let wi = wi_world * frame;
+            let ls = sample_light(si.p, ng, rng, depth);
+            if ls.valid && dot(ls.wi, ng) > 0.0 {
+                let wi = ls.wi * frame;
                 let f = bsdf_eval(mat, wo, wi);
                 if any(f != vec3<f32>(0.0)) {
                     rays += 1u;
-                    if !traverse_any(Ray(origin, wi_world), dist * (1.0 - 1e-4)) {
-                        let lpdf = light_pdf(light, dist, cos_l);
-                        let w = power_heuristic(lpdf, bsdf_pdf(mat, wo, wi));
-                        let le = materials[shading[light].material].emission;
-                        radiance += beta * f * le * (w / lpdf);
+                    if !traverse_any(Ray(ls.origin, ls.wi), ls.t_max) {
+                        let w = power_heuristic(ls.pdf, bsdf_pdf(mat, wo, wi));
+                        radiance += beta * f * ls.le * (w / ls.pdf);
                     }
                 }
             }

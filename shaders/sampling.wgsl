@@ -45,6 +45,17 @@ fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
     return max(cos_theta, 0.0) * FRAC_1_PI;
 }
 
+// mirror: src/render/sampling.rs `sample_uniform_sphere`
+fn sample_uniform_sphere(u: vec2<f32>) -> vec3<f32> {
+    let z = 1.0 - 2.0 * u.x;
+    let r = sqrt(max(1.0 - z * z, 0.0));
+    let phi = 2.0 * PI * u.y;
+    return vec3<f32>(r * cos(phi), r * sin(phi), z);
+}
+
+// mirror: src/render/sampling.rs `UNIFORM_SPHERE_PDF`
+const UNIFORM_SPHERE_PDF: f32 = 0.25 * FRAC_1_PI;
+
 // mirror: src/render/sampling.rs `sample_uniform_triangle`
 fn sample_uniform_triangle(u: vec2<f32>) -> vec2<f32> {
     let su = sqrt(u.x);

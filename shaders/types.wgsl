@@ -29,6 +29,9 @@ struct TriShading {
 
 const TRI_SMOOTH: u32 = 1u;
 
+// The `emitters` entry that stands for the sky. mirror: src/render/mod.rs `SKY_EMITTER`
+const SKY_EMITTER: u32 = 0xffffffffu;
+
 // mirror: src/gpu/layout.rs `GpuMaterial` (48 bytes)
 struct Material {
     albedo: vec3<f32>,
@@ -47,7 +50,7 @@ const MAT_CONDUCTOR: u32 = 1u;
 const MAT_ROUGH_CONDUCTOR: u32 = 2u;
 const MAT_DIELECTRIC: u32 = 3u;
 
-// mirror: src/gpu/layout.rs `GpuParams` (128 bytes): one dispatch's camera, sky and range.
+// mirror: src/gpu/layout.rs `GpuParams` (144 bytes): one dispatch's camera, sky and range.
 struct Params {
     cam_position: vec3<f32>,
     width: u32,
@@ -71,6 +74,11 @@ struct Params {
     sample_end: u32,
     row_start: u32,
     row_end: u32,
+    // Probability that light sampling picks the sky (RenderScene::sky_pmf on the host).
+    sky_pmf: f32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 struct Ray {

@@ -216,6 +216,8 @@ fn structs_match_their_rust_twins() {
                 sample_end,
                 row_start,
                 row_end,
+                sky_pmf,
+                _pad,
             }),
         );
     }

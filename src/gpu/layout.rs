@@ -6,7 +6,7 @@ use crate::render::RenderScene;
 use crate::scene::{Material, RenderSettings, Sky};
 use bytemuck::{Pod, Zeroable};
 
-/// One dispatch's parameters (128 bytes). mirror: shaders/types.wgsl `Params`
+/// One dispatch's parameters (144 bytes). mirror: shaders/types.wgsl `Params`
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuParams {
@@ -30,6 +30,8 @@ pub struct GpuParams {
     pub sample_end: u32,
     pub row_start: u32,
     pub row_end: u32,
+    pub sky_pmf: f32,
+    pub _pad: [u32; 3],
 }
 
 impl GpuParams {
@@ -62,6 +64,8 @@ impl GpuParams {
             sample_end: 0,
             row_start: 0,
             row_end: settings.height,
+            sky_pmf: scene.sky_pmf,
+            _pad: [0; 3],
         }
     }
 }

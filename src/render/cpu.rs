@@ -8,8 +8,10 @@
 
 use super::bsdf::{bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample};
 use super::rng::{self, Rng};
-use super::sampling::{power_heuristic, sample_cdf, sample_uniform_triangle};
-use super::{RenderJob, RenderScene, TRI_SMOOTH};
+use super::sampling::{
+    UNIFORM_SPHERE_PDF, power_heuristic, sample_cdf, sample_uniform_sphere, sample_uniform_triangle,
+};
+use super::{RenderJob, RenderScene, SKY_EMITTER, TRI_SMOOTH};
 use crate::bvh::{Hit, traverse_any, traverse_closest};
 use crate::film::Film;
 use crate::geometry::{self, T_INF};
@@ -85,6 +87,66 @@ pub fn light_pdf(scene: &RenderScene, tri: u32, dist: f32, cos_l: f32) -> f32 {
     pmf * dist * dist / (cos_l * area)
 }
 
+/// A point on a light chosen for next event estimation, seen from a shading point.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample {
+    /// The shadow ray: from `origin` along unit `wi` up to `t_max`.
+    pub origin: Vec3,
+    pub wi: Vec3,
+    pub t_max: f32,
+    /// Radiance arriving along the shadow ray if nothing blocks it.
+    pub le: Vec3,
+    /// Solid-angle pdf of having drawn `wi`, the light's pick included.
+    pub pdf: f32,
+}
+
+/// Picks a light by the emitter CDF and a point (triangle) or direction (sky) on it, as
+/// seen from surface point `p` with geometric normal `ng` facing the viewer. `None` when
+/// the point faces away. mirror: shaders/pathtrace.wgsl `sample_light`
+pub fn sample_light(
+    scene: &RenderScene,
+    p: Vec3,
+    ng: Vec3,
+    rng: &Rng,
+    depth: u32,
+) -> Option<LightSample> {
+    let k = sample_cdf(&scene.emitter_cdf, rng.rng_1d(depth, rng::DIM_LIGHT_PICK));
+    let light = scene.emitters[k];
+    let u = Vec2::new(
+        rng.rng_1d(depth, rng::DIM_LIGHT_U),
+        rng.rng_1d(depth, rng::DIM_LIGHT_V),
+    );
+    if light == SKY_EMITTER {
+        let wi = sample_uniform_sphere(u);
+        return Some(LightSample {
+            origin: offset_ray_origin(p, ng, wi),
+            wi,
+            t_max: T_INF,
+            le: scene.sky.radiance(wi),
+            pdf: scene.sky_pmf * UNIFORM_SPHERE_PDF,
+        });
+    }
+    let tri = &scene.tris[light as usize];
+    let [a, b, c] = tri.corners();
+    let bary = sample_uniform_triangle(u);
+    let q = (1.0 - bary.x - bary.y) * a + bary.x * b + bary.y * c;
+    let origin = offset_ray_origin(p, ng, q - p);
+    let to_light = q - origin;
+    let dist = to_light.length();
+    let wi = to_light / dist;
+    let cos_l = -wi.dot(geometry::geometric_normal(tri));
+    if !(cos_l > 0.0 && dist > 0.0) {
+        return None;
+    }
+    Some(LightSample {
+        origin,
+        wi,
+        t_max: dist * (1.0 - 1e-4),
+        le: scene.materials[scene.shading[light as usize].material as usize].emission,
+        pdf: light_pdf(scene, light, dist, cos_l),
+    })
+}
+
 /// One path's radiance estimate and the number of rays it traced.
 /// mirror: shaders/pathtrace.wgsl `trace_path`
 pub fn trace_path(scene: &RenderScene, mut ray: Ray, rng: &Rng, max_depth: u32) -> (Vec3, u32) {
@@ -102,7 +164,12 @@ pub fn trace_path(scene: &RenderScene, mut ray: Ray, rng: &Rng, max_depth: u32) 
     loop {
         rays += 1;
         let Some(hit) = traverse_closest(nodes, tris, &ray, T_INF) else {
-            radiance += beta * scene.sky.radiance(ray.dir);
+            let w = if prev_delta || scene.sky_pmf == 0.0 {
+                1.0
+            } else {
+                power_heuristic(prev_pdf, scene.sky_pmf * UNIFORM_SPHERE_PDF)
+            };
+            radiance += beta * w * scene.sky.radiance(ray.dir);
             break;
         };
         let si = surface_at(scene, &ray, &hit);
@@ -139,33 +206,16 @@ pub fn trace_path(scene: &RenderScene, mut ray: Ray, rng: &Rng, max_depth: u32) 
 
         // Next event estimation.
         if !bsdf_is_delta(mat) && !scene.emitters.is_empty() {
-            let k = sample_cdf(&scene.emitter_cdf, rng.rng_1d(depth, rng::DIM_LIGHT_PICK));
-            let light = scene.emitters[k];
-            let corners = scene.tris[light as usize].corners();
-            let bary = sample_uniform_triangle(Vec2::new(
-                rng.rng_1d(depth, rng::DIM_LIGHT_U),
-                rng.rng_1d(depth, rng::DIM_LIGHT_V),
-            ));
-            let q =
-                (1.0 - bary.x - bary.y) * corners[0] + bary.x * corners[1] + bary.y * corners[2];
-            let origin = offset_ray_origin(si.p, ng, q - si.p);
-            let to_light = q - origin;
-            let dist = to_light.length();
-            let wi_world = to_light / dist;
-            let n_light = geometry::geometric_normal(&scene.tris[light as usize]);
-            let cos_l = -wi_world.dot(n_light);
-            if cos_l > 0.0 && wi_world.dot(ng) > 0.0 && dist > 0.0 {
-                let wi = to_local(wi_world);
-                let f = bsdf_eval(mat, wo, wi);
-                if f != Vec3::ZERO {
-                    rays += 1;
-                    let shadow = Ray::new(origin, wi_world);
-                    if !traverse_any(nodes, tris, &shadow, dist * (1.0 - 1e-4)) {
-                        let lpdf = light_pdf(scene, light, dist, cos_l);
-                        let w = power_heuristic(lpdf, bsdf_pdf(mat, wo, wi));
-                        let le = scene.materials[scene.shading[light as usize].material as usize]
-                            .emission;
-                        radiance += beta * f * le * (w / lpdf);
+            if let Some(ls) = sample_light(scene, si.p, ng, rng, depth) {
+                if ls.wi.dot(ng) > 0.0 {
+                    let wi = to_local(ls.wi);
+                    let f = bsdf_eval(mat, wo, wi);
+                    if f != Vec3::ZERO {
+                        rays += 1;
+                        if !traverse_any(nodes, tris, &Ray::new(ls.origin, ls.wi), ls.t_max) {
+                            let w = power_heuristic(ls.pdf, bsdf_pdf(mat, wo, wi));
+                            radiance += beta * f * ls.le * (w / ls.pdf);
+                        }
                     }
                 }
             }

@@ -32,6 +32,10 @@ pub struct TriShading {
 
 pub const TRI_SMOOTH: u32 = 1;
 
+/// The entry of [`RenderScene::emitters`] that stands for the sky.
+/// mirror: shaders/types.wgsl `SKY_EMITTER`
+pub const SKY_EMITTER: u32 = u32::MAX;
+
 /// Everything an integrator reads, as flat tables in BVH leaf order.
 #[derive(Clone, Debug)]
 pub struct RenderScene {
@@ -39,9 +43,13 @@ pub struct RenderScene {
     pub tris: Vec<TriVerts>,
     pub shading: Vec<TriShading>,
     pub materials: Vec<Material>,
-    /// Leaf-order indices of emissive triangles, and the inclusive CDF of their power.
+    /// The lights next event estimation picks from: leaf-order indices of emissive
+    /// triangles, then [`SKY_EMITTER`] if the sky is not black; and their inclusive CDF.
     pub emitters: Vec<u32>,
     pub emitter_cdf: Vec<f32>,
+    /// Probability that next event estimation picks the sky (sampled uniformly over the
+    /// sphere): 0 for a black sky, 1 with no emissive triangles, else 1/2.
+    pub sky_pmf: f32,
     pub camera: Camera,
     pub sky: Sky,
 }
@@ -86,14 +94,24 @@ impl RenderScene {
                 emitter_cdf.push(total);
             }
         }
-        let emitter_cdf: Vec<f32> = emitter_cdf.iter().map(|&c| (c / total) as f32).collect();
+        let sky_pmf = match (scene.sky.is_black(), emitters.is_empty()) {
+            (true, _) => 0.0,
+            (false, true) => 1.0,
+            (false, false) => 0.5,
+        };
+        let tri_share = 1.0 - sky_pmf as f64;
+        let mut emitter_cdf: Vec<f32> = emitter_cdf
+            .iter()
+            .map(|&c| (tri_share * c / total) as f32)
+            .collect();
         let mut prev = 0.0;
         for (k, &i) in emitters.iter().enumerate() {
             shading[i as usize].emitter_pmf = emitter_cdf[k] - prev;
             prev = emitter_cdf[k];
         }
-        if let Some(last) = emitter_cdf.last() {
-            debug_assert!((last - 1.0).abs() < 1e-6);
+        if sky_pmf > 0.0 {
+            emitters.push(SKY_EMITTER);
+            emitter_cdf.push(1.0);
         }
         Ok(Self {
             bvh,
@@ -102,6 +120,7 @@ impl RenderScene {
             materials: scene.materials.clone(),
             emitters,
             emitter_cdf,
+            sky_pmf,
             camera: scene.camera.clone(),
             sky: scene.sky,
         })

@@ -32,6 +32,17 @@ pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
     cos_theta.max(0.0) * FRAC_1_PI
 }
 
+/// A uniform direction on the unit sphere. mirror: shaders/sampling.wgsl `sample_uniform_sphere`
+pub fn sample_uniform_sphere(u: Vec2) -> Vec3 {
+    let z = 1.0 - 2.0 * u.x;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * std::f32::consts::PI * u.y;
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// The pdf of `sample_uniform_sphere`: 1 / (4 pi).
+pub const UNIFORM_SPHERE_PDF: f32 = 0.25 * FRAC_1_PI;
+
 /// Uniform barycentrics (b1, b2) on a triangle, by the square-root warp (pbrt-v3 §13.6.4).
 /// mirror: shaders/sampling.wgsl `sample_uniform_triangle`
 pub fn sample_uniform_triangle(u: Vec2) -> Vec2 {
