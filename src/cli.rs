@@ -34,6 +34,44 @@ pub enum Command {
     },
     /// List the Vulkan adapters; pick one with --adapter INDEX or a name substring.
     Adapters,
+    /// Measure BVH build, ray and path-tracing throughput of both renderers.
+    Bench(BenchArgs),
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BenchDevice {
+    Cpu,
+    Gpu,
+    All,
+}
+
+#[derive(clap::Args)]
+pub struct BenchArgs {
+    /// Scene files, .obj meshes, builtin:NAME or generated:terrain; by default the built-in
+    /// Cornell box, the Stanford bunny (from ../shared/meshes) and a 2M-triangle terrain.
+    pub scenes: Vec<PathBuf>,
+    #[arg(long, value_enum, default_value_t = BenchDevice::All)]
+    pub device: BenchDevice,
+    /// GPU adapter: an index or a name substring from `meshtrace adapters`.
+    #[arg(long)]
+    pub adapter: Option<String>,
+    /// Worker threads for the CPU path (default: one per core).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Timed repeats per measure, after one warm-up run.
+    #[arg(long, default_value_t = 5)]
+    pub repeats: usize,
+    /// Image size of the ray and path measures.
+    #[arg(long, default_value_t = 512)]
+    pub width: u32,
+    #[arg(long, default_value_t = 512)]
+    pub height: u32,
+    /// Samples per pixel of the path-tracing measure.
+    #[arg(long, default_value_t = 4)]
+    pub spp: u32,
+    /// Print one JSON array instead of a table.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -91,9 +129,8 @@ fn load(path: &Path) -> Result<Scene> {
     Ok(scene)
 }
 
-pub fn render(args: &RenderArgs) -> Result<()> {
-    meshtrace::film::Format::from_path(&args.output)?;
-    if let Some(n) = args.threads {
+fn set_threads(threads: Option<usize>) -> Result<()> {
+    if let Some(n) = threads {
         if n == 0 {
             bail!("--threads must be at least 1");
         }
@@ -102,6 +139,12 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             .build_global()
             .context("cannot start the worker threads")?;
     }
+    Ok(())
+}
+
+pub fn render(args: &RenderArgs) -> Result<()> {
+    meshtrace::film::Format::from_path(&args.output)?;
+    set_threads(args.threads)?;
     let mut scene = match &args.scene {
         Some(path) => load(path)?,
         None => load(Path::new(&format!("builtin:{}", builtin::DEFAULT)))?,
@@ -226,4 +269,98 @@ pub fn adapters() -> Result<()> {
         );
     }
     Ok(())
+}
+
+pub fn bench(args: &BenchArgs) -> Result<()> {
+    set_threads(args.threads)?;
+    if args.width == 0 || args.height == 0 || args.spp == 0 || args.repeats == 0 {
+        bail!("--width, --height, --spp and --repeats must be at least 1");
+    }
+    let mut scenes: Vec<PathBuf> = args.scenes.clone();
+    if scenes.is_empty() {
+        scenes.push(PathBuf::from("builtin:cornell"));
+        let bunny = PathBuf::from("../shared/meshes/stanford-bunny.obj");
+        if bunny.exists() {
+            scenes.push(bunny);
+        } else {
+            eprintln!("notice: {} absent; skipping the bunny", bunny.display());
+        }
+        scenes.push(PathBuf::from("generated:terrain"));
+    }
+    let gpu = match args.device {
+        BenchDevice::Cpu => None,
+        BenchDevice::Gpu | BenchDevice::All => Some(GpuContext::new(args.adapter.as_deref())?),
+    };
+    let opts = meshtrace::bench::BenchOptions {
+        repeats: args.repeats,
+        width: args.width,
+        height: args.height,
+        spp: args.spp,
+    };
+    if !args.json {
+        eprintln!(
+            "CPU: {} ({} threads){}",
+            cpu_name(),
+            rayon::current_num_threads(),
+            gpu.as_ref()
+                .map_or(String::new(), |g| format!("; GPU: {}", g.adapter.name))
+        );
+        println!(
+            "{:<22} {:<6} {:<16} {:>12} {:>18}  unit",
+            "scene", "device", "measure", "median", "min..max"
+        );
+    }
+    let mut all = Vec::new();
+    for path in &scenes {
+        let text = path.to_string_lossy();
+        let (name, scene) = match text.strip_prefix("generated:") {
+            Some("terrain") => ("terrain-2M".to_string(), meshtrace::bench::terrain(1000)),
+            Some(other) => bail!("unknown generated scene `{other}`; there is: terrain"),
+            None => {
+                let scene = load(path)?;
+                let name = path
+                    .file_stem()
+                    .map_or(text.to_string(), |s| s.to_string_lossy().into_owned());
+                (name.trim_start_matches("builtin:").to_string(), scene)
+            }
+        };
+        let measures = meshtrace::bench::bench_scene(
+            &name,
+            &scene,
+            gpu.as_ref(),
+            args.device != BenchDevice::Gpu,
+            &opts,
+        )?;
+        if !args.json {
+            for m in &measures {
+                println!(
+                    "{:<22} {:<6} {:<16} {:>12.3} {:>18}  {}",
+                    m.scene,
+                    m.device,
+                    m.measure,
+                    m.median,
+                    format!("{:.3}..{:.3}", m.min, m.max),
+                    m.unit
+                );
+            }
+        }
+        all.extend(measures);
+    }
+    if args.json {
+        println!("{}", meshtrace::bench::to_json(&all));
+    }
+    Ok(())
+}
+
+/// The CPU's model name, from /proc/cpuinfo (Linux), for labelling results.
+fn cpu_name() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|n| n.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into())
 }

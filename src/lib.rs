@@ -5,6 +5,7 @@
 //! tables that the CPU reference integrator ([`render::cpu`]) and the GPU compute renderer
 //! read alike; the samples land in a [`film::Film`], which writes the image file.
 
+pub mod bench;
 pub mod bvh;
 pub mod film;
 pub mod geometry;

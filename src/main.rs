@@ -19,6 +19,7 @@ fn main() -> ExitCode {
         cli::Command::Render(r) => cli::render(r),
         cli::Command::Info { scene } => cli::info(scene),
         cli::Command::Adapters => cli::adapters(),
+        cli::Command::Bench(b) => cli::bench(b),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

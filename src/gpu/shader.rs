@@ -1,6 +1,6 @@
 //! The WGSL sources, joined in a fixed order (WGSL has no includes). The library files hold
-//! the path tracer's stages; `render.wgsl` adds the render kernel and `tests.wgsl` the
-//! shader unit-test kernels.
+//! the path tracer's stages; `render.wgsl` adds the render kernel, `tests.wgsl` the
+//! shader unit-test kernels and `bench.wgsl` the ray-throughput kernels.
 
 /// The shared library, in dependency order.
 pub const LIBRARY: &[(&str, &str)] = &[
@@ -23,6 +23,7 @@ pub const LIBRARY: &[(&str, &str)] = &[
 
 const RENDER: &str = include_str!("../../shaders/render.wgsl");
 const TESTS: &str = include_str!("../../shaders/tests.wgsl");
+const BENCH: &str = include_str!("../../shaders/bench.wgsl");
 
 fn join(extra: &str) -> String {
     let mut src = String::new();
@@ -41,4 +42,9 @@ pub fn render_source() -> String {
 /// The module with the `test_*` entry points.
 pub fn test_source() -> String {
     join(TESTS)
+}
+
+/// The module with the `bench_*` ray-throughput entry points.
+pub fn bench_source() -> String {
+    join(BENCH)
 }

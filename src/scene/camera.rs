@@ -47,6 +47,18 @@ impl Camera {
         })
     }
 
+    /// A pinhole camera (vertical field of view 40 degrees) that frames `bounds` from the
+    /// front (+Z) and slightly above, as for a bare mesh.
+    pub fn framing(bounds: &crate::math::Aabb) -> Self {
+        let vfov = 40.0f32;
+        let center = bounds.center();
+        let radius = (0.5 * bounds.extent().length()).max(1e-6);
+        let distance = 1.1 * radius / (0.5 * vfov.to_radians()).sin();
+        let position = center + distance * Vec3::new(0.0, 0.25, 1.0).normalize();
+        Self::new(position, center, Vec3::Y, vfov, 0.0, None)
+            .expect("a camera offset from its target along +Z is never degenerate")
+    }
+
     /// tan(vfov / 2): the image plane's half height at unit distance.
     pub fn tan_half_vfov(&self) -> f32 {
         (0.5 * self.vfov.to_radians()).tan()

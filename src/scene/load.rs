@@ -83,13 +83,7 @@ fn load_bare_obj(path: &Path, files: &dyn FileSource) -> Result<Scene, SceneErro
             message: "the mesh has no faces".into(),
         });
     }
-    let vfov = 40.0f32;
-    let center = bounds.center();
-    let radius = (0.5 * bounds.extent().length()).max(1e-6);
-    let distance = 1.1 * radius / (0.5 * vfov.to_radians()).sin();
-    let position = center + distance * Vec3::new(0.0, 0.25, 1.0).normalize();
-    let camera = Camera::new(position, center, Vec3::Y, vfov, 0.0, None)
-        .expect("a camera offset from its target along +Z is never degenerate");
+    let camera = Camera::framing(&bounds);
     Ok(builder.finish(
         Some(path.to_path_buf()),
         camera,

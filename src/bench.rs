@@ -1,0 +1,342 @@
+//! Throughput measurements of both renderers, for `meshtrace bench`: BVH build rate, ray
+//! rates for coherent, incoherent and shadow rays, and full path tracing. Each measure runs
+//! once to warm up, then `repeats` times; the median and the spread are reported.
+
+use crate::bvh::{BuildParams, Bvh, traverse_any, traverse_closest};
+use crate::geometry::{T_INF, geometric_normal};
+use crate::gpu::{GpuContext, GpuError, kernels::Kernel, shader};
+use crate::math::{Aabb, Ray, onb_from_normal};
+use crate::render::rng::Rng;
+use crate::render::sampling::{sample_cosine_hemisphere, sample_uniform_triangle};
+use crate::render::{RenderJob, RenderScene, SKY_EMITTER, cpu, cpu::offset_ray_origin};
+use crate::scene::{Camera, Material, Mesh, NO_NORMAL, RenderSettings, Scene, Sky, Triangle};
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// One reported number: the median of `repeats` timed runs, with their extremes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Measure {
+    pub scene: String,
+    pub device: String,
+    pub measure: &'static str,
+    pub unit: &'static str,
+    pub median: f64,
+    pub min: f64,
+    pub max: f64,
+    pub repeats: usize,
+}
+
+/// How much to measure.
+#[derive(Clone, Copy, Debug)]
+pub struct BenchOptions {
+    pub repeats: usize,
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel of the path-tracing measure.
+    pub spp: u32,
+}
+
+impl Default for BenchOptions {
+    fn default() -> Self {
+        Self {
+            repeats: 5,
+            width: 512,
+            height: 512,
+            spp: 4,
+        }
+    }
+}
+
+/// The benchmark rays of a scene: one camera ray per pixel, a cosine-distributed bounce
+/// from each primary hit, and a shadow ray from each hit towards a light (or a random
+/// point of the scene where it has no emitters).
+pub struct RaySets {
+    pub primary: Vec<(Ray, f32)>,
+    pub incoherent: Vec<(Ray, f32)>,
+    pub shadow: Vec<(Ray, f32)>,
+}
+
+impl RaySets {
+    pub fn new(scene: &RenderScene, width: u32, height: u32) -> Self {
+        let primary: Vec<(Ray, f32)> = (0..width * height)
+            .map(|i| {
+                let rng = Rng::new(i, 0, 0x0bec);
+                (
+                    scene
+                        .camera
+                        .generate_camera_ray(i % width, i / width, width, height, &rng),
+                    T_INF,
+                )
+            })
+            .collect();
+        let bounds = scene.bvh.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds());
+        let hits: Vec<(u32, Ray, Vec3, Vec3)> = primary
+            .par_iter()
+            .enumerate()
+            .filter_map(|(i, (ray, _))| {
+                let h = traverse_closest(&scene.bvh.nodes, &scene.tris, ray, T_INF)?;
+                let mut n = geometric_normal(&scene.tris[h.tri as usize]);
+                if n.dot(ray.dir) > 0.0 {
+                    n = -n;
+                }
+                Some((i as u32, *ray, ray.at(h.t), n))
+            })
+            .collect();
+        let lights: Vec<u32> = scene
+            .emitters
+            .iter()
+            .copied()
+            .filter(|&e| e != SKY_EMITTER)
+            .collect();
+        let mut incoherent = Vec::with_capacity(hits.len());
+        let mut shadow = Vec::with_capacity(hits.len());
+        for &(i, _, p, n) in &hits {
+            let rng = Rng::new(i, 1, 0x0bec);
+            let u = Vec2::new(rng.rng_1d(0, 0), rng.rng_1d(0, 1));
+            let (t, b) = onb_from_normal(n);
+            let l = sample_cosine_hemisphere(u);
+            let dir = l.x * t + l.y * b + l.z * n;
+            incoherent.push((Ray::new(offset_ray_origin(p, n, dir), dir), T_INF));
+            let target = if lights.is_empty() {
+                bounds.min + bounds.extent() * Vec3::new(u.x, u.y, rng.rng_1d(0, 3))
+            } else {
+                let e = lights[rng.rng_u32(0, 2) as usize % lights.len()];
+                let [a, b, c] = scene.tris[e as usize].corners();
+                let w = sample_uniform_triangle(u);
+                (1.0 - w.x - w.y) * a + w.x * b + w.y * c
+            };
+            let origin = offset_ray_origin(p, n, target - p);
+            let d = target - origin;
+            let dist = d.length();
+            if dist > 0.0 {
+                shadow.push((Ray::new(origin, d / dist), dist * (1.0 - 1e-4)));
+            }
+        }
+        Self {
+            primary,
+            incoherent,
+            shadow,
+        }
+    }
+}
+
+/// Runs `f` once to warm up, then `repeats` times; returns the rates `work / seconds`.
+fn timed(
+    repeats: usize,
+    work: f64,
+    mut f: impl FnMut() -> Result<f64, GpuError>,
+) -> Result<Vec<f64>, GpuError> {
+    f()?;
+    (0..repeats.max(1))
+        .map(|_| f().map(|s| work / s.max(1e-9)))
+        .collect()
+}
+
+fn summarize(
+    scene: &str,
+    device: &str,
+    measure: &'static str,
+    unit: &'static str,
+    mut rates: Vec<f64>,
+) -> Measure {
+    rates.sort_by(f64::total_cmp);
+    Measure {
+        scene: scene.to_string(),
+        device: device.to_string(),
+        measure,
+        unit,
+        median: rates[rates.len() / 2],
+        min: rates[0],
+        max: rates[rates.len() - 1],
+        repeats: rates.len(),
+    }
+}
+
+fn ray_words(rays: &[(Ray, f32)]) -> Vec<[u32; 4]> {
+    rays.iter()
+        .flat_map(|(r, t_max)| {
+            [
+                r.origin.extend(*t_max).to_array().map(f32::to_bits),
+                r.dir.extend(0.0).to_array().map(f32::to_bits),
+            ]
+        })
+        .collect()
+}
+
+/// Measures one scene on the CPU and, when `gpu` is given, on that device.
+pub fn bench_scene(
+    name: &str,
+    scene: &Scene,
+    gpu: Option<&GpuContext>,
+    cpu: bool,
+    opts: &BenchOptions,
+) -> Result<Vec<Measure>, GpuError> {
+    let mut out = Vec::new();
+    let bounds: Vec<Aabb> = scene
+        .mesh
+        .triangles
+        .iter()
+        .map(|t| Aabb::from_points(&scene.mesh.vertices(t)))
+        .collect();
+    let tris = bounds.len() as f64;
+    let mut sah = 0.0;
+    let builds = timed(opts.repeats, tris / 1e6, || {
+        let start = Instant::now();
+        let bvh = Bvh::build(&bounds, &BuildParams::default())
+            .map_err(|e| GpuError::Fault(e.to_string()))?;
+        sah = bvh.stats.sah_cost as f64;
+        Ok(start.elapsed().as_secs_f64())
+    })?;
+    out.push(summarize(name, "host", "bvh_build", "Mtris/s", builds));
+    out.push(summarize(name, "host", "sah_cost", "cost", vec![sah]));
+
+    let rs = RenderScene::new(scene, &BuildParams::default())
+        .map_err(|e| GpuError::Fault(e.to_string()))?;
+    let rays = RaySets::new(&rs, opts.width, opts.height);
+    let sets: [(&'static str, &Vec<(Ray, f32)>, bool); 3] = [
+        ("primary_rays", &rays.primary, false),
+        ("incoherent_rays", &rays.incoherent, false),
+        ("shadow_rays", &rays.shadow, true),
+    ];
+    let settings = RenderSettings {
+        width: opts.width,
+        height: opts.height,
+        spp: opts.spp,
+        max_depth: scene.settings.max_depth,
+        seed: 0,
+    };
+    let job = RenderJob::new(settings);
+    let samples = opts.width as f64 * opts.height as f64 * opts.spp as f64;
+    if cpu {
+        for (measure, set, any) in sets {
+            let n = set.len() as f64 / 1e6;
+            let rates = timed(opts.repeats, n, || {
+                let start = Instant::now();
+                let hits: usize = set
+                    .par_iter()
+                    .map(|(r, t)| {
+                        if any {
+                            traverse_any(&rs.bvh.nodes, &rs.tris, r, *t) as usize
+                        } else {
+                            traverse_closest(&rs.bvh.nodes, &rs.tris, r, *t).is_some() as usize
+                        }
+                    })
+                    .sum();
+                std::hint::black_box(hits);
+                Ok(start.elapsed().as_secs_f64())
+            })?;
+            out.push(summarize(name, "cpu", measure, "Mrays/s", rates));
+        }
+        let mut path_rays = 0u64;
+        let rates = timed(opts.repeats, samples / 1e6, || {
+            let start = Instant::now();
+            path_rays = cpu::render(&rs, &job, &|_| {}).1;
+            Ok(start.elapsed().as_secs_f64())
+        })?;
+        push_path(&mut out, name, "cpu", rates, path_rays as f64 / samples);
+    }
+    if let Some(ctx) = gpu {
+        for (measure, set, any) in sets {
+            let entry = if any { "bench_any" } else { "bench_closest" };
+            let kernel = Kernel::new(ctx, &rs, &settings, &shader::bench_source(), entry)?;
+            let words = ray_words(set);
+            let n = set.len() as f64 / 1e6;
+            let rates = timed(opts.repeats, n, || {
+                Ok(kernel.run(&words, set.len(), set.len())?.1)
+            })?;
+            out.push(summarize(name, "gpu", measure, "Mrays/s", rates));
+        }
+        let mut path_rays = 0u64;
+        let rates = timed(opts.repeats, samples / 1e6, || {
+            let start = Instant::now();
+            path_rays = crate::gpu::render(ctx, &rs, &job, &|_| {})?.1;
+            Ok(start.elapsed().as_secs_f64())
+        })?;
+        push_path(&mut out, name, "gpu", rates, path_rays as f64 / samples);
+    }
+    Ok(out)
+}
+
+/// Path tracing in Msamples/s, and in Mrays/s from the rays each sample traced.
+fn push_path(
+    out: &mut Vec<Measure>,
+    scene: &str,
+    device: &str,
+    rates: Vec<f64>,
+    rays_per_sample: f64,
+) {
+    let rays = rates.iter().map(|r| r * rays_per_sample).collect();
+    out.push(summarize(
+        scene,
+        device,
+        "path_samples",
+        "Msamples/s",
+        rates,
+    ));
+    out.push(summarize(scene, device, "path_rays", "Mrays/s", rays));
+}
+
+/// A generated height field of `2 n^2` triangles: rolling hills under a white sky, framed
+/// from the front, for measuring large meshes without shipping one.
+pub fn terrain(n: u32) -> Scene {
+    let mut mesh = Mesh::default();
+    let size = 10.0;
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, z) = (
+                size * (i as f32 / n as f32 - 0.5),
+                size * (j as f32 / n as f32 - 0.5),
+            );
+            let y = 0.6 * (1.3 * x).sin() * (0.9 * z).cos()
+                + 0.25 * (3.7 * x + 2.1 * z).sin()
+                + 0.05 * (17.0 * x).sin() * (13.0 * z).cos();
+            mesh.positions.push(Vec3::new(x, y, z));
+        }
+    }
+    let idx = |i: u32, j: u32| j * (n + 1) + i;
+    for j in 0..n {
+        for i in 0..n {
+            let (a, b, c, d) = (idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1));
+            for p in [[a, d, c], [a, c, b]] {
+                mesh.triangles.push(Triangle {
+                    p,
+                    n: [NO_NORMAL; 3],
+                    material: 0,
+                });
+            }
+        }
+    }
+    let bounds = Aabb::from_points(&mesh.positions);
+    Scene {
+        path: None,
+        camera: Camera::framing(&bounds),
+        sky: Sky::Constant(Vec3::ONE),
+        settings: RenderSettings::default(),
+        materials: vec![Material::diffuse("ground", Vec3::splat(0.7))],
+        mesh,
+        warnings: Vec::new(),
+    }
+}
+
+/// The measures as a JSON array: one object per (scene, device, measure).
+pub fn to_json(measures: &[Measure]) -> String {
+    let esc = |s: &str| s.replace('\\', "\\\\").replace('"', "\\\"");
+    let rows: Vec<String> = measures
+        .iter()
+        .map(|m| {
+            format!(
+                "  {{\"scene\": \"{}\", \"device\": \"{}\", \"measure\": \"{}\", \"unit\": \"{}\", \"median\": {}, \"min\": {}, \"max\": {}, \"repeats\": {}}}",
+                esc(&m.scene),
+                esc(&m.device),
+                m.measure,
+                m.unit,
+                m.median,
+                m.min,
+                m.max,
+                m.repeats
+            )
+        })
+        .collect();
+    format!("[\n{}\n]", rows.join(",\n"))
+}
