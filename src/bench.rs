@@ -52,14 +52,17 @@ impl Default for BenchOptions {
 /// from each primary hit, and a shadow ray from each hit towards a light (or a random
 /// point of the scene where it has no emitters).
 pub struct RaySets {
-    pub primary: Vec<(Ray, f32)>,
-    pub incoherent: Vec<(Ray, f32)>,
-    pub shadow: Vec<(Ray, f32)>,
+    pub primary: Vec<BenchRay>,
+    pub incoherent: Vec<BenchRay>,
+    pub shadow: Vec<BenchRay>,
 }
+
+/// A ray and its extent.
+pub type BenchRay = (Ray, f32);
 
 impl RaySets {
     pub fn new(scene: &RenderScene, width: u32, height: u32) -> Self {
-        let primary: Vec<(Ray, f32)> = (0..width * height)
+        let primary: Vec<BenchRay> = (0..width * height)
             .map(|i| {
                 let rng = Rng::new(i, 0, 0x0bec);
                 (
@@ -153,7 +156,7 @@ fn summarize(
     }
 }
 
-fn ray_words(rays: &[(Ray, f32)]) -> Vec<[u32; 4]> {
+fn ray_words(rays: &[BenchRay]) -> Vec<[u32; 4]> {
     rays.iter()
         .flat_map(|(r, t_max)| {
             [
@@ -194,10 +197,10 @@ pub fn bench_scene(
     let rs = RenderScene::new(scene, &BuildParams::default())
         .map_err(|e| GpuError::Fault(e.to_string()))?;
     let rays = RaySets::new(&rs, opts.width, opts.height);
-    let sets: [(&'static str, &Vec<(Ray, f32)>, bool); 3] = [
-        ("primary_rays", &rays.primary, false),
-        ("incoherent_rays", &rays.incoherent, false),
-        ("shadow_rays", &rays.shadow, true),
+    let sets: [(&'static str, &[BenchRay], bool); 3] = [
+        ("primary_rays", &rays.primary[..], false),
+        ("incoherent_rays", &rays.incoherent[..], false),
+        ("shadow_rays", &rays.shadow[..], true),
     ];
     let settings = RenderSettings {
         width: opts.width,
