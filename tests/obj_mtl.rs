@@ -72,8 +72,6 @@ fn per_corner_normals() {
 }
 
 #[test]
-#[ignore = "bug: obj::load_obj gives a face without vn, in a group whose other faces have vn, \
-            the normals tobj makes up (previous index) instead of NO_NORMAL"]
 fn face_without_normals_among_faces_with_normals_is_flat() {
     let m = obj("mixed_normals.obj");
     assert_eq!(m.triangles.len(), 2);
@@ -430,4 +428,19 @@ fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("meshtrace-test-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
+}
+
+#[test]
+fn unknown_usemtl_is_a_warning_with_its_line() {
+    let m = obj("unknown_usemtl.obj");
+    assert_eq!(m.triangles.len(), 2);
+    assert_eq!(m.warnings.len(), 1, "{:?}", m.warnings);
+    let w = &m.warnings[0];
+    assert!(
+        w.contains("unknown_usemtl.obj:7:") && w.contains("no_such_material"),
+        "{w}"
+    );
+    // The face falls back to the default material; the known one keeps its own.
+    assert!(m.triangles[0].2.is_some());
+    assert_eq!(m.triangles[1].2, None);
 }

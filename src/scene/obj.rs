@@ -72,7 +72,9 @@ pub fn load_obj(path: &Path, files: &dyn FileSource) -> Result<ObjMesh, SceneErr
     }))
     .map_err(|_| err("malformed OBJ or MTL data (the parser rejected a line)".into()))?;
     let (models, materials) = parsed.map_err(|e| err(describe_tobj_error(&e)))?;
-    for lib in failed_mtl.into_inner() {
+    let failed_mtl = failed_mtl.into_inner();
+    let failed_mtl_count = failed_mtl.len();
+    for lib in failed_mtl {
         out.warnings.push(format!(
             "{shown}: material library {lib} could not be read; its materials fall back to the default"
         ));
@@ -80,6 +82,29 @@ pub fn load_obj(path: &Path, files: &dyn FileSource) -> Result<ObjMesh, SceneErr
     if let Ok(mtls) = materials {
         out.materials = mtls.iter().map(map_mtl).collect();
     }
+    let scan = scan_obj(&bytes);
+    let names: Vec<&str> = out.materials.iter().map(|m| m.name.as_str()).collect();
+    if failed_mtl_count == 0 {
+        for (line, name) in &scan.usemtl {
+            if !names.contains(&name.as_str()) {
+                out.warnings.push(format!(
+                    "{shown}:{line}: unknown material `{name}`; its faces use the default material"
+                ));
+            }
+        }
+    }
+    // Which triangles came from faces with normals, in file order (tobj keeps that order
+    // and fans each polygon into `corners - 2` triangles); tobj itself fills a missing
+    // `vn` with a neighbour's, which would smooth-shade a face that asked to be flat.
+    let total: usize = models.iter().map(|m| m.mesh.indices.len() / 3).sum();
+    let tri_has_normal: Option<Vec<bool>> =
+        (scan.faces.iter().map(|f| f.0).sum::<usize>() == total).then(|| {
+            scan.faces
+                .iter()
+                .flat_map(|&(n, has)| std::iter::repeat_n(has, n))
+                .collect()
+        });
+    let mut tri_index = 0usize;
     for model in &models {
         let m = &model.mesh;
         let base_p = out.positions.len() as u32;
@@ -106,7 +131,9 @@ pub fn load_obj(path: &Path, files: &dyn FileSource) -> Result<ObjMesh, SceneErr
         let has_normals = m.normal_indices.len() == m.indices.len() && !m.normals.is_empty();
         for (f, tri) in m.indices.chunks_exact(3).enumerate() {
             let p = [tri[0] + base_p, tri[1] + base_p, tri[2] + base_p];
-            let n = if has_normals {
+            let face_has_normals = tri_has_normal.as_ref().is_none_or(|v| v[tri_index]);
+            tri_index += 1;
+            let n = if has_normals && face_has_normals {
                 let ni = &m.normal_indices[3 * f..3 * f + 3];
                 [ni[0] + base_n, ni[1] + base_n, ni[2] + base_n]
             } else {
@@ -116,6 +143,39 @@ pub fn load_obj(path: &Path, files: &dyn FileSource) -> Result<ObjMesh, SceneErr
         }
     }
     Ok(out)
+}
+
+/// What tobj does not report: each face's triangle count and whether all its corners have
+/// normals, and every `usemtl` with its line number.
+struct ObjScan {
+    faces: Vec<(usize, bool)>,
+    usemtl: Vec<(usize, String)>,
+}
+
+fn scan_obj(bytes: &[u8]) -> ObjScan {
+    let mut scan = ObjScan {
+        faces: Vec::new(),
+        usemtl: Vec::new(),
+    };
+    for (i, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        let line = String::from_utf8_lossy(line);
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("f") => {
+                let corners: Vec<&str> = words.collect();
+                let has = corners
+                    .iter()
+                    .all(|c| c.split('/').nth(2).is_some_and(|n| !n.is_empty()));
+                scan.faces.push((corners.len().saturating_sub(2), has));
+            }
+            Some("usemtl") => {
+                let name = line.trim().strip_prefix("usemtl").unwrap_or("").trim();
+                scan.usemtl.push((i + 1, name.to_string()));
+            }
+            _ => {}
+        }
+    }
+    scan
 }
 
 /// The MTL mapping of the scene format: Kd, Ke, illum 3 / Pm (conductors, rough with Pr),
