@@ -143,7 +143,7 @@ fn set_threads(threads: Option<usize>) -> Result<()> {
 }
 
 pub fn render(args: &RenderArgs) -> Result<()> {
-    meshtrace::film::Format::from_path(&args.output)?;
+    meshtrace::film::Film::check_writable(&args.output)?;
     set_threads(args.threads)?;
     let mut scene = match &args.scene {
         Some(path) => load(path)?,

@@ -89,6 +89,19 @@ impl Film {
         self.samples += other.samples;
     }
 
+    /// Checks, before any rendering, that `path` names a known format in a folder where a
+    /// file can be created, by creating and removing the temporary file `save` would use.
+    pub fn check_writable(path: &Path) -> Result<(), FilmError> {
+        Format::from_path(path)?;
+        let tmp = temp_sibling(path);
+        std::fs::File::create(&tmp).map_err(|e| FilmError::Io {
+            path: path.display().to_string(),
+            message: format!("cannot write here: {e}"),
+        })?;
+        let _ = std::fs::remove_file(&tmp);
+        Ok(())
+    }
+
     /// Writes the mean radiance in the format the extension names.
     pub fn save(&self, path: &Path) -> Result<(), FilmError> {
         let format = Format::from_path(path)?;

@@ -1,0 +1,291 @@
+//! The binary on bad input: every case exits non-zero with one line on stderr that names the
+//! file and the line or field at fault, and leaves no output file behind. And on good input,
+//! it writes the image and nothing else.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new(name: &str) -> Self {
+        let p = std::env::temp_dir().join(format!("meshtrace-cli-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&p);
+        std::fs::create_dir_all(&p).unwrap();
+        Self(p)
+    }
+    fn write(&self, name: &str, text: &str) -> PathBuf {
+        let p = self.0.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+    fn listing(&self) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(&self.0)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
+}
+
+/// Runs `meshtrace args...` in `dir`; returns (exit code, stderr).
+fn run(dir: &TempDir, args: &[&str]) -> (i32, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_meshtrace"))
+        .args(args)
+        .current_dir(&dir.0)
+        .env("NODEVICE_SELECT", "1")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    (out.status.code().unwrap_or(-1), stderr)
+}
+
+/// Asserts a failed run: exit 1, one `error:` line containing every `needle`, no panic, and
+/// nothing left in the folder but the inputs.
+fn assert_fails(dir: &TempDir, args: &[&str], needles: &[&str]) {
+    let before = dir.listing();
+    let (code, stderr) = run(dir, args);
+    let ctx = format!(
+        "meshtrace {args:?} in {}: exit {code}, stderr:\n{stderr}\nfiles: {:?}",
+        dir.0.display(),
+        dir.listing()
+    );
+    assert_eq!(code, 1, "{ctx}");
+    assert!(!stderr.contains("panicked"), "{ctx}");
+    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error:")).collect();
+    assert_eq!(errors.len(), 1, "{ctx}");
+    for n in needles {
+        assert!(errors[0].contains(n), "missing `{n}`: {ctx}");
+    }
+    assert_eq!(dir.listing(), before, "{ctx}");
+}
+
+const CAMERA: &str = "[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\n";
+
+#[test]
+fn bad_scene_files_fail_cleanly() {
+    let dir = TempDir::new("scenes");
+    let cases: &[(&str, String, &[&str])] = &[
+        (
+            "syntax.toml",
+            format!("{CAMERA}[render\nspp = 4\n"),
+            &["syntax.toml:4:"],
+        ),
+        (
+            "unknown.toml",
+            format!("{CAMERA}[render]\nssp = 4\n"),
+            &["unknown.toml", "ssp"],
+        ),
+        (
+            "type.toml",
+            format!("{CAMERA}[render]\nspp = \"many\"\n"),
+            &["type.toml:5:"],
+        ),
+        (
+            "negative.toml",
+            format!("{CAMERA}[render]\nspp = -3\n"),
+            &["negative.toml:5:"],
+        ),
+        (
+            "zero.toml",
+            format!("{CAMERA}[render]\nwidth = 0\n"),
+            &["zero.toml", "render.width"],
+        ),
+        (
+            "huge.toml",
+            format!("{CAMERA}[render]\nwidth = 100000\nheight = 100000\n"),
+            &["huge.toml", "render.width", "too large"],
+        ),
+        (
+            "vfov.toml",
+            format!("{CAMERA}vfov = 180\n"),
+            &["vfov.toml", "camera.vfov"],
+        ),
+        (
+            "nan.toml",
+            "[camera]\nposition = [nan, 0, 3]\nlook_at = [0, 0, 0]\n".into(),
+            &["nan.toml", "camera.position"],
+        ),
+        (
+            "ior.toml",
+            format!("{CAMERA}[materials.glass]\ntype = \"dielectric\"\nior = 0\n"),
+            &["ior.toml", "materials.glass.ior"],
+        ),
+        (
+            "rough.toml",
+            format!("{CAMERA}[materials.m]\ntype = \"rough_conductor\"\nroughness = 1.5\n"),
+            &["rough.toml", "materials.m.roughness"],
+        ),
+        (
+            "nomesh.toml",
+            format!("{CAMERA}[[objects]]\nmesh = \"nowhere.obj\"\n"),
+            &["nowhere.obj"],
+        ),
+    ];
+    for (name, text, needles) in cases {
+        let scene = dir.write(name, text);
+        assert_fails(
+            &dir,
+            &[
+                "render",
+                scene.to_str().unwrap(),
+                "-o",
+                "out.png",
+                "--device",
+                "cpu",
+            ],
+            needles,
+        );
+        std::fs::remove_file(scene).unwrap();
+    }
+}
+
+#[test]
+fn bad_meshes_fail_cleanly() {
+    let dir = TempDir::new("meshes");
+    for (file, needle) in [
+        ("bad_index.obj", "bad_index.obj"),
+        ("nan_vertex.obj", "nan_vertex.obj"),
+    ] {
+        let path = data(file);
+        assert_fails(
+            &dir,
+            &[
+                "render",
+                path.to_str().unwrap(),
+                "-o",
+                "out.png",
+                "--device",
+                "cpu",
+            ],
+            &[needle],
+        );
+    }
+    let empty = dir.write("empty.obj", "# nothing\n");
+    assert_fails(
+        &dir,
+        &["render", empty.to_str().unwrap(), "-o", "out.png"],
+        &["empty.obj", "no faces"],
+    );
+}
+
+#[test]
+fn bad_arguments_and_outputs_fail_cleanly() {
+    let dir = TempDir::new("args");
+    assert_fails(
+        &dir,
+        &["render", "missing.toml", "-o", "out.png"],
+        &["missing.toml"],
+    );
+    assert_fails(
+        &dir,
+        &["render", "-o", "out.xyz", "--device", "cpu"],
+        &["out.xyz", "unknown image format"],
+    );
+    assert_fails(
+        &dir,
+        &["render", "-o", "no/such/dir/out.png", "--device", "cpu"],
+        &["no/such/dir/out.png"],
+    );
+    assert_fails(
+        &dir,
+        &["render", "-o", "out.png", "--spp", "0", "--device", "cpu"],
+        &["--spp"],
+    );
+    assert_fails(
+        &dir,
+        &[
+            "render",
+            "-o",
+            "out.png",
+            "--threads",
+            "0",
+            "--device",
+            "cpu",
+        ],
+        &["--threads"],
+    );
+    assert_fails(
+        &dir,
+        &["render", "builtin:nope", "-o", "out.png"],
+        &["builtin:nope", "cornell"],
+    );
+}
+
+#[test]
+fn warnings_do_not_stop_a_render() {
+    let dir = TempDir::new("warn");
+    let obj = data("degenerate.obj");
+    let (code, stderr) = run(
+        &dir,
+        &[
+            "render",
+            obj.to_str().unwrap(),
+            "-o",
+            "out.png",
+            "--spp",
+            "1",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--device",
+            "cpu",
+        ],
+    );
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stderr.contains("warning: dropped 2 degenerate"), "{stderr}");
+    assert_eq!(dir.listing(), vec!["out.png".to_string()]);
+}
+
+#[test]
+fn a_render_writes_exactly_its_output() {
+    let dir = TempDir::new("ok");
+    let (code, stderr) = run(
+        &dir,
+        &[
+            "render", "-o", "x.exr", "--spp", "2", "--width", "16", "--height", "16", "--device",
+            "cpu", "--quiet",
+        ],
+    );
+    assert_eq!(code, 0, "{stderr}");
+    assert_eq!(stderr, "", "--quiet prints nothing");
+    assert_eq!(dir.listing(), vec!["x.exr".to_string()]);
+    let (code, stderr) = run(
+        &dir,
+        &[
+            "render", "-o", "y.png", "--spp", "1", "--width", "16", "--height", "16", "--device",
+            "cpu",
+        ],
+    );
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stderr.contains("16x16 at 1 spp on the CPU"), "{stderr}");
+    let (code, stdout) = {
+        let out = Command::new(env!("CARGO_BIN_EXE_meshtrace"))
+            .args(["info", "builtin:cornell"])
+            .output()
+            .unwrap();
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stdout).into_owned(),
+        )
+    };
+    assert_eq!(code, Some(0));
+    assert!(
+        stdout.contains("triangles    36") && stdout.contains("sah cost"),
+        "{stdout}"
+    );
+}
