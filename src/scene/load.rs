@@ -168,6 +168,9 @@ impl Builder {
         sky: Sky,
         settings: RenderSettings,
     ) -> Scene {
+        // A mesh used by several objects repeats its warnings; say each once.
+        let mut seen = std::collections::HashSet::new();
+        self.warnings.retain(|w| seen.insert(w.clone()));
         if self.degenerate > 0 {
             self.warnings.push(format!(
                 "dropped {} degenerate (zero-area) triangle{}",
