@@ -63,12 +63,36 @@ fn check(name: &str, corners: &[[Vec3; 3]]) {
         .collect();
     let all = bounds.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
     let rays = rays(all, 100_000);
+    // Bounding spheres (inflated by 1e-4 of the scene size) let the brute force skip
+    // triangles whose sphere the ray's line misses, a test that can never reject a hit.
+    let pad = 1e-4 * all.extent().length();
+    let spheres: Vec<(Vec3, f32)> = tris
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.corners();
+            let center = (a + b + c) / 3.0;
+            let r = (a - center)
+                .length()
+                .max((b - center).length())
+                .max((c - center).length())
+                + pad;
+            (center, r * r)
+        })
+        .collect();
     let mismatches: Vec<String> = rays
         .par_iter()
         .enumerate()
         .filter_map(|(i, ray)| {
             let mut best: Option<(f32, u32)> = None;
             for (k, t) in tris.iter().enumerate() {
+                let (center, r2) = spheres[k];
+                let oc = center - ray.origin;
+                let along = oc.dot(ray.dir);
+                if oc.length_squared() - along * along > r2
+                    || (along < 0.0 && oc.length_squared() > r2)
+                {
+                    continue;
+                }
                 if let Some(h) = intersect_triangle(ray, t, best.map_or(T_INF, |b| b.0)) {
                     best = Some((h.t, k as u32));
                 }
