@@ -109,94 +109,113 @@ fn max3(v: vec3<f32>) -> f32 {
     return max(max(v.x, v.y), v.z);
 }
 
-// One path's radiance (xyz) and the number of rays it traced (w).
-// mirror: src/render/cpu.rs `trace_path`
-fn trace_path(ray_in: Ray, rng: Rng) -> vec4<f32> {
-    var ray = ray_in;
-    var radiance = vec3<f32>(0.0);
-    var beta = vec3<f32>(1.0);
-    var rays = 0u;
-    var prev_pdf = 0.0;
-    var prev_delta = true;
-    var eta_scale = 1.0;
-    var depth = 0u;
-    loop {
-        rays += 1u;
-        let hit = traverse_closest(ray, T_INF);
-        if hit.tri == NO_HIT {
-            var w = 1.0;
-            if !prev_delta && params.sky_pmf != 0.0 {
-                w = power_heuristic(prev_pdf, params.sky_pmf * UNIFORM_SPHERE_PDF);
-            }
-            radiance += beta * w * sky_radiance(ray.dir);
-            break;
-        }
-        let si = surface_at(ray, hit);
-        let mat = materials[si.material];
-        if si.front_face && is_emissive(mat) {
-            var w = 1.0;
-            if !prev_delta {
-                let cos_l = -dot(ray.dir, si.ng);
-                w = power_heuristic(prev_pdf, light_pdf(si.tri, hit.t, cos_l));
-            }
-            radiance += beta * w * mat.emission;
-        }
-        if depth + 1u >= params.max_depth {
-            break;
-        }
-        let wo_world = -ray.dir;
-        let flip = mat.kind != MAT_DIELECTRIC && dot(wo_world, si.ng) < 0.0;
-        let ng = select(si.ng, -si.ng, flip);
-        var ns = select(si.ns, -si.ns, flip);
-        if mat.kind != MAT_DIELECTRIC && dot(ns, wo_world) <= 0.0 {
-            ns = ng;
-        }
-        let frame = onb_from_normal(ns);
-        let wo = wo_world * frame;
+// The state of one path between bounces: the locals of the CPU's `trace_path` loop.
+struct PathState {
+    ray: Ray,
+    radiance: vec3<f32>,
+    beta: vec3<f32>,
+    rays: u32,
+    prev_pdf: f32,
+    prev_delta: bool,
+    eta_scale: f32,
+    depth: u32,
+}
 
-        // Next event estimation.
-        if !bsdf_is_delta(mat) && params.num_emitters > 0u {
-            let ls = sample_light(si.p, ng, rng, depth);
-            if ls.valid && dot(ls.wi, ng) > 0.0 {
-                let wi = ls.wi * frame;
-                let f = bsdf_eval(mat, wo, wi);
-                if any(f != vec3<f32>(0.0)) {
-                    rays += 1u;
-                    if !traverse_any(Ray(ls.origin, ls.wi), ls.t_max) {
-                        let w = power_heuristic(ls.pdf, bsdf_pdf(mat, wo, wi));
-                        radiance += beta * f * ls.le * (w / ls.pdf);
-                    }
+// A path about to trace its camera ray.
+fn path_start(ray: Ray) -> PathState {
+    return PathState(ray, vec3<f32>(0.0), vec3<f32>(1.0), 0u, 0.0, true, 1.0, 0u);
+}
+
+// One bounce: an iteration of the loop of `trace_path`; true when the path has ended.
+// mirror: src/render/cpu.rs `trace_path`
+fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
+    (*st).rays += 1u;
+    let hit = traverse_closest((*st).ray, T_INF);
+    if hit.tri == NO_HIT {
+        var w = 1.0;
+        if !(*st).prev_delta && params.sky_pmf != 0.0 {
+            w = power_heuristic((*st).prev_pdf, params.sky_pmf * UNIFORM_SPHERE_PDF);
+        }
+        (*st).radiance += (*st).beta * w * sky_radiance((*st).ray.dir);
+        return true;
+    }
+    let si = surface_at((*st).ray, hit);
+    let mat = materials[si.material];
+    if si.front_face && is_emissive(mat) {
+        var w = 1.0;
+        if !(*st).prev_delta {
+            let cos_l = -dot((*st).ray.dir, si.ng);
+            w = power_heuristic((*st).prev_pdf, light_pdf(si.tri, hit.t, cos_l));
+        }
+        (*st).radiance += (*st).beta * w * mat.emission;
+    }
+    if (*st).depth + 1u >= params.max_depth {
+        return true;
+    }
+    let wo_world = -(*st).ray.dir;
+    let flip = mat.kind != MAT_DIELECTRIC && dot(wo_world, si.ng) < 0.0;
+    let ng = select(si.ng, -si.ng, flip);
+    var ns = select(si.ns, -si.ns, flip);
+    if mat.kind != MAT_DIELECTRIC && dot(ns, wo_world) <= 0.0 {
+        ns = ng;
+    }
+    let frame = onb_from_normal(ns);
+    let wo = wo_world * frame;
+
+    // Next event estimation.
+    if !bsdf_is_delta(mat) && params.num_emitters > 0u {
+        let ls = sample_light(si.p, ng, rng, (*st).depth);
+        if ls.valid && dot(ls.wi, ng) > 0.0 {
+            let wi = ls.wi * frame;
+            let f = bsdf_eval(mat, wo, wi);
+            if any(f != vec3<f32>(0.0)) {
+                (*st).rays += 1u;
+                if !traverse_any(Ray(ls.origin, ls.wi), ls.t_max) {
+                    let w = power_heuristic(ls.pdf, bsdf_pdf(mat, wo, wi));
+                    (*st).radiance += (*st).beta * f * ls.le * (w / ls.pdf);
                 }
             }
         }
-
-        // BSDF sampling.
-        let bs = bsdf_sample(mat, wo, rng_1d(rng, depth, DIM_BSDF_LOBE),
-            vec2<f32>(rng_1d(rng, depth, DIM_BSDF_U), rng_1d(rng, depth, DIM_BSDF_V)));
-        if !bs.valid {
-            break;
-        }
-        let wi_world = frame * bs.wi;
-        let reflect = bs.wi.z * wo.z > 0.0;
-        if (dot(wi_world, si.ng) * dot(wo_world, si.ng) > 0.0) != reflect {
-            break;
-        }
-        beta *= bs.weight;
-        prev_pdf = bs.pdf;
-        prev_delta = bs.delta;
-        eta_scale *= bs.eta;
-        depth += 1u;
-        if depth >= RR_DEPTH {
-            let q = min(max3(beta) * eta_scale * eta_scale, 0.95);
-            if rng_1d(rng, depth, DIM_ROULETTE) >= q {
-                break;
-            }
-            beta /= q;
-        }
-        if all(beta == vec3<f32>(0.0)) {
-            break;
-        }
-        ray = Ray(offset_ray_origin(si.p, si.ng, wi_world), wi_world);
     }
-    return vec4<f32>(radiance, f32(rays));
+
+    // BSDF sampling.
+    let bs = bsdf_sample(mat, wo, rng_1d(rng, (*st).depth, DIM_BSDF_LOBE),
+        vec2<f32>(rng_1d(rng, (*st).depth, DIM_BSDF_U), rng_1d(rng, (*st).depth, DIM_BSDF_V)));
+    if !bs.valid {
+        return true;
+    }
+    let wi_world = frame * bs.wi;
+    let reflect = bs.wi.z * wo.z > 0.0;
+    if (dot(wi_world, si.ng) * dot(wo_world, si.ng) > 0.0) != reflect {
+        return true;
+    }
+    (*st).beta *= bs.weight;
+    (*st).prev_pdf = bs.pdf;
+    (*st).prev_delta = bs.delta;
+    (*st).eta_scale *= bs.eta;
+    (*st).depth += 1u;
+    if (*st).depth >= RR_DEPTH {
+        let q = min(max3((*st).beta) * (*st).eta_scale * (*st).eta_scale, 0.95);
+        if rng_1d(rng, (*st).depth, DIM_ROULETTE) >= q {
+            return true;
+        }
+        (*st).beta /= q;
+    }
+    if all((*st).beta == vec3<f32>(0.0)) {
+        return true;
+    }
+    (*st).ray = Ray(offset_ray_origin(si.p, si.ng, wi_world), wi_world);
+    return false;
+}
+
+// One path's radiance (xyz) and the number of rays it traced (w).
+// mirror: src/render/cpu.rs `trace_path`
+fn trace_path(ray: Ray, rng: Rng) -> vec4<f32> {
+    var st = path_start(ray);
+    loop {
+        if path_step(&st, rng) {
+            break;
+        }
+    }
+    return vec4<f32>(st.radiance, f32(st.rays));
 }

@@ -18,13 +18,27 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let pixel = y * params.width + x;
     var sum = accum[pixel];
-    for (var s = params.sample_start; s < params.sample_end; s++) {
-        let rng = Rng(pixel, s, params.seed);
-        let l = trace_path(generate_camera_ray(x, y, rng), rng);
-        if is_finite3(l.xyz) {
-            sum += vec4<f32>(l.xyz, 0.0);
+    // Persistent paths: a lane whose path ends starts its next sample at once, so the lanes
+    // of a SIMD group do not all wait for the longest path of every sample.
+    var s = params.sample_start;
+    if s >= params.sample_end {
+        return;
+    }
+    var rng = Rng(pixel, s, params.seed);
+    var st = path_start(generate_camera_ray(x, y, rng));
+    loop {
+        if path_step(&st, rng) {
+            if is_finite3(st.radiance) {
+                sum += vec4<f32>(st.radiance, 0.0);
+            }
+            sum.w += f32(st.rays);
+            s += 1u;
+            if s >= params.sample_end {
+                break;
+            }
+            rng = Rng(pixel, s, params.seed);
+            st = path_start(generate_camera_ray(x, y, rng));
         }
-        sum.w += l.w;
     }
     accum[pixel] = sum;
 }

@@ -3,6 +3,11 @@
 // mirror: src/bvh/mod.rs `STACK_SIZE`
 const STACK_SIZE: u32 = 64u;
 
+// One stack for both traversals (they never nest). At module scope it is zero-initialised
+// once per invocation; WGSL zeroes a function-local array on every call, which costs
+// lavapipe more than the traversal of a small scene.
+var<private> stack: array<u32, STACK_SIZE>;
+
 struct Hit {
     t: f32,
     u: f32,
@@ -22,7 +27,6 @@ fn traverse_closest(ray: Ray, t_max_in: f32) -> Hit {
     if intersect_aabb(ray.origin, inv_dir, root.min, root.max, best.t) == T_INF {
         return best;
     }
-    var stack: array<u32, STACK_SIZE>;
     var sp = 0u;
     var node = 0u;
     loop {
@@ -82,7 +86,6 @@ fn traverse_any(ray: Ray, t_max: f32) -> bool {
     if intersect_aabb(ray.origin, inv_dir, root.min, root.max, t_max) == T_INF {
         return false;
     }
-    var stack: array<u32, STACK_SIZE>;
     var sp = 0u;
     var node = 0u;
     loop {
