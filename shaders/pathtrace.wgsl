@@ -37,8 +37,8 @@ fn is_emissive(m: Material) -> bool {
 
 // mirror: src/render/cpu.rs `surface_at`
 fn surface_at(ray: Ray, hit: Hit) -> SurfaceHit {
-    let tri = tris[hit.tri];
-    let sh = shading[hit.tri];
+    let tri = load_tri(hit.tri);
+    let sh = load_shading(hit.tri);
     let ng = geometric_normal(tri);
     var ns = ng;
     if (sh.flags & TRI_SMOOTH) != 0u {
@@ -65,8 +65,8 @@ fn offset_ray_origin(p: vec3<f32>, ng: vec3<f32>, w: vec3<f32>) -> vec3<f32> {
 
 // mirror: src/render/cpu.rs `light_pdf`
 fn light_pdf(tri: u32, dist: f32, cos_l: f32) -> f32 {
-    let pmf = shading[tri].emitter_pmf;
-    let area = triangle_area(tris[tri]);
+    let pmf = load_shading(tri).emitter_pmf;
+    let area = triangle_area(load_tri(tri));
     return pmf * dist * dist / (cos_l * area);
 }
 
@@ -84,13 +84,13 @@ struct LightSample {
 fn sample_light(p: vec3<f32>, ng: vec3<f32>, rng: Rng, depth: u32) -> LightSample {
     var none = LightSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, false);
     let k = sample_cdf(rng_1d(rng, depth, DIM_LIGHT_PICK));
-    let light = emitters[k];
+    let light = load_emitter(k);
     let u = vec2<f32>(rng_1d(rng, depth, DIM_LIGHT_U), rng_1d(rng, depth, DIM_LIGHT_V));
     if light == SKY_EMITTER {
         let wi = sample_uniform_sphere(u);
         return LightSample(offset_ray_origin(p, ng, wi), wi, T_INF, sky_radiance(wi), params.sky_pmf * UNIFORM_SPHERE_PDF, true);
     }
-    let tri = tris[light];
+    let tri = load_tri(light);
     let bary = sample_uniform_triangle(u);
     let q = (1.0 - bary.x - bary.y) * tri.v0.xyz + bary.x * tri.v1.xyz + bary.y * tri.v2.xyz;
     let origin = offset_ray_origin(p, ng, q - p);
@@ -101,7 +101,7 @@ fn sample_light(p: vec3<f32>, ng: vec3<f32>, rng: Rng, depth: u32) -> LightSampl
     if !(cos_l > 0.0 && dist > 0.0) {
         return none;
     }
-    let le = materials[shading[light].material].emission;
+    let le = load_material(load_shading(light).material).emission;
     return LightSample(origin, wi, dist * (1.0 - 1e-4), le, light_pdf(light, dist, cos_l), true);
 }
 
@@ -140,7 +140,7 @@ fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
         return true;
     }
     let si = surface_at((*st).ray, hit);
-    let mat = materials[si.material];
+    let mat = load_material(si.material);
     if si.front_face && is_emissive(mat) {
         var w = 1.0;
         if !(*st).prev_delta {

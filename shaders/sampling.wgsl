@@ -78,7 +78,7 @@ fn sample_cdf(u: f32) -> u32 {
     var hi = params.num_emitters - 1u;
     while lo < hi {
         let mid = (lo + hi) / 2u;
-        if emitter_cdf[mid] <= u {
+        if load_emitter_cdf(mid) <= u {
             lo = mid + 1u;
         } else {
             hi = mid;

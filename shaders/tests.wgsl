@@ -42,7 +42,7 @@ fn test_intersect_triangle(@builtin(global_invocation_id) gid: vec3<u32>) {
     if 2u * i >= arrayLength(&test_in) { return; }
     let tri = test_in[2u * i].w;
     let t_max = f4(test_in[2u * i + 1u]).w;
-    let h = intersect_triangle(case_ray(i), tris[tri], t_max);
+    let h = intersect_triangle(case_ray(i), load_tri(tri), t_max);
     test_out[2u * i] = vec4<u32>(select(0u, 1u, h.hit), bitcast<u32>(h.t), bitcast<u32>(h.u), bitcast<u32>(h.v));
     test_out[2u * i + 1u] = vec4<u32>(0u);
 }
@@ -52,7 +52,7 @@ fn test_intersect_triangle(@builtin(global_invocation_id) gid: vec3<u32>) {
 fn test_intersect_aabb(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = case_index(gid);
     if 2u * i >= arrayLength(&test_in) { return; }
-    let node = nodes[test_in[2u * i].w];
+    let node = load_node(test_in[2u * i].w);
     let ray = case_ray(i);
     let t = intersect_aabb(ray.origin, safe_inverse(ray.dir), node.min, node.max, f4(test_in[2u * i + 1u]).w);
     test_out[2u * i] = vec4<u32>(bitcast<u32>(t), 0u, 0u, 0u);
@@ -91,7 +91,7 @@ fn test_light_pick(@builtin(global_invocation_id) gid: vec3<u32>) {
     if 2u * i >= arrayLength(&test_in) { return; }
     let u = f4(test_in[2u * i]).x;
     let k = sample_cdf(u);
-    test_out[2u * i] = vec4<u32>(k, emitters[k], bitcast<u32>(power_heuristic(u, 1.0 - u)), 0u);
+    test_out[2u * i] = vec4<u32>(k, load_emitter(k), bitcast<u32>(power_heuristic(u, 1.0 - u)), 0u);
     test_out[2u * i + 1u] = vec4<u32>(0u);
 }
 
@@ -103,7 +103,7 @@ fn test_bsdf_sample(@builtin(global_invocation_id) gid: vec3<u32>) {
     if 2u * i >= arrayLength(&test_in) { return; }
     let a = test_in[2u * i];
     let u = f4(test_in[2u * i + 1u]);
-    let m = materials[a.w];
+    let m = load_material(a.w);
     let s = bsdf_sample(m, f4(a).xyz, u.x, u.yz);
     let flags = select(0u, 1u, s.valid) | select(0u, 2u, s.delta);
     test_out[2u * i] = u4(vec4<f32>(s.wi, s.pdf));
@@ -118,7 +118,7 @@ fn test_bsdf_eval(@builtin(global_invocation_id) gid: vec3<u32>) {
     let a = test_in[2u * i];
     let wo = f4(a).xyz;
     let wi = f4(test_in[2u * i + 1u]).xyz;
-    let m = materials[a.w];
+    let m = load_material(a.w);
     test_out[2u * i] = u4(vec4<f32>(bsdf_eval(m, wo, wi), bsdf_pdf(m, wo, wi)));
     test_out[2u * i + 1u] = vec4<u32>(0u);
 }

@@ -19,8 +19,8 @@ struct Hit {
 // mirror: src/bvh/traverse.rs `traverse_closest`
 fn traverse_closest(ray: Ray, t_max_in: f32) -> Hit {
     var best = Hit(t_max_in, 0.0, 0.0, NO_HIT);
-    let root = nodes[0];
-    if arrayLength(&nodes) == 1u && root.count == 0u {
+    let root = load_node(0);
+    if root.count == 0u && root.left_or_first == 0u {
         return best;
     }
     let inv_dir = safe_inverse(ray.dir);
@@ -30,10 +30,10 @@ fn traverse_closest(ray: Ray, t_max_in: f32) -> Hit {
     var sp = 0u;
     var node = 0u;
     loop {
-        let n = nodes[node];
+        let n = load_node(node);
         if n.count > 0u {
             for (var i = n.left_or_first; i < n.left_or_first + n.count; i++) {
-                let h = intersect_triangle(ray, tris[i], best.t);
+                let h = intersect_triangle(ray, load_tri(i), best.t);
                 if h.hit {
                     best = Hit(h.t, h.u, h.v, i);
                 }
@@ -47,8 +47,8 @@ fn traverse_closest(ray: Ray, t_max_in: f32) -> Hit {
         }
         var a = node + 1u;
         var b = n.left_or_first;
-        let ca = nodes[a];
-        let cb = nodes[b];
+        let ca = load_node(a);
+        let cb = load_node(b);
         var ta = intersect_aabb(ray.origin, inv_dir, ca.min, ca.max, best.t);
         var tb = intersect_aabb(ray.origin, inv_dir, cb.min, cb.max, best.t);
         if tb < ta {
@@ -78,8 +78,8 @@ fn traverse_closest(ray: Ray, t_max_in: f32) -> Hit {
 
 // mirror: src/bvh/traverse.rs `traverse_any`
 fn traverse_any(ray: Ray, t_max: f32) -> bool {
-    let root = nodes[0];
-    if arrayLength(&nodes) == 1u && root.count == 0u {
+    let root = load_node(0);
+    if root.count == 0u && root.left_or_first == 0u {
         return false;
     }
     let inv_dir = safe_inverse(ray.dir);
@@ -89,10 +89,10 @@ fn traverse_any(ray: Ray, t_max: f32) -> bool {
     var sp = 0u;
     var node = 0u;
     loop {
-        let n = nodes[node];
+        let n = load_node(node);
         if n.count > 0u {
             for (var i = n.left_or_first; i < n.left_or_first + n.count; i++) {
-                if intersect_triangle(ray, tris[i], t_max).hit {
+                if intersect_triangle(ray, load_tri(i), t_max).hit {
                     return true;
                 }
             }
@@ -105,8 +105,8 @@ fn traverse_any(ray: Ray, t_max: f32) -> bool {
         }
         var a = node + 1u;
         var b = n.left_or_first;
-        let ca = nodes[a];
-        let cb = nodes[b];
+        let ca = load_node(a);
+        let cb = load_node(b);
         var ta = intersect_aabb(ray.origin, inv_dir, ca.min, ca.max, t_max);
         var tb = intersect_aabb(ray.origin, inv_dir, cb.min, cb.max, t_max);
         if tb < ta {

@@ -9,7 +9,8 @@ shared/specs/scene-format.md):
     the object's transform (scale, rotate X then Y then Z, translate, or `matrix`)
     becomes `to_world`;
   * spheres: Mitsuba's analytic `sphere` (meshtrace tessellates it: expect tiny
-    differences at silhouettes);
+    differences at silhouettes), or with --spheres mesh meshtrace's own icosphere (same
+    algorithm and default level as src/scene/sphere.rs) with smooth vertex normals;
   * diffuse -> twosided(diffuse); conductor -> twosided(conductor, material none);
     rough_conductor -> twosided(roughconductor ggx, alpha = roughness^2, material none);
     dielectric -> dielectric(int_ior = ior, ext_ior = 1); emission -> `area` emitter;
@@ -27,6 +28,7 @@ box filter weighs every sample alike.
 Usage:
   python3 tools/mitsuba_render.py SCENE.toml [--spp N] [--seed S] [--width W]
         [--height H] [--max-depth D] [-o out.exr] [--variant llvm_ad_rgb]
+        [--spheres analytic|mesh]
 """
 import argparse
 import glob
@@ -293,6 +295,56 @@ def gradient_envmap(mi, zenith, horizon, width=64, height=1024):
     return {"type": "envmap", "bitmap": mi.Bitmap(img, mi.Bitmap.PixelFormat.RGB)}
 
 
+def icosphere(level):
+    """Unit-sphere vertices and counter-clockwise triangles of an icosahedron subdivided
+    `level` times: the algorithm, vertex and face order of meshtrace's src/scene/sphere.rs."""
+    t = (1.0 + math.sqrt(5.0)) / 2.0
+    verts = [np.array(v, dtype=np.float64) / np.linalg.norm(v) for v in (
+        [-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t],
+        [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1])]
+    faces = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9),
+             (5, 11, 4), (11, 10, 2), (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2),
+             (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10),
+             (8, 6, 7), (9, 8, 1)]
+    for _ in range(level):
+        mid = {}
+
+        def m(a, b):
+            key = (min(a, b), max(a, b))
+            if key not in mid:
+                v = verts[a] + verts[b]
+                verts.append(v / np.linalg.norm(v))
+                mid[key] = len(verts) - 1
+            return mid[key]
+        nxt = []
+        for a, b, c in faces:
+            ab, bc, ca = m(a, b), m(b, c), m(c, a)
+            nxt += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        faces = nxt
+    return np.array(verts), np.array(faces)
+
+
+def default_subdivisions():
+    """meshtrace's default level: the first whose largest gap between a triangle (at its
+    centroid) and the unit sphere is below 1/1000 (src/scene/sphere.rs)."""
+    level = 0
+    while True:
+        v, f = icosphere(level)
+        if (1.0 - np.linalg.norm(v[f].mean(axis=1), axis=1)).max() < 1e-3:
+            return level
+        level += 1
+
+
+def icosphere_obj(path, level):
+    """Writes the unit icosphere as an OBJ with smooth normals (the vertex directions)."""
+    v, f = icosphere(level)
+    with open(path, "w") as fh:
+        fh.write("".join("v %.9g %.9g %.9g\n" % tuple(p) for p in v))
+        fh.write("".join("vn %.9g %.9g %.9g\n" % tuple(p) for p in v))
+        fh.write("".join("f %d//%d %d//%d %d//%d\n" % (a + 1, a + 1, b + 1, b + 1, c + 1, c + 1)
+                         for a, b, c in f))
+
+
 def build_scene_dict(mi, path, args, tmpdir):
     with open(path, "rb") as fh:
         doc = tomllib.load(fh)
@@ -384,17 +436,24 @@ def build_scene_dict(mi, path, args, tmpdir):
             check_keys(sp, {"center", "radius", "subdivisions"}, where + ".sphere")
             c = vec3(sp["center"], where + ".sphere.center")
             r = float(sp["radius"])
-            if "subdivisions" in sp:
-                print("mitsuba_render: note: %s uses an analytic sphere (subdivisions ignored)"
-                      % where, file=sys.stderr)
-            L = M[:3, :3]
-            sv = np.linalg.svd(L, compute_uv=False)
-            if sv.max() - sv.min() > 1e-9 * max(sv.max(), 1.0):
-                raise SceneError("%s: non-uniform transform of a sphere is not supported by "
-                                 "this tool" % where)
             to_world = M @ np.array([[r, 0, 0, c[0]], [0, r, 0, c[1]], [0, 0, r, c[2]],
                                      [0, 0, 0, 1.0]])
-            shape = {"type": "sphere", "to_world": mi.ScalarTransform4f(to_world.tolist())}
+            if getattr(args, "spheres", "analytic") == "mesh":
+                level = int(sp.get("subdivisions", default_subdivisions()))
+                fn = os.path.join(tmpdir, "sphere_%d.obj" % level)
+                if not os.path.exists(fn):
+                    icosphere_obj(fn, level)
+                shape = {"type": "obj", "filename": fn, "face_normals": False,
+                         "to_world": mi.ScalarTransform4f(to_world.tolist())}
+            else:
+                if "subdivisions" in sp:
+                    print("mitsuba_render: note: %s uses an analytic sphere (subdivisions "
+                          "ignored)" % where, file=sys.stderr)
+                sv = np.linalg.svd(M[:3, :3], compute_uv=False)
+                if sv.max() - sv.min() > 1e-9 * max(sv.max(), 1.0):
+                    raise SceneError("%s: non-uniform transform of a sphere is not supported "
+                                     "with --spheres analytic" % where)
+                shape = {"type": "sphere", "to_world": mi.ScalarTransform4f(to_world.tolist())}
             mat = materials[mname] if mname is not None else DEFAULT_MATERIAL
             scene["shape_%d" % n_shapes] = shape_with(shape, mat, where)
             n_shapes += 1
@@ -458,6 +517,9 @@ def main():
     ap.add_argument("--variant", help="Mitsuba variant (default: llvm_ad_rgb, else scalar_rgb)")
     ap.add_argument("--lanes", type=int, default=1 << 23,
                     help="samples per pass at most (memory); default 2^23")
+    ap.add_argument("--spheres", choices=("analytic", "mesh"), default="analytic",
+                    help="`sphere` objects as Mitsuba's analytic sphere (default) or as "
+                         "meshtrace's own icosphere mesh with smooth normals")
     args = ap.parse_args()
     mi = setup_mitsuba(args.variant)
     with tempfile.TemporaryDirectory(prefix="mitsuba_render_") as tmp:

@@ -64,8 +64,9 @@ fn walk(
     mut leaf: impl FnMut(u32, u32, f32) -> (bool, f32),
 ) {
     let Some(root) = nodes.first() else { return };
-    // An empty scene's root is a leaf of no triangles.
-    if nodes.len() == 1 && root.count == 0 {
+    // An empty scene's root is a leaf of no triangles (any other root with count 0 is an
+    // interior node, whose second child is never at index 0).
+    if root.count == 0 && root.left_or_first == 0 {
         return;
     }
     let inv_dir = safe_inverse(ray.dir);

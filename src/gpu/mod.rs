@@ -28,7 +28,7 @@ pub enum GpuError {
     #[error("cannot open the GPU device: {0}")]
     Device(String),
     #[error(
-        "the {what} need {bytes} bytes but this adapter allows {limit} per storage buffer; use --device cpu or a smaller scene"
+        "the {what} need {bytes} bytes but this adapter allows {limit} per binding; use --device cpu or a smaller scene"
     )]
     TooLarge {
         what: &'static str,

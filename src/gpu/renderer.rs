@@ -11,10 +11,63 @@ use wgpu::util::DeviceExt;
 /// dispatch runs long enough (~100 ms on a desktop GPU) for a driver watchdog to kill it.
 pub const PATHS_PER_DISPATCH: u64 = 1 << 21;
 const WORKGROUP: u32 = 8;
+/// Texels per row of the table textures. mirror: shaders/bindings.wgsl `TABLE_WIDTH_LOG2`
+pub const TABLE_WIDTH: u32 = 1 << 12;
+/// The scene tables (all of them) read as textures.
+const TEXTURE_TABLES: usize = 6;
+
+/// Uploads a table of 16-byte texels as an Rgba32Uint texture `TABLE_WIDTH` texels wide.
+fn table_texture(
+    ctx: &GpuContext,
+    what: &'static str,
+    data: &[u8],
+) -> Result<wgpu::TextureView, GpuError> {
+    let texels = (data.len() as u64).div_ceil(16);
+    let rows = texels.div_ceil(TABLE_WIDTH as u64).max(1);
+    let max_rows = ctx.limits.max_texture_dimension_2d as u64;
+    if rows > max_rows {
+        return Err(GpuError::TooLarge {
+            what,
+            bytes: data.len() as u64,
+            limit: max_rows * TABLE_WIDTH as u64 * 16,
+        });
+    }
+    let row_bytes = TABLE_WIDTH as usize * 16;
+    let mut padded = data.to_vec();
+    padded.resize(rows as usize * row_bytes, 0);
+    let size = wgpu::Extent3d {
+        width: TABLE_WIDTH,
+        height: rows as u32,
+        depth_or_array_layers: 1,
+    };
+    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(what),
+        size,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba32Uint,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    ctx.queue.write_texture(
+        texture.as_image_copy(),
+        &padded,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(row_bytes as u32),
+            rows_per_image: Some(rows as u32),
+        },
+        size,
+    );
+    Ok(texture.create_view(&Default::default()))
+}
 
 /// A scene uploaded to one device: its buffers, the scene bind group's layout, and the
 /// uniform buffer of per-dispatch parameters.
 pub struct GpuScene {
+    /// The tables read as texels (BVH nodes, triangle corners), then those read as storage.
+    views: Vec<wgpu::TextureView>,
     buffers: Vec<wgpu::Buffer>,
     pub layout: wgpu::BindGroupLayout,
 }
@@ -59,8 +112,13 @@ impl GpuScene {
             ("emitter CDF", bytes(&scene.emitter_cdf)),
         ];
         let limit = ctx.limits.max_storage_buffer_binding_size;
-        let mut buffers = Vec::with_capacity(tables.len());
-        for (what, data) in &tables {
+        let mut views = Vec::new();
+        let mut buffers = Vec::new();
+        for (i, (what, data)) in tables.iter().enumerate() {
+            if i < TEXTURE_TABLES {
+                views.push(table_texture(ctx, what, data)?);
+                continue;
+            }
             if data.len() as u64 > limit {
                 return Err(GpuError::TooLarge {
                     what,
@@ -87,7 +145,19 @@ impl GpuScene {
             },
             count: None,
         }];
-        entries.extend((1..=6).map(|b| storage_entry(b, true)));
+        entries.extend(
+            (1..=TEXTURE_TABLES as u32).map(|binding| wgpu::BindGroupLayoutEntry {
+                binding,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Uint,
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            }),
+        );
+        entries.extend((TEXTURE_TABLES as u32 + 1..=6).map(|b| storage_entry(b, true)));
         let layout = ctx
             .device
             .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -95,7 +165,11 @@ impl GpuScene {
                 entries: &entries,
             });
         ctx.check()?;
-        Ok(Self { buffers, layout })
+        Ok(Self {
+            views,
+            buffers,
+            layout,
+        })
     }
 
     /// The scene bind group, with `params` (one block per dispatch, at `params_stride`).
@@ -109,11 +183,20 @@ impl GpuScene {
             }),
         }];
         entries.extend(
+            self.views
+                .iter()
+                .enumerate()
+                .map(|(i, v)| wgpu::BindGroupEntry {
+                    binding: i as u32 + 1,
+                    resource: wgpu::BindingResource::TextureView(v),
+                }),
+        );
+        entries.extend(
             self.buffers
                 .iter()
                 .enumerate()
                 .map(|(i, b)| wgpu::BindGroupEntry {
-                    binding: i as u32 + 1,
+                    binding: (TEXTURE_TABLES + i) as u32 + 1,
                     resource: b.as_entire_binding(),
                 }),
         );
