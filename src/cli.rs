@@ -5,12 +5,15 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use meshtrace::bvh::BuildParams;
+use meshtrace::film::Film;
 use meshtrace::gpu::{self, GpuContext, GpuError};
 use meshtrace::render::{RenderJob, RenderScene, cpu};
 use meshtrace::scene::{self, Scene, builtin, load::validate_settings};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
 
 #[derive(Parser)]
 #[command(
@@ -114,6 +117,13 @@ pub struct RenderArgs {
     /// Print nothing but warnings and errors.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Also write the image every this many seconds while rendering.
+    #[arg(long, value_name = "SECONDS")]
+    pub checkpoint: Option<f64>,
+    /// On Ctrl-C, write no image (by default the samples finished so far are written;
+    /// checkpoints already written stay).
+    #[arg(long)]
+    pub no_partial: bool,
 }
 
 /// Loads a scene given on the command line: a path, or `builtin:NAME`.
@@ -142,6 +152,11 @@ fn set_threads(threads: Option<usize>) -> Result<()> {
     Ok(())
 }
 
+/// A render stopped by Ctrl-C; the binary exits with status 130 for it.
+#[derive(Debug, thiserror::Error)]
+#[error("interrupted: {0}")]
+pub struct Interrupted(String);
+
 pub fn render(args: &RenderArgs) -> Result<()> {
     meshtrace::film::Film::check_writable(&args.output)?;
     set_threads(args.threads)?;
@@ -160,7 +175,30 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     }
     let settings = *s;
     let rs = RenderScene::new(&scene, &BuildParams::default())?;
-    let job = RenderJob::new(settings);
+    let mut job = RenderJob::new(settings);
+    let cancel = Arc::new(AtomicBool::new(false));
+    job.cancel = Some(cancel.clone());
+    ctrlc::set_handler(move || {
+        if cancel.swap(true, Ordering::SeqCst) {
+            // A second Ctrl-C: stop now, without waiting for the pass.
+            std::process::exit(130);
+        }
+    })
+    .context("cannot install the Ctrl-C handler")?;
+    if let Some(every) = args.checkpoint {
+        if !(every > 0.0 && every.is_finite()) {
+            bail!("--checkpoint must be a positive number of seconds");
+        }
+        let out = args.output.clone();
+        job.checkpoint = Some((
+            Duration::from_secs_f64(every),
+            Arc::new(move |film: &Film| {
+                if let Err(e) = film.save(&out) {
+                    eprintln!("warning: checkpoint not written: {e}");
+                }
+            }),
+        ));
+    }
     let total = settings.width as u64 * settings.height as u64 * settings.spp as u64;
     let bar = progress_bar(total, args.quiet);
     let start = Instant::now();
@@ -184,6 +222,25 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     };
     let seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
+    if film.samples < settings.spp {
+        let what = if args.no_partial {
+            format!(
+                "at {} of {} spp; nothing written (--no-partial)",
+                film.samples, settings.spp
+            )
+        } else if film.samples == 0 {
+            "before the first pass finished; nothing written".to_string()
+        } else {
+            film.save(&args.output)?;
+            format!(
+                "wrote {} with {} of {} spp",
+                args.output.display(),
+                film.samples,
+                settings.spp
+            )
+        };
+        return Err(Interrupted(what).into());
+    }
     film.save(&args.output)?;
     if !args.quiet {
         eprintln!(

@@ -289,3 +289,49 @@ fn a_render_writes_exactly_its_output() {
         "{stdout}"
     );
 }
+
+/// Ctrl-C writes the samples finished so far (exit 130), or nothing with --no-partial.
+#[cfg(unix)]
+#[test]
+fn interruption_writes_the_partial_image_unless_told_not_to() {
+    let dir = TempDir::new("interrupt");
+    for (flag, expect_file, needle) in [
+        (None, true, "of 100000 spp"),
+        (Some("--no-partial"), false, "nothing written"),
+    ] {
+        let mut args = vec![
+            "render", "-o", "part.png", "--spp", "100000", "--width", "64", "--height", "64",
+            "--device", "cpu",
+        ];
+        args.extend(flag);
+        let child = Command::new(env!("CARGO_BIN_EXE_meshtrace"))
+            .args(&args)
+            .current_dir(&dir.0)
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(1500));
+        let killed = Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(killed.success());
+        let out = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(130), "{stderr}");
+        assert!(
+            stderr.contains("interrupted") && stderr.contains(needle),
+            "{stderr}"
+        );
+        assert_eq!(
+            dir.listing(),
+            if expect_file {
+                vec!["part.png".to_string()]
+            } else {
+                vec![]
+            },
+            "{stderr}"
+        );
+        let _ = std::fs::remove_file(dir.0.join("part.png"));
+    }
+}

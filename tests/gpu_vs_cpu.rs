@@ -136,24 +136,8 @@ fn gpu_renders_are_deterministic() {
 fn sample_ranges_merge_into_the_full_render() {
     let (rs, s) = cornell(32, 8, 4);
     let full = cpu::render(&rs, &RenderJob::new(s), &|_| {}).0;
-    let mut first = cpu::render(
-        &rs,
-        &RenderJob {
-            settings: s,
-            samples: 0..3,
-        },
-        &|_| {},
-    )
-    .0;
-    let second = cpu::render(
-        &rs,
-        &RenderJob {
-            settings: s,
-            samples: 3..8,
-        },
-        &|_| {},
-    )
-    .0;
+    let mut first = cpu::render(&rs, &RenderJob::new(s).with_samples(0..3), &|_| {}).0;
+    let second = cpu::render(&rs, &RenderJob::new(s).with_samples(3..8), &|_| {}).0;
     first.merge(&second);
     assert_eq!(first.samples, full.samples);
     for (a, b) in first.sum.iter().zip(&full.sum) {

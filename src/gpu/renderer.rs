@@ -3,7 +3,7 @@
 use super::layout::{GpuMaterial, GpuParams};
 use super::{GpuContext, GpuError, shader};
 use crate::film::Film;
-use crate::render::{RenderJob, RenderScene};
+use crate::render::{Checkpoints, RenderJob, RenderScene};
 use glam::Vec3;
 use wgpu::util::DeviceExt;
 
@@ -329,8 +329,22 @@ pub fn plan_dispatches(base: &GpuParams, job: &RenderJob) -> Vec<GpuParams> {
     out
 }
 
+/// The film and ray count in a read-back accumulation buffer.
+fn film_of(data: &[u8], w: u32, h: u32, samples: u32) -> (Film, u64) {
+    let sums: &[[f32; 4]] = bytemuck::cast_slice(data);
+    let mut film = Film::new(w, h);
+    film.samples = samples;
+    let mut rays = 0u64;
+    for (dst, s) in film.sum.iter_mut().zip(sums) {
+        *dst = Vec3::new(s[0], s[1], s[2]);
+        rays += s[3] as u64;
+    }
+    (film, rays)
+}
+
 /// Renders the job's sample range on the GPU. `progress` is told the samples each
-/// dispatch finished. Returns the film and the number of rays traced.
+/// dispatch finished. Stops early, after a whole pass, when the job is cancelled; the film's
+/// `samples` says how many it holds. Returns the film and the number of rays traced.
 pub fn render(
     ctx: &GpuContext,
     scene: &RenderScene,
@@ -369,6 +383,9 @@ pub fn render(
         }],
     });
     let stride = params_stride(ctx);
+    let mut checkpoints = Checkpoints::new(job);
+    // Samples every pixel has received: a pass is complete when its last row band is.
+    let mut samples_done = 0;
     for (i, b) in blocks.iter().enumerate() {
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         {
@@ -390,15 +407,17 @@ pub fn render(
         progress(
             (b.sample_end - b.sample_start) as u64 * w as u64 * (b.row_end - b.row_start) as u64,
         );
+        if b.row_end == h {
+            samples_done = b.sample_end - job.samples.start;
+            let more = b.sample_end < job.samples.end;
+            if more && job.cancelled() {
+                break;
+            }
+            if more && checkpoints.due() {
+                checkpoints.write(&film_of(&read_back(ctx, &accum)?, w, h, samples_done).0);
+            }
+        }
     }
-    let data = read_back(ctx, &accum)?;
-    let sums: &[[f32; 4]] = bytemuck::cast_slice(&data);
-    let mut film = Film::new(w, h);
-    film.samples = job.samples.len() as u32;
-    let mut rays = 0u64;
-    for (dst, s) in film.sum.iter_mut().zip(sums) {
-        *dst = Vec3::new(s[0], s[1], s[2]);
-        rays += s[3] as u64;
-    }
+    let (film, rays) = film_of(&read_back(ctx, &accum)?, w, h, samples_done);
     Ok((film, rays))
 }

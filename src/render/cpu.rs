@@ -11,7 +11,7 @@ use super::rng::{self, Rng};
 use super::sampling::{
     UNIFORM_SPHERE_PDF, power_heuristic, sample_cdf, sample_uniform_sphere, sample_uniform_triangle,
 };
-use super::{RenderJob, RenderScene, SKY_EMITTER, TRI_SMOOTH};
+use super::{Checkpoints, RenderJob, RenderScene, SKY_EMITTER, TRI_SMOOTH};
 use crate::bvh::{Hit, traverse_any, traverse_closest};
 use crate::film::Film;
 use crate::geometry::{self, T_INF};
@@ -260,8 +260,13 @@ pub fn trace_path(scene: &RenderScene, mut ray: Ray, rng: &Rng, max_depth: u32) 
     (radiance, rays)
 }
 
-/// Renders the job's sample range with rayon over tiles. `progress` is told of every
-/// finished tile's sample count; it runs on worker threads.
+/// Paths traced per pass over the image: a pass is the unit of cancellation and checkpoints.
+pub const PATHS_PER_PASS: u64 = 1 << 20;
+
+/// Renders the job's sample range with rayon over tiles, in passes of a few samples per
+/// pixel over the whole image. `progress` is told of every finished tile's sample count; it
+/// runs on worker threads. Stops early, after a whole pass, when the job is cancelled; the
+/// film's `samples` says how many samples it holds. Returns the film and the rays traced.
 pub fn render(
     scene: &RenderScene,
     job: &RenderJob,
@@ -273,46 +278,63 @@ pub fn render(
         .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
         .collect();
     let rays = AtomicU64::new(0);
-    let spp = job.samples.len() as u64;
-    let done: Vec<((u32, u32), Vec<Vec3>)> = tiles
-        .into_par_iter()
-        .map(|(x0, y0)| {
-            let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
-            let mut sums = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
-            let mut tile_rays = 0u64;
-            for y in y0..y1 {
-                for x in x0..x1 {
-                    let (sum, r) = render_pixel(scene, job, x, y);
-                    sums.push(sum);
-                    tile_rays += r;
-                }
-            }
-            rays.fetch_add(tile_rays, Ordering::Relaxed);
-            progress(sums.len() as u64 * spp);
-            ((x0, y0), sums)
-        })
-        .collect();
+    let step = (PATHS_PER_PASS / (w as u64 * h as u64)).max(1) as u32;
     let mut film = Film::new(w, h);
-    film.samples = spp as u32;
-    for ((x0, y0), sums) in done {
-        let tw = (x0 + TILE).min(w) - x0;
-        for (i, sum) in sums.into_iter().enumerate() {
-            let (x, y) = (x0 + i as u32 % tw, y0 + i as u32 / tw);
-            film.sum[(y * w + x) as usize] = sum;
+    let mut checkpoints = Checkpoints::new(job);
+    let mut start = job.samples.start;
+    while start < job.samples.end && !job.cancelled() {
+        let end = (start + step).min(job.samples.end);
+        let film_ref = &film;
+        let done: Vec<((u32, u32), Vec<Vec3>)> = tiles
+            .par_iter()
+            .map(|&(x0, y0)| {
+                let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+                let mut sums = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+                let mut tile_rays = 0u64;
+                for y in y0..y1 {
+                    for x in x0..x1 {
+                        let sum = film_ref.sum[(y * w + x) as usize];
+                        let (sum, r) = render_pixel(scene, job, x, y, start..end, sum);
+                        sums.push(sum);
+                        tile_rays += r;
+                    }
+                }
+                rays.fetch_add(tile_rays, Ordering::Relaxed);
+                progress(sums.len() as u64 * (end - start) as u64);
+                ((x0, y0), sums)
+            })
+            .collect();
+        for ((x0, y0), sums) in done {
+            let tw = (x0 + TILE).min(w) - x0;
+            for (i, sum) in sums.into_iter().enumerate() {
+                let (x, y) = (x0 + i as u32 % tw, y0 + i as u32 / tw);
+                film.sum[(y * w + x) as usize] = sum;
+            }
+        }
+        film.samples += end - start;
+        start = end;
+        if start < job.samples.end && checkpoints.due() {
+            checkpoints.write(&film);
         }
     }
     (film, rays.into_inner())
 }
 
-/// The sum of one pixel's samples over the job's range, accumulated in sample order in f32
-/// as the GPU accumulates them; non-finite samples are dropped.
+/// `sum` plus one pixel's samples over `samples`, added in sample order in f32 as the GPU
+/// adds them; non-finite samples are dropped. Returns the sum and the rays traced.
 /// mirror: shaders/render.wgsl `render`
-pub fn render_pixel(scene: &RenderScene, job: &RenderJob, x: u32, y: u32) -> (Vec3, u64) {
+pub fn render_pixel(
+    scene: &RenderScene,
+    job: &RenderJob,
+    x: u32,
+    y: u32,
+    samples: std::ops::Range<u32>,
+    mut sum: Vec3,
+) -> (Vec3, u64) {
     let s = &job.settings;
     let pixel = y * s.width + x;
-    let mut sum = Vec3::ZERO;
     let mut rays = 0u64;
-    for sample in job.samples.clone() {
+    for sample in samples {
         let rng = Rng::new(pixel, sample, s.seed);
         let ray = scene
             .camera

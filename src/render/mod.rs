@@ -8,11 +8,15 @@ pub mod rng;
 pub mod sampling;
 
 use crate::bvh::{BuildParams, Bvh, BvhError};
+use crate::film::Film;
 use crate::geometry::{self, TriVerts};
 use crate::math::{Aabb, luminance};
 use crate::scene::{Camera, Material, NO_NORMAL, RenderSettings, Scene, Sky};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
 
 /// Per-triangle shading data in leaf order (48 bytes): vertex normals, the material, and
 /// the probability that light sampling picks this triangle.
@@ -136,19 +140,72 @@ pub struct RenderStats {
     pub samples: u64,
 }
 
-/// The settings of one render, with the sample range it covers (all of `0..spp` unless
-/// merging partial renders).
-#[derive(Clone, Debug)]
+/// One render: its settings, the sample range it covers (all of `0..spp` unless merging
+/// partial renders), and how it may be stopped or observed while it runs.
+#[derive(Clone)]
 pub struct RenderJob {
     pub settings: RenderSettings,
     pub samples: std::ops::Range<u32>,
+    /// Set from another thread (a Ctrl-C handler) to stop at the next sample pass; the
+    /// render then returns the film of the passes it finished.
+    pub cancel: Option<Arc<AtomicBool>>,
+    /// Called with the film so far after a finished pass, at most once per interval.
+    pub checkpoint: Option<(Duration, CheckpointFn)>,
 }
+
+/// What a checkpoint does with the film so far (the CLI writes the output image).
+pub type CheckpointFn = Arc<dyn Fn(&Film) + Send + Sync>;
 
 impl RenderJob {
     pub fn new(settings: RenderSettings) -> Self {
         Self {
             settings,
             samples: 0..settings.spp,
+            cancel: None,
+            checkpoint: None,
         }
+    }
+
+    /// The job over samples `range` only.
+    pub fn with_samples(mut self, range: std::ops::Range<u32>) -> Self {
+        self.samples = range;
+        self
+    }
+
+    pub fn cancelled(&self) -> bool {
+        self.cancel
+            .as_ref()
+            .is_some_and(|c| c.load(Ordering::Relaxed))
+    }
+}
+
+/// Hands out checkpoints of a running render at most once per the job's interval.
+pub struct Checkpoints<'a> {
+    job: &'a RenderJob,
+    last: Instant,
+}
+
+impl<'a> Checkpoints<'a> {
+    pub fn new(job: &'a RenderJob) -> Self {
+        Self {
+            job,
+            last: Instant::now(),
+        }
+    }
+
+    /// Whether a checkpoint is due now.
+    pub fn due(&self) -> bool {
+        self.job
+            .checkpoint
+            .as_ref()
+            .is_some_and(|(every, _)| self.last.elapsed() >= *every)
+    }
+
+    /// Passes `film` to the job's checkpoint callback.
+    pub fn write(&mut self, film: &Film) {
+        if let Some((_, f)) = &self.job.checkpoint {
+            f(film);
+        }
+        self.last = Instant::now();
     }
 }
