@@ -279,7 +279,9 @@ pub fn info(path: &Path) -> Result<()> {
     println!("triangles    {}", st.triangles);
     println!("vertices     {}", scene.mesh.positions.len());
     println!("materials    {}", scene.materials.len());
-    println!("emitters     {} triangles", rs.emitters.len());
+    let sky = rs.sky_pmf > 0.0;
+    let tris = rs.emitters.len() - sky as usize;
+    println!("emitters     {tris} triangles{}", if sky { " and the sky" } else { "" });
     println!(
         "bvh build    {:.2} ms ({:.2} M triangles/s)",
         st.build_seconds * 1e3,
