@@ -313,7 +313,7 @@ pub fn terrain(n: u32) -> Scene {
     let bounds = Aabb::from_points(&mesh.positions);
     Scene {
         path: None,
-        camera: Camera::framing(&bounds),
+        camera: Camera::framing(&bounds).expect("the terrain is small and centred"),
         sky: Sky::Constant(Vec3::ONE),
         settings: RenderSettings::default(),
         materials: vec![Material::diffuse("ground", Vec3::splat(0.7))],

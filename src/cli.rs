@@ -281,7 +281,10 @@ pub fn info(path: &Path) -> Result<()> {
     println!("materials    {}", scene.materials.len());
     let sky = rs.sky_pmf > 0.0;
     let tris = rs.emitters.len() - sky as usize;
-    println!("emitters     {tris} triangles{}", if sky { " and the sky" } else { "" });
+    println!(
+        "emitters     {tris} triangles{}",
+        if sky { " and the sky" } else { "" }
+    );
     println!(
         "bvh build    {:.2} ms ({:.2} M triangles/s)",
         st.build_seconds * 1e3,

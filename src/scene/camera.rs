@@ -48,15 +48,20 @@ impl Camera {
     }
 
     /// A pinhole camera (vertical field of view 40 degrees) that frames `bounds` from the
-    /// front (+Z) and slightly above, as for a bare mesh.
-    pub fn framing(bounds: &crate::math::Aabb) -> Self {
+    /// front (+Z) and slightly above, as for a bare mesh. `None` when the bounds are too large
+    /// for f32 (their size or the camera distance overflows).
+    pub fn framing(bounds: &crate::math::Aabb) -> Option<Self> {
         let vfov = 40.0f32;
         let center = bounds.center();
-        let radius = (0.5 * bounds.extent().length()).max(1e-6);
+        // Far from the origin, a tiny mesh still needs a camera distance that f32 resolves.
+        let resolvable = 1e-5 * (1.0 + center.abs().max_element());
+        let radius = (0.5 * bounds.extent().length()).max(resolvable);
         let distance = 1.1 * radius / (0.5 * vfov.to_radians()).sin();
         let position = center + distance * Vec3::new(0.0, 0.25, 1.0).normalize();
+        if !(center.is_finite() && position.is_finite()) {
+            return None;
+        }
         Self::new(position, center, Vec3::Y, vfov, 0.0, None)
-            .expect("a camera offset from its target along +Z is never degenerate")
     }
 
     /// tan(vfov / 2): the image plane's half height at unit distance.

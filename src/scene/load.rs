@@ -32,7 +32,7 @@ pub fn load_scene_from(path: &Path, files: &dyn FileSource) -> Result<Scene, Sce
         return load_bare_obj(path, files);
     }
     let io = |source| SceneError::Io {
-        path: path.display().to_string(),
+        path: super::shown(path),
         source,
     };
     let bytes = files.read(path).map_err(io)?;
@@ -49,7 +49,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
 fn parse_scene_from(text: &str, path: &Path, files: &dyn FileSource) -> Result<Scene, SceneError> {
     let ctx = Ctx {
         files,
-        path: path.display().to_string(),
+        path: super::shown(path),
         dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
     };
     let file: SceneFile = toml::from_str(text).map_err(|e| ctx.syntax(text, &e))?;
@@ -79,11 +79,17 @@ fn load_bare_obj(path: &Path, files: &dyn FileSource) -> Result<Scene, SceneErro
     let bounds = Aabb::from_points(&builder.mesh.positions);
     if bounds.is_empty() {
         return Err(SceneError::Obj {
-            path: path.display().to_string(),
+            path: super::shown(path),
             message: "the mesh has no faces".into(),
         });
     }
-    let camera = Camera::framing(&bounds);
+    let camera = Camera::framing(&bounds).ok_or_else(|| SceneError::Obj {
+        path: super::shown(path),
+        message: format!(
+            "the mesh spans {} to {}, too far out to frame with a camera",
+            bounds.min, bounds.max
+        ),
+    })?;
     Ok(builder.finish(
         Some(path.to_path_buf()),
         camera,
@@ -215,7 +221,7 @@ impl Ctx<'_> {
             path: self.path.clone(),
             line,
             column,
-            message: e.message().replace('\n', " ").trim().to_string(),
+            message: e.message().replace(['\n', '\r'], " ").trim().to_string(),
         }
     }
 
@@ -319,7 +325,8 @@ impl Ctx<'_> {
     }
 
     fn material(&self, name: &str, m: &MaterialFile) -> Result<Material, SceneError> {
-        let field = |key: &str| format!("materials.{name}.{key}");
+        // A quoted TOML key may hold any character; keep messages on one line.
+        let field = |key: &str| format!("materials.{}.{key}", name.escape_debug());
         let not_for = |key: &str| {
             self.invalid(
                 field(key),
@@ -375,7 +382,10 @@ impl Ctx<'_> {
         let field = |key: &str| format!("objects[{i}].{key}");
         let material = match &o.material {
             Some(name) => Some(*builder.named.get(name).ok_or_else(|| {
-                self.invalid(field("material"), format!("unknown material `{name}`"))
+                self.invalid(
+                    field("material"),
+                    format!("unknown material `{}`", name.escape_debug()),
+                )
             })?),
             None => None,
         };

@@ -110,6 +110,11 @@ pub struct Scene {
     pub warnings: Vec<String>,
 }
 
+/// A path as error messages show it: on one line whatever characters it holds.
+pub fn shown(path: &std::path::Path) -> String {
+    path.display().to_string().escape_debug().to_string()
+}
+
 /// Why a scene could not be loaded. Each message is one line naming the file and the
 /// line or field at fault.
 #[derive(Debug, thiserror::Error)]

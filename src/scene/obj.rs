@@ -32,7 +32,7 @@ pub struct ObjMesh {
 
 /// Reads an OBJ file, fan-triangulating polygons, and maps its MTL materials.
 pub fn load_obj(path: &Path, files: &dyn FileSource) -> Result<ObjMesh, SceneError> {
-    let shown = path.display().to_string();
+    let shown = super::shown(path);
     let err = |message: String| SceneError::Obj {
         path: shown.clone(),
         message,

@@ -1,0 +1,225 @@
+//! The fuzz harnesses, shared by the cargo-fuzz targets (`fuzz_targets/`) and by the
+//! regression test that replays the corpora without libFuzzer (`tests/fuzz_corpus.rs`,
+//! which includes this file as a module), so both run exactly the same code.
+//!
+//! A harness panics only on a bug: a panic escaping the library, a malformed loaded scene,
+//! or an invalid BVH. Errors from bad input are the expected outcome.
+
+use meshtrace::bvh::{BuildParams, validate};
+use meshtrace::math::Aabb;
+use meshtrace::render::RenderScene;
+use meshtrace::scene::obj::{FileSource, load_obj};
+use meshtrace::scene::{NO_NORMAL, Scene, load_scene_from};
+use std::cell::RefCell;
+use std::path::{Path, PathBuf};
+
+/// Separates the OBJ part of an `obj_mtl` input from the part also served as `m.mtl`.
+pub const MTL_MARKER: &[u8] = b"\n#MTL\n";
+
+/// Sphere triangles a fuzzed scene may ask for. The format allows 21M per sphere
+/// (`MAX_SPHERE_SUBDIVISIONS`), which is slow and large by design, not a bug; inputs asking
+/// for more than this are skipped so that the fuzzer spends its time on parsing.
+pub const SPHERE_TRIANGLE_BUDGET: u64 = 50_000;
+
+/// A mesh that scene inputs may name as `mesh = "m.obj"`, with a material library.
+pub const SCENE_OBJ: &str = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\n\
+usemtl red\nf 1//1 2//1 3//1 4//1\nusemtl glass\nf 1 3 2\n";
+pub const SCENE_MTL: &str = "newmtl red\nKd 0.8 0.1 0.1\nKe 1 1 1\n\
+newmtl glass\nillum 7\nNi 1.5\n";
+
+/// Files served from memory; any other path is "not found". Nothing touches the disk.
+pub struct MemFiles {
+    files: Vec<(PathBuf, Vec<u8>)>,
+}
+
+impl MemFiles {
+    pub fn new(files: &[(&str, &[u8])]) -> Self {
+        Self {
+            files: files
+                .iter()
+                .map(|(p, b)| (PathBuf::from(p), b.to_vec()))
+                .collect(),
+        }
+    }
+}
+
+impl FileSource for MemFiles {
+    fn read(&self, path: &Path) -> std::io::Result<Vec<u8>> {
+        self.files
+            .iter()
+            .find(|(p, _)| p == path)
+            .map(|(_, b)| b.clone())
+            .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::NotFound, "not in memory"))
+    }
+}
+
+/// Fuzz target `scene_file`: the input is `fuzz.toml`, read through the same path as
+/// `parse_scene` (`load_scene_from` on a `.toml` is UTF-8 decoding then `parse_scene`'s
+/// code) but with an in-memory file source, so that `mesh = "/dev/zero"` cannot hang the
+/// fuzzer and `mesh = "m.obj"` reaches a real mesh.
+pub fn scene_file(data: &[u8]) {
+    if exceeds_sphere_budget(data) {
+        return;
+    }
+    let files = MemFiles::new(&[
+        ("fuzz.toml", data),
+        ("m.obj", SCENE_OBJ.as_bytes()),
+        ("m.mtl", SCENE_MTL.as_bytes()),
+    ]);
+    if let Ok(scene) = load_scene_from(Path::new("fuzz.toml"), &files) {
+        check_scene(&scene);
+    }
+}
+
+/// Fuzz target `obj_mtl`: the input is `m.obj`; the bytes after the first `\n#MTL\n`
+/// are also served as `m.mtl` (an OBJ reaches them with `mtllib m.mtl`).
+pub fn obj_mtl(data: &[u8]) {
+    let mtl = data
+        .windows(MTL_MARKER.len())
+        .position(|w| w == MTL_MARKER)
+        .map_or(&[][..], |i| &data[i + MTL_MARKER.len()..]);
+    let files = MemFiles::new(&[("m.obj", data), ("m.mtl", mtl)]);
+    let Ok(obj) = load_obj(Path::new("m.obj"), &files) else {
+        return;
+    };
+    for (k, (p, n, material)) in obj.triangles.iter().enumerate() {
+        assert!(
+            p.iter().all(|&i| (i as usize) < obj.positions.len()),
+            "triangle {k}: position index out of range: {p:?} of {}",
+            obj.positions.len()
+        );
+        assert!(
+            *n == [NO_NORMAL; 3] || n.iter().all(|&i| (i as usize) < obj.normals.len()),
+            "triangle {k}: normal index out of range: {n:?} of {}",
+            obj.normals.len()
+        );
+        assert!(
+            material.is_none_or(|m| (m as usize) < obj.materials.len()),
+            "triangle {k}: material {material:?} of {}",
+            obj.materials.len()
+        );
+    }
+    assert!(
+        obj.positions.iter().all(|p| p.is_finite()),
+        "a non-finite position was accepted"
+    );
+    // The same file as a bare OBJ scene ("the mesh has no faces" is an error).
+    if let Ok(scene) = load_scene_from(Path::new("m.obj"), &files) {
+        check_scene(&scene);
+    }
+}
+
+/// A loaded scene is well formed, and if its BVH fits the traversal stack the tree is valid.
+pub fn check_scene(scene: &Scene) {
+    let mesh = &scene.mesh;
+    for (k, t) in mesh.triangles.iter().enumerate() {
+        assert!(
+            t.p.iter().all(|&i| (i as usize) < mesh.positions.len()),
+            "triangle {k}: position index out of range: {:?}",
+            t.p
+        );
+        assert!(
+            t.n == [NO_NORMAL; 3] || t.n.iter().all(|&i| (i as usize) < mesh.normals.len()),
+            "triangle {k}: normal index out of range: {:?}",
+            t.n
+        );
+        assert!(
+            (t.material as usize) < scene.materials.len(),
+            "triangle {k}: material {} of {}",
+            t.material,
+            scene.materials.len()
+        );
+        assert!(
+            mesh.vertices(t).iter().all(|p| p.is_finite()),
+            "triangle {k} has a non-finite corner"
+        );
+    }
+    // `RenderScene::new` refuses trees deeper than the traversal stack; that is an error,
+    // not a bug.
+    let Ok(rs) = RenderScene::new(scene, &BuildParams::default()) else {
+        return;
+    };
+    let bounds: Vec<Aabb> = mesh
+        .triangles
+        .iter()
+        .map(|t| Aabb::from_points(&mesh.vertices(t)))
+        .collect();
+    if let Err(e) = validate(&rs.bvh, &bounds) {
+        panic!("invalid BVH: {e}");
+    }
+    assert_eq!(rs.tris.len(), mesh.triangles.len());
+}
+
+/// Whether the scene asks for more sphere triangles than [`SPHERE_TRIANGLE_BUDGET`].
+/// Inputs that do not parse are within budget: the loader rejects them first.
+fn exceeds_sphere_budget(data: &[u8]) -> bool {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return false;
+    };
+    let Ok(file) = toml::from_str::<meshtrace::scene::file::SceneFile>(text) else {
+        return false;
+    };
+    static DEFAULT: std::sync::OnceLock<u32> = std::sync::OnceLock::new();
+    let default = *DEFAULT.get_or_init(meshtrace::scene::sphere::default_subdivisions);
+    let total: u64 = file
+        .objects
+        .iter()
+        .filter_map(|o| o.sphere.as_ref())
+        .map(|s| 20u64 << (2 * s.subdivisions.unwrap_or(default).min(20)))
+        .sum();
+    total > SPHERE_TRIANGLE_BUDGET
+}
+
+thread_local! {
+    static IN_REPLAY: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    static LAST_PANIC: RefCell<Option<String>> = const { RefCell::new(None) };
+}
+
+/// Makes panics inside [`replay`] quiet: their message is recorded (per thread) instead of
+/// printed. The library catches the panics of tobj on some malformed MTL lines by design,
+/// and those must neither abort the fuzzer (libFuzzer's hook aborts on every panic) nor
+/// flood the log; panics that escape are reported by [`guarded`] and [`replay`]. Panics
+/// elsewhere go to the previous hook. Installing twice is harmless.
+pub fn install_panic_hook() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !IN_REPLAY.with(|r| r.get()) {
+                return previous(info);
+            }
+            let at = info
+                .location()
+                .map(|l| format!(" at {}:{}", l.file(), l.line()))
+                .unwrap_or_default();
+            let msg = info
+                .payload()
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| info.payload().downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "(non-string panic)".into());
+            LAST_PANIC.with(|p| *p.borrow_mut() = Some(format!("{msg}{at}")));
+        }));
+    });
+}
+
+/// Runs `harness` on `data`; returns the message of a panic that escaped it.
+pub fn replay(data: &[u8], harness: fn(&[u8])) -> Result<(), String> {
+    LAST_PANIC.with(|p| p.borrow_mut().take());
+    IN_REPLAY.with(|r| r.set(true));
+    let result = std::panic::catch_unwind(|| harness(data));
+    IN_REPLAY.with(|r| r.set(false));
+    result.map_err(|_| {
+        LAST_PANIC
+            .with(|p| p.borrow_mut().take())
+            .unwrap_or_else(|| "panic".into())
+    })
+}
+
+/// Runs `harness` on `data` and aborts, printing the panic, if one escaped it.
+pub fn guarded(data: &[u8], harness: fn(&[u8])) {
+    if let Err(msg) = replay(data, harness) {
+        eprintln!("panic escaped the library: {msg}");
+        std::process::abort();
+    }
+}
