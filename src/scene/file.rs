@@ -58,6 +58,18 @@ pub enum MaterialType {
     Dielectric,
 }
 
+impl MaterialType {
+    /// The name as a scene file spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Diffuse => "diffuse",
+            Self::Conductor => "conductor",
+            Self::RoughConductor => "rough_conductor",
+            Self::Dielectric => "dielectric",
+        }
+    }
+}
+
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialFile {

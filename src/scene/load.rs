@@ -330,7 +330,7 @@ impl Ctx<'_> {
         let not_for = |key: &str| {
             self.invalid(
                 field(key),
-                format!("is not a parameter of {:?} materials", m.kind),
+                format!("is not a parameter of {} materials", m.kind.name()),
             )
         };
         let kind = match m.kind {
