@@ -131,15 +131,6 @@ impl RenderScene {
     }
 }
 
-/// What a finished render reports besides its image.
-#[derive(Clone, Debug, Default)]
-pub struct RenderStats {
-    pub seconds: f64,
-    /// Rays traced (camera, bounce and shadow rays).
-    pub rays: u64,
-    pub samples: u64,
-}
-
 /// One render: its settings, the sample range it covers (all of `0..spp` unless merging
 /// partial renders), and how it may be stopped or observed while it runs.
 #[derive(Clone)]
