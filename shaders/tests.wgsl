@@ -42,7 +42,7 @@ fn test_intersect_triangle(@builtin(global_invocation_id) gid: vec3<u32>) {
     if 2u * i >= arrayLength(&test_in) { return; }
     let tri = test_in[2u * i].w;
     let t_max = f4(test_in[2u * i + 1u]).w;
-    let h = intersect_triangle(case_ray(i), load_tri(tri), t_max);
+    let h = intersect_triangle(sheared_ray(case_ray(i)), load_tri(tri), t_max);
     test_out[2u * i] = vec4<u32>(select(0u, 1u, h.hit), bitcast<u32>(h.t), bitcast<u32>(h.u), bitcast<u32>(h.v));
     test_out[2u * i + 1u] = vec4<u32>(0u);
 }

@@ -19,6 +19,7 @@ struct Hit {
 // mirror: src/bvh/traverse.rs `traverse_closest`
 fn traverse_closest(ray: Ray, t_max_in: f32) -> Hit {
     var best = Hit(t_max_in, 0.0, 0.0, NO_HIT);
+    let sheared = sheared_ray(ray);
     let root = load_node(0);
     if root.count == 0u && root.left_or_first == 0u {
         return best;
@@ -33,7 +34,7 @@ fn traverse_closest(ray: Ray, t_max_in: f32) -> Hit {
         let n = load_node(node);
         if n.count > 0u {
             for (var i = n.left_or_first; i < n.left_or_first + n.count; i++) {
-                let h = intersect_triangle(ray, load_tri(i), best.t);
+                let h = intersect_triangle(sheared, load_tri(i), best.t);
                 if h.hit {
                     best = Hit(h.t, h.u, h.v, i);
                 }
@@ -78,6 +79,7 @@ fn traverse_closest(ray: Ray, t_max_in: f32) -> Hit {
 
 // mirror: src/bvh/traverse.rs `traverse_any`
 fn traverse_any(ray: Ray, t_max: f32) -> bool {
+    let sheared = sheared_ray(ray);
     let root = load_node(0);
     if root.count == 0u && root.left_or_first == 0u {
         return false;
@@ -92,7 +94,7 @@ fn traverse_any(ray: Ray, t_max: f32) -> bool {
         let n = load_node(node);
         if n.count > 0u {
             for (var i = n.left_or_first; i < n.left_or_first + n.count; i++) {
-                if intersect_triangle(ray, load_tri(i), t_max).hit {
+                if intersect_triangle(sheared, load_tri(i), t_max).hit {
                     return true;
                 }
             }

@@ -5,7 +5,7 @@ mod common;
 
 use glam::Vec3;
 use meshtrace::bvh::{BuildParams, Bvh, traverse_any, traverse_closest, validate};
-use meshtrace::geometry::{T_INF, TriVerts, intersect_triangle};
+use meshtrace::geometry::{ShearedRay, T_INF, TriVerts, intersect_triangle};
 use meshtrace::math::{Aabb, Ray};
 use meshtrace::render::rng::pcg4d;
 use meshtrace::scene::{self, sphere::icosphere};
@@ -93,7 +93,9 @@ fn check(name: &str, corners: &[[Vec3; 3]]) {
                 {
                     continue;
                 }
-                if let Some(h) = intersect_triangle(ray, t, best.map_or(T_INF, |b| b.0)) {
+                if let Some(h) =
+                    intersect_triangle(&ShearedRay::new(ray), t, best.map_or(T_INF, |b| b.0))
+                {
                     best = Some((h.t, k as u32));
                 }
             }

@@ -8,7 +8,9 @@ mod common;
 
 use glam::{Vec2, Vec3};
 use meshtrace::bvh::{BuildParams, traverse_any, traverse_closest};
-use meshtrace::geometry::{T_INF, TriVerts, intersect_aabb, intersect_triangle, safe_inverse};
+use meshtrace::geometry::{
+    ShearedRay, T_INF, TriVerts, intersect_aabb, intersect_triangle, safe_inverse,
+};
 use meshtrace::gpu::GpuContext;
 use meshtrace::gpu::kernels::run_test_kernel;
 use meshtrace::math::Ray;
@@ -548,7 +550,7 @@ fn intersect_triangle_matches() {
         let ray = Ray::new(v3(c[0]), v3(c[1]));
         let tri = &rs.tris[c[0][3] as usize];
         let t_max = f(c[1][3]);
-        let cpu = intersect_triangle(&ray, tri, t_max);
+        let cpu = intersect_triangle(&ShearedRay::new(&ray), tri, t_max);
         let gpu_hit = o[0][0] == 1;
         let (gt, gu, gv) = (f(o[0][1]), f(o[0][2]), f(o[0][3]));
         let show = || {

@@ -2,7 +2,9 @@
 //! mirror: shaders/traverse.wgsl
 
 use super::{BvhNode, STACK_SIZE};
-use crate::geometry::{T_INF, TriVerts, intersect_aabb, intersect_triangle, safe_inverse};
+use crate::geometry::{
+    ShearedRay, T_INF, TriVerts, intersect_aabb, intersect_triangle, safe_inverse,
+};
 use crate::math::Ray;
 use glam::Vec3;
 
@@ -23,11 +25,12 @@ pub fn traverse_closest(
     ray: &Ray,
     t_max: f32,
 ) -> Option<Hit> {
+    let sheared = ShearedRay::new(ray);
     let mut best: Option<Hit> = None;
     let mut t_best = t_max;
     walk(nodes, ray, t_max, |first, count, _| {
         for i in first..first + count {
-            if let Some(h) = intersect_triangle(ray, &tris[i as usize], t_best) {
+            if let Some(h) = intersect_triangle(&sheared, &tris[i as usize], t_best) {
                 t_best = h.t;
                 best = Some(Hit {
                     t: h.t,
@@ -45,10 +48,11 @@ pub fn traverse_closest(
 /// Whether anything lies on the ray with `0 < t < t_max` (shadow rays).
 /// mirror: shaders/traverse.wgsl `traverse_any`
 pub fn traverse_any(nodes: &[BvhNode], tris: &[TriVerts], ray: &Ray, t_max: f32) -> bool {
+    let sheared = ShearedRay::new(ray);
     let mut hit = false;
     walk(nodes, ray, t_max, |first, count, _| {
         hit = (first..first + count)
-            .any(|i| intersect_triangle(ray, &tris[i as usize], t_max).is_some());
+            .any(|i| intersect_triangle(&sheared, &tris[i as usize], t_max).is_some());
         (hit, t_max)
     });
     hit
