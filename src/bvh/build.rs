@@ -1,15 +1,17 @@
 //! Binned SAH construction (Wald 2007, "On fast Construction of SAH-based Bounding Volume
-//! Hierarchies"), then a depth-first flattening into [`BvhNode`]s.
+//! Hierarchies") over triangle boxes partitioned in place, then a depth-first compaction
+//! into [`BvhNode`]s.
 
 use super::{Bvh, BvhNode, BvhStats};
 use crate::math::Aabb;
-use glam::Vec3;
+use glam::{IVec3, Vec3A};
+use rayon::prelude::*;
 
 /// How to build: bin count and the SAH's cost model. Leaf sizes are not fixed: a node
 /// becomes a leaf when the SAH says splitting would cost more.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BuildParams {
-    /// Bins per axis for the split search.
+    /// Bins per axis for the split search, at most [`MAX_BINS`].
     pub bins: usize,
     /// Cost of visiting an interior node, relative to `intersect_cost`.
     pub traversal_cost: f32,
@@ -48,50 +50,110 @@ impl Default for BuildParams {
 /// Subtrees of at least this many triangles are built in parallel.
 const PARALLEL_THRESHOLD: usize = 4096;
 
-enum Node {
-    Leaf {
-        bounds: Aabb,
-        first: u32,
-        count: u32,
-    },
-    Interior {
-        bounds: Aabb,
-        children: Box<[Node; 2]>,
-    },
+/// The most bins [`BuildParams::bins`] may ask for; the bins live on the stack.
+pub const MAX_BINS: usize = 32;
+
+/// A triangle's box as the builder moves it: SIMD-friendly and partitioned in place, so
+/// every pass over a node reads memory in order.
+#[derive(Clone, Copy)]
+struct PrimRef {
+    min: Vec3A,
+    max: Vec3A,
 }
 
-struct Input<'a> {
-    bounds: &'a [Aabb],
-    centroids: Vec<Vec3>,
-    params: &'a BuildParams,
+impl PrimRef {
+    /// Twice the centroid: binning needs only its order.
+    fn centroid2(&self) -> Vec3A {
+        self.min + self.max
+    }
 }
 
-pub fn build(bounds: &[Aabb], params: &BuildParams) -> Bvh {
-    let input = Input {
-        bounds,
-        centroids: bounds.iter().map(Aabb::center).collect(),
-        params,
+/// A box and the box of the doubled centroids of what it holds.
+#[derive(Clone, Copy)]
+struct Bounds {
+    min: Vec3A,
+    max: Vec3A,
+    cmin: Vec3A,
+    cmax: Vec3A,
+}
+
+impl Bounds {
+    const EMPTY: Bounds = Bounds {
+        min: Vec3A::INFINITY,
+        max: Vec3A::NEG_INFINITY,
+        cmin: Vec3A::INFINITY,
+        cmax: Vec3A::NEG_INFINITY,
     };
-    let mut order: Vec<u32> = (0..bounds.len() as u32).collect();
-    let root = if bounds.is_empty() {
-        Node::Leaf {
-            bounds: Aabb {
-                min: Vec3::ZERO,
-                max: Vec3::ZERO,
-            },
-            first: 0,
-            count: 0,
+
+    fn grow(&mut self, r: &PrimRef) {
+        self.min = self.min.min(r.min);
+        self.max = self.max.max(r.max);
+        let c = r.centroid2();
+        self.cmin = self.cmin.min(c);
+        self.cmax = self.cmax.max(c);
+    }
+
+    fn union(self, o: Bounds) -> Bounds {
+        Bounds {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+            cmin: self.cmin.min(o.cmin),
+            cmax: self.cmax.max(o.cmax),
         }
-    } else {
-        build_node(&input, &mut order, 0)
-    };
-    let mut nodes = Vec::with_capacity(2 * bounds.len().max(1));
+    }
+
+    fn of(refs: &[PrimRef]) -> Bounds {
+        let mut b = Bounds::EMPTY;
+        refs.iter().for_each(|r| b.grow(r));
+        b
+    }
+}
+
+fn area(min: Vec3A, max: Vec3A) -> f32 {
+    let e = (max - min).max(Vec3A::ZERO);
+    2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+}
+
+/// Builds the tree. Each subtree of `n` triangles owns `2n - 1` node slots, enough for
+/// any shape, so subtrees are written in parallel without coordination; [`compact`] then
+/// lays the used slots out depth-first.
+pub fn build(bounds: &[Aabb], params: &BuildParams) -> Bvh {
+    let n = bounds.len();
     let mut stats = BvhStats {
-        triangles: bounds.len(),
+        triangles: n,
         ..Default::default()
     };
-    let root_area = node_bounds(&root).area().max(f32::MIN_POSITIVE);
-    flatten(&root, &mut nodes, &mut stats, 0, root_area, params);
+    if n == 0 {
+        let nodes = vec![BvhNode::default()];
+        stats.nodes = 1;
+        stats.leaves = 1;
+        stats.leaf_sizes = vec![1];
+        return Bvh {
+            nodes,
+            order: Vec::new(),
+            stats,
+        };
+    }
+    let mut refs: Vec<PrimRef> = bounds
+        .par_iter()
+        .map(|b| PrimRef {
+            min: b.min.into(),
+            max: b.max.into(),
+        })
+        .collect();
+    let mut order: Vec<u32> = (0..n as u32).collect();
+    let root = refs
+        .par_chunks(PARALLEL_THRESHOLD)
+        .map(Bounds::of)
+        .reduce(|| Bounds::EMPTY, Bounds::union);
+    let mut slots = vec![BvhNode::default(); 2 * n - 1];
+    let ctx = Context {
+        params,
+        bins: params.bins.clamp(2, MAX_BINS),
+    };
+    build_node(&ctx, &mut refs, &mut order, root, 0, &mut slots);
+    drop(refs);
+    let nodes = compact(&slots, &mut stats, params);
     stats.nodes = nodes.len();
     Bvh {
         nodes,
@@ -100,178 +162,236 @@ pub fn build(bounds: &[Aabb], params: &BuildParams) -> Bvh {
     }
 }
 
-fn node_bounds(n: &Node) -> Aabb {
-    match n {
-        Node::Leaf { bounds, .. } | Node::Interior { bounds, .. } => *bounds,
-    }
+struct Context<'a> {
+    params: &'a BuildParams,
+    bins: usize,
 }
 
 #[derive(Clone, Copy)]
 struct Bin {
-    bounds: Aabb,
+    min: Vec3A,
+    max: Vec3A,
     count: u32,
 }
 
-/// Builds the subtree over `order` (whose first element sits at leaf position `offset`).
-fn build_node(input: &Input, order: &mut [u32], offset: u32) -> Node {
-    let p = input.params;
-    let mut bounds = Aabb::EMPTY;
-    let mut cbounds = Aabb::EMPTY;
-    for &i in order.iter() {
-        bounds = bounds.union(input.bounds[i as usize]);
-        cbounds = cbounds.grow(input.centroids[i as usize]);
-    }
-    let n = order.len();
-    let leaf = || Node::Leaf {
-        bounds,
-        first: offset,
-        count: n as u32,
+const EMPTY_BIN: Bin = Bin {
+    min: Vec3A::INFINITY,
+    max: Vec3A::NEG_INFINITY,
+    count: 0,
+};
+
+/// A chosen split: the axis and the first bin of the right side.
+struct Split {
+    axis: usize,
+    bin: usize,
+}
+
+/// Builds the subtree over `refs` (with their input indices in `ids`; the first sits at
+/// leaf position `offset`) into `slots`, whose first entry is the subtree's root.
+fn build_node(
+    ctx: &Context,
+    refs: &mut [PrimRef],
+    ids: &mut [u32],
+    b: Bounds,
+    offset: u32,
+    slots: &mut [BvhNode],
+) {
+    let p = ctx.params;
+    let n = refs.len();
+    let leaf = |slots: &mut [BvhNode]| {
+        slots[0] = BvhNode {
+            min: b.min.into(),
+            max: b.max.into(),
+            left_or_first: offset,
+            count: n as u32,
+        };
     };
     if n == 1 {
-        return leaf();
+        return leaf(slots);
     }
-    let best = find_split(input, order, &cbounds);
-    let leaf_cost = p.intersect_cost * n as f32;
-    let split_at = match best {
-        Some((cost, axis, bin)) if cost < leaf_cost || n > p.max_leaf_size => {
-            let scale = p.bins as f32 / cbounds.extent()[axis];
-            let bin_of =
-                |c: Vec3| (((c[axis] - cbounds.min[axis]) * scale) as usize).min(p.bins - 1);
-            partition(order, |&i| bin_of(input.centroids[i as usize]) < bin)
+    let (split_at, left, right) = match find_split(ctx, refs, &b) {
+        Some((cost, split)) if cost < p.intersect_cost * n as f32 || n > p.max_leaf_size => {
+            partition(ctx, refs, ids, &b, &split)
         }
-        Some(_) => return leaf(),
+        Some(_) => return leaf(slots),
         // All centroids coincide: no plane separates them.
-        None if n <= p.max_leaf_size => return leaf(),
-        None => n / 2,
+        None if n <= p.max_leaf_size => return leaf(slots),
+        None => {
+            let half = n / 2;
+            (half, Bounds::of(&refs[..half]), Bounds::of(&refs[half..]))
+        }
     };
-    let (left, right) = order.split_at_mut(split_at);
+    let (node, rest) = slots.split_at_mut(1);
+    let (left_slots, right_slots) = rest.split_at_mut(2 * split_at - 1);
+    node[0] = BvhNode {
+        min: b.min.into(),
+        max: b.max.into(),
+        left_or_first: 2 * split_at as u32,
+        count: 0,
+    };
+    let (lr, rr) = refs.split_at_mut(split_at);
+    let (li, ri) = ids.split_at_mut(split_at);
     let right_offset = offset + split_at as u32;
-    let (l, r) = if n >= PARALLEL_THRESHOLD {
+    if n >= PARALLEL_THRESHOLD {
         rayon::join(
-            || build_node(input, left, offset),
-            || build_node(input, right, right_offset),
-        )
+            || build_node(ctx, lr, li, left, offset, left_slots),
+            || build_node(ctx, rr, ri, right, right_offset, right_slots),
+        );
     } else {
-        (
-            build_node(input, left, offset),
-            build_node(input, right, right_offset),
-        )
-    };
-    Node::Interior {
-        bounds,
-        children: Box::new([l, r]),
+        build_node(ctx, lr, li, left, offset, left_slots);
+        build_node(ctx, rr, ri, right, right_offset, right_slots);
     }
 }
 
-/// The cheapest binned split as (SAH cost, axis, first bin of the right side).
-fn find_split(input: &Input, order: &[u32], cbounds: &Aabb) -> Option<(f32, usize, usize)> {
-    let p = input.params;
-    let nb = p.bins;
-    let extent = cbounds.extent();
-    let empty = Bin {
-        bounds: Aabb::EMPTY,
-        count: 0,
-    };
-    let mut bins = vec![[empty; 3]; nb];
-    let scale = Vec3::splat(nb as f32) / extent;
-    for &i in order {
-        let c = input.centroids[i as usize];
-        let b = input.bounds[i as usize];
-        let idx = ((c - cbounds.min) * scale).as_uvec3();
-        for axis in 0..3 {
-            let k = (idx[axis] as usize).min(nb - 1);
-            let bin = &mut bins[k][axis];
-            bin.bounds = bin.bounds.union(b);
+/// Which bin of each axis a doubled centroid falls in.
+#[inline]
+fn bin_index(c: Vec3A, b: &Bounds, scale: Vec3A, bins: usize) -> [usize; 3] {
+    let k = ((c - b.cmin) * scale)
+        .as_ivec3()
+        .clamp(IVec3::ZERO, IVec3::splat(bins as i32 - 1));
+    [k.x as usize, k.y as usize, k.z as usize]
+}
+
+/// Per-axis bin scale; an axis whose centroids all coincide gets 0 (everything in bin 0).
+fn bin_scale(b: &Bounds, bins: usize) -> Vec3A {
+    let extent = b.cmax - b.cmin;
+    Vec3A::select(
+        extent.cmpgt(Vec3A::ZERO),
+        Vec3A::splat(bins as f32) / extent,
+        Vec3A::ZERO,
+    )
+}
+
+/// Bins for a node of `n` triangles: small nodes get fewer, as more bins than triangles
+/// mostly stay empty and only lengthen the sweep.
+fn bins_for(ctx: &Context, n: usize) -> usize {
+    ctx.bins.min(n.max(4))
+}
+
+/// The cheapest binned split and its SAH cost.
+fn find_split(ctx: &Context, refs: &[PrimRef], b: &Bounds) -> Option<(f32, Split)> {
+    // The bins live on the stack and must be initialised; sizing them to the node keeps
+    // that cost from dominating small nodes.
+    match bins_for(ctx, refs.len()) {
+        nb if nb <= 8 => find_split_in::<8>(ctx, refs, b, nb),
+        nb if nb <= 16 => find_split_in::<16>(ctx, refs, b, nb),
+        nb => find_split_in::<MAX_BINS>(ctx, refs, b, nb),
+    }
+}
+
+fn find_split_in<const N: usize>(
+    ctx: &Context,
+    refs: &[PrimRef],
+    b: &Bounds,
+    nb: usize,
+) -> Option<(f32, Split)> {
+    let p = ctx.params;
+    let scale = bin_scale(b, nb);
+    let mut bins = [[EMPTY_BIN; N]; 3];
+    for r in refs {
+        let k = bin_index(r.centroid2(), b, scale, nb);
+        for (axis, &k) in k.iter().enumerate() {
+            let bin = &mut bins[axis][k];
+            bin.min = bin.min.min(r.min);
+            bin.max = bin.max.max(r.max);
             bin.count += 1;
         }
     }
-    let parent_area = {
-        let mut a = Aabb::EMPTY;
-        for &i in order {
-            a = a.union(input.bounds[i as usize]);
-        }
-        a.area()
-    };
-    let mut best: Option<(f32, usize, usize)> = None;
-    let mut right_area = vec![0.0f32; nb];
-    let mut right_count = vec![0u32; nb];
-    for axis in 0..3 {
-        if extent[axis].is_nan() || extent[axis] <= 0.0 {
+    // Costs are compared as area-weighted counts; the SAH's constants apply at the end.
+    let mut best: Option<(f32, Split)> = None;
+    let mut right_cost = [0.0f32; N];
+    for (axis, bins) in bins.iter().enumerate() {
+        if scale[axis] == 0.0 {
             continue;
         }
-        let (mut acc, mut cnt) = (Aabb::EMPTY, 0);
+        let (mut min, mut max, mut count) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY, 0u32);
         for k in (1..nb).rev() {
-            acc = acc.union(bins[k][axis].bounds);
-            cnt += bins[k][axis].count;
-            right_area[k] = acc.area();
-            right_count[k] = cnt;
+            min = min.min(bins[k].min);
+            max = max.max(bins[k].max);
+            count += bins[k].count;
+            right_cost[k] = area(min, max) * count as f32;
         }
-        let (mut acc, mut cnt) = (Aabb::EMPTY, 0);
+        let (mut min, mut max, mut count) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY, 0u32);
         for k in 1..nb {
-            acc = acc.union(bins[k - 1][axis].bounds);
-            cnt += bins[k - 1][axis].count;
-            if cnt == 0 || right_count[k] == 0 {
+            min = min.min(bins[k - 1].min);
+            max = max.max(bins[k - 1].max);
+            count += bins[k - 1].count;
+            if count == 0 || count as usize == refs.len() {
                 continue;
             }
-            let cost = p.traversal_cost
-                + p.intersect_cost
-                    * (acc.area() * cnt as f32 + right_area[k] * right_count[k] as f32)
-                    / parent_area;
-            if best.is_none_or(|(c, _, _)| cost < c) {
-                best = Some((cost, axis, k));
+            let cost = area(min, max) * count as f32 + right_cost[k];
+            if best.as_ref().is_none_or(|(c, _)| cost < *c) {
+                best = Some((cost, Split { axis, bin: k }));
             }
         }
     }
-    best
+    let parent_area = area(b.min, b.max).max(f32::MIN_POSITIVE);
+    best.map(|(c, split)| (p.traversal_cost + p.intersect_cost * c / parent_area, split))
 }
 
-/// Moves the elements satisfying `pred` to the front; returns how many there are.
-fn partition(v: &mut [u32], pred: impl Fn(&u32) -> bool) -> usize {
-    let mut i = 0;
-    for j in 0..v.len() {
-        if pred(&v[j]) {
-            v.swap(i, j);
+/// Moves the triangles left of the split to the front (ids alongside); returns their
+/// count and the bounds of both sides.
+fn partition(
+    ctx: &Context,
+    refs: &mut [PrimRef],
+    ids: &mut [u32],
+    b: &Bounds,
+    split: &Split,
+) -> (usize, Bounds, Bounds) {
+    let nb = bins_for(ctx, refs.len());
+    let scale = bin_scale(b, nb);
+    let (axis, last) = (split.axis, nb as i32 - 1);
+    // `bin_index` on one axis only: the same arithmetic, so the counts match the bins'.
+    let goes_left = |r: &PrimRef| {
+        let k = (r.centroid2()[axis] - b.cmin[axis]) * scale[axis];
+        ((k as i32).clamp(0, last) as usize) < split.bin
+    };
+    let (mut left, mut right) = (Bounds::EMPTY, Bounds::EMPTY);
+    let (mut i, mut j) = (0, refs.len());
+    while i < j {
+        if goes_left(&refs[i]) {
+            left.grow(&refs[i]);
             i += 1;
+        } else {
+            j -= 1;
+            refs.swap(i, j);
+            ids.swap(i, j);
+            right.grow(&refs[j]);
         }
     }
-    i
+    (i, left, right)
 }
 
-fn flatten(
-    node: &Node,
-    out: &mut Vec<BvhNode>,
-    stats: &mut BvhStats,
-    depth: u32,
-    root_area: f32,
-    p: &BuildParams,
-) {
-    stats.depth = stats.depth.max(depth);
-    let index = out.len();
-    let b = node_bounds(node);
-    out.push(BvhNode {
-        min: b.min.into(),
-        max: b.max.into(),
-        left_or_first: 0,
-        count: 0,
-    });
-    let rel_area = b.area() / root_area;
-    match node {
-        Node::Leaf { first, count, .. } => {
-            out[index].left_or_first = *first;
-            out[index].count = *count;
+/// Lays the used slots out depth-first (first child right after its parent) and fills in
+/// the statistics.
+fn compact(slots: &[BvhNode], stats: &mut BvhStats, p: &BuildParams) -> Vec<BvhNode> {
+    let mut out: Vec<BvhNode> = Vec::with_capacity(slots.len() / 2 + 1);
+    let root_area = slots[0].bounds().area().max(f32::MIN_POSITIVE);
+    // (slot, depth, index in `out` of the parent whose second child this is)
+    let mut stack: Vec<(usize, u32, Option<usize>)> = vec![(0, 0, None)];
+    while let Some((slot, depth, parent)) = stack.pop() {
+        if let Some(parent) = parent {
+            out[parent].left_or_first = out.len() as u32;
+        }
+        let node = slots[slot];
+        let index = out.len();
+        out.push(node);
+        stats.depth = stats.depth.max(depth);
+        let rel_area = node.bounds().area() / root_area;
+        if node.is_leaf() {
             stats.leaves += 1;
-            stats.sah_cost += rel_area * p.intersect_cost * *count as f32;
-            let c = *count as usize;
+            stats.sah_cost += rel_area * p.intersect_cost * node.count as f32;
+            let c = node.count as usize;
             if stats.leaf_sizes.len() <= c {
                 stats.leaf_sizes.resize(c + 1, 0);
             }
             stats.leaf_sizes[c] += 1;
-        }
-        Node::Interior { children, .. } => {
+        } else {
             stats.sah_cost += rel_area * p.traversal_cost;
-            flatten(&children[0], out, stats, depth + 1, root_area, p);
-            out[index].left_or_first = out.len() as u32;
-            flatten(&children[1], out, stats, depth + 1, root_area, p);
+            // The second child is visited after the whole first subtree.
+            stack.push((slot + node.left_or_first as usize, depth + 1, Some(index)));
+            stack.push((slot + 1, depth + 1, None));
         }
     }
+    out
 }
