@@ -35,6 +35,7 @@ pub fn load_obj(path: &Path, files: &dyn FileSource) -> Result<ObjMesh, SceneErr
     let shown = super::shown(path);
     let err = |message: String| SceneError::Obj {
         path: shown.clone(),
+        line: None,
         message,
     };
     let bytes = files.read(path).map_err(|source| SceneError::Io {
