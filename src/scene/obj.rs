@@ -313,19 +313,52 @@ fn scan_obj(bytes: &[u8]) -> Result<ObjScan, BadLine> {
 
 /// The indices of one face corner as written: `v`, `v/vt`, `v//vn` or `v/vt/vn`, each an
 /// integer as tobj reads it (`isize`, negative counting back). `None` for anything else.
+/// Byte by byte rather than through `split('/')` and `str::parse`: faces are most of a
+/// large mesh's lines, and this runs on every corner.
 fn parse_corner(word: &str) -> Option<[Option<isize>; 3]> {
-    let mut parts = word.split('/');
-    let v = parts.next()?.parse().ok()?;
-    let (vt, vn) = match (parts.next(), parts.next()) {
-        (None, _) => (None, None),
-        (Some(vt), None) => (Some(vt.parse().ok()?), None),
-        (Some(""), Some(vn)) => (None, Some(vn.parse().ok()?)),
-        (Some(vt), Some(vn)) => (Some(vt.parse().ok()?), Some(vn.parse().ok()?)),
+    let mut fields = [None; 3];
+    let mut rest = word.as_bytes();
+    for (k, field) in fields.iter_mut().enumerate() {
+        let end = rest.iter().position(|&b| b == b'/').unwrap_or(rest.len());
+        let (text, tail) = rest.split_at(end);
+        // Only `vt` may be empty, and only before a `vn` (`v//vn`).
+        if !(text.is_empty() && k == 1 && !tail.is_empty()) {
+            *field = Some(parse_index(text)?);
+        }
+        match tail.split_first() {
+            None => return Some(fields),
+            Some((_, after)) => rest = after,
+        }
+    }
+    // A fourth `/`-separated field.
+    None
+}
+
+/// An index as `isize::from_str` reads it (an optional sign, then decimal digits, no
+/// overflow), without going through `str`.
+fn parse_index(text: &[u8]) -> Option<isize> {
+    let (negative, digits) = match text {
+        [b'-', rest @ ..] => (true, rest),
+        [b'+', rest @ ..] => (false, rest),
+        _ => (false, text),
     };
-    if parts.next().is_some() {
+    if digits.is_empty() {
         return None;
     }
-    Some([Some(v), vt, vn])
+    let mut value: isize = 0;
+    for &b in digits {
+        let digit = b.wrapping_sub(b'0');
+        if digit > 9 {
+            return None;
+        }
+        value = value.checked_mul(10)?;
+        value = if negative {
+            value.checked_sub(digit as isize)?
+        } else {
+            value.checked_add(digit as isize)?
+        };
+    }
+    Some(value)
 }
 
 /// A `v` line's fields: x y z, then tobj's optional w (which divides x y z and must not be
