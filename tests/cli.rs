@@ -157,8 +157,8 @@ fn bad_scene_files_fail_cleanly() {
 fn bad_meshes_fail_cleanly() {
     let dir = TempDir::new("meshes");
     for (file, needle) in [
-        ("bad_index.obj", "bad_index.obj"),
-        ("nan_vertex.obj", "nan_vertex.obj"),
+        ("bad_index.obj", "bad_index.obj:4: "),
+        ("nan_vertex.obj", "nan_vertex.obj:2: "),
     ] {
         let path = data(file);
         assert_fails(

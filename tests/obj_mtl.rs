@@ -320,17 +320,178 @@ fn obj_error(name: &str) -> String {
     msg
 }
 
-#[test]
-fn out_of_range_index_names_the_file() {
-    let msg = obj_error("bad_index.obj");
-    assert!(msg.contains("vertex that does not exist"), "{msg}");
+/// `obj_error` for a file whose first bad line is `line`: the message must name it right
+/// after the path, and contain each of `needles`.
+fn obj_error_at(name: &str, line: usize, needles: &[&str]) -> String {
+    let msg = obj_error(name);
+    let prefix = format!("{}:{line}: ", data(name).display());
+    assert!(msg.starts_with(&prefix), "expected {prefix:?}: {msg}");
+    match load_obj(&data(name), &Fs) {
+        Err(SceneError::Obj { line: at, .. }) => assert_eq!(at, Some(line), "{msg}"),
+        other => panic!("expected SceneError::Obj, got {other:?}"),
+    }
+    for needle in needles {
+        assert!(msg.contains(needle), "expected {needle:?}: {msg}");
+    }
+    msg
 }
 
 #[test]
-fn nan_coordinate_names_the_file() {
-    let msg = obj_error("nan_vertex.obj");
-    assert!(msg.contains("non-finite"), "{msg}");
-    assert!(msg.contains("NaN"), "{msg}");
+fn position_with_two_coordinates_names_its_line() {
+    obj_error_at(
+        "bad_v.obj",
+        4,
+        &["malformed vertex position (`v`)", "2 numbers"],
+    );
+}
+
+#[test]
+fn nan_coordinate_names_its_line() {
+    obj_error_at("nan_vertex.obj", 2, &["non-finite", "NaN", "vertex 2"]);
+}
+
+#[test]
+fn infinite_coordinate_names_its_line() {
+    obj_error_at("inf_vertex.obj", 3, &["non-finite", "inf", "vertex 3"]);
+}
+
+#[test]
+fn normal_with_two_numbers_names_its_line() {
+    obj_error_at("bad_vn.obj", 5, &["malformed normal (`vn`)", "2 numbers"]);
+}
+
+#[test]
+fn texture_coordinate_that_is_not_a_number_names_its_line() {
+    obj_error_at(
+        "bad_vt.obj",
+        6,
+        &["malformed texture coordinate (`vt`)", "`one`"],
+    );
+}
+
+#[test]
+fn face_with_two_corners_names_its_line() {
+    obj_error_at(
+        "two_corners.obj",
+        5,
+        &["malformed face (`f`)", "at least 3"],
+    );
+}
+
+#[test]
+fn face_index_zero_names_its_line() {
+    obj_error_at("zero_index.obj", 5, &["malformed face (`f`)", "index 0"]);
+}
+
+#[test]
+fn out_of_range_index_names_its_line() {
+    obj_error_at(
+        "bad_index.obj",
+        4,
+        &["vertex 4", "does not exist", "defines 3 vertices"],
+    );
+}
+
+#[test]
+fn out_of_range_negative_index_names_its_line() {
+    // `-4` after three vertices; the fourth vertex comes after the face.
+    obj_error_at(
+        "negative_index.obj",
+        5,
+        &[
+            "vertex -4",
+            "does not exist",
+            "3 vertices are defined before",
+        ],
+    );
+}
+
+#[test]
+fn non_integer_index_names_its_line() {
+    obj_error_at(
+        "non_integer_index.obj",
+        6,
+        &["malformed face (`f`)", "`2.0`"],
+    );
+}
+
+#[test]
+fn forward_index_beyond_the_file_names_the_face_line() {
+    // tobj accepts faces before their vertices (`f 1 2 3` on line 2 loads); line 3's `5`
+    // is past the four vertices the file ends up defining.
+    obj_error_at("forward_index.obj", 3, &["vertex 5", "defines 4 vertices"]);
+}
+
+#[test]
+fn backslash_does_not_continue_a_line() {
+    // As in tobj: `\` is a word of its own line, not a continuation.
+    obj_error_at("continued_face.obj", 4, &["malformed face (`f`)", "`\\\\`"]);
+}
+
+#[test]
+fn valid_crlf_file_with_every_corner_form_loads() {
+    let bytes = std::fs::read(data("crlf_valid.obj")).unwrap();
+    assert_eq!(
+        bytes.windows(2).filter(|w| w == b"\r\n").count(),
+        bytes.iter().filter(|&&b| b == b'\n').count(),
+        "crlf_valid.obj must keep its CRLF line endings"
+    );
+    let m = obj("crlf_valid.obj");
+    assert!(m.warnings.is_empty(), "{:?}", m.warnings);
+    let (o, x, y, xy) = (
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [1.0, 1.0, 0.0],
+    );
+    assert_eq!(
+        corners(&m),
+        vec![
+            // `f 1 2 3` before the vertices; `v 2 0 0 2` is (1, 0, 0) after its w
+            [o, x, y],
+            // `f -4/-2 -3/-1 -2/-1`
+            [o, x, y],
+            // `f 2//1 4//-1 3//1`
+            [x, xy, y],
+            // `f 1/1/1 2/2/1 4/2/-1`
+            [o, x, xy],
+        ]
+    );
+    let normals: Vec<bool> = m.triangles.iter().map(|t| t.1 != [NO_NORMAL; 3]).collect();
+    assert_eq!(normals, [false, false, true, true]);
+    for (_, n, _) in &m.triangles[2..] {
+        for i in n {
+            assert_eq!(m.normals[*i as usize], Vec3::Z);
+        }
+    }
+}
+
+#[test]
+fn scene_file_error_names_the_obj_and_its_line() {
+    let dir = temp_dir("obj-line-scene");
+    std::fs::copy(data("bad_vn.obj"), dir.join("m.obj")).unwrap();
+    std::fs::write(
+        dir.join("s.toml"),
+        "[camera]\nposition = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\n[[objects]]\nmesh = \"m.obj\"\n",
+    )
+    .unwrap();
+    let result = load_scene(&dir.join("s.toml"));
+    std::fs::remove_dir_all(&dir).unwrap();
+    let msg = result.unwrap_err().to_string();
+    let expected = format!("{}:5: malformed normal (`vn`)", dir.join("m.obj").display());
+    assert!(msg.starts_with(&expected), "{msg}");
+}
+
+#[test]
+fn odd_obj_path_stays_on_one_line_with_its_line_number() {
+    let dir = temp_dir("obj-line-name");
+    let path = dir.join("two\nlines.obj");
+    std::fs::copy(data("bad_vn.obj"), &path).unwrap();
+    let result = load_obj(&path, &Fs);
+    std::fs::remove_dir_all(&dir).unwrap();
+    let msg = result.unwrap_err().to_string();
+    assert!(!msg.contains('\n'), "{msg}");
+    assert!(msg.contains("two\\nlines.obj:5: "), "{msg}");
 }
 
 #[test]

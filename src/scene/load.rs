@@ -80,11 +80,13 @@ fn load_bare_obj(path: &Path, files: &dyn FileSource) -> Result<Scene, SceneErro
     if bounds.is_empty() {
         return Err(SceneError::Obj {
             path: super::shown(path),
+            line: None,
             message: "the mesh has no faces".into(),
         });
     }
     let camera = Camera::framing(&bounds).ok_or_else(|| SceneError::Obj {
         path: super::shown(path),
+        line: None,
         message: format!(
             "the mesh spans {} to {}, too far out to frame with a camera",
             bounds.min, bounds.max

@@ -138,6 +138,17 @@ pub enum SceneError {
         field: String,
         message: String,
     },
-    #[error("{path}: {message}")]
-    Obj { path: String, message: String },
+    /// A problem with an OBJ file (or its meshes), at `line` when the validating scan found
+    /// it; tobj's own errors and whole-mesh problems have no line.
+    #[error("{path}{}: {message}", at_line(*.line))]
+    Obj {
+        path: String,
+        line: Option<usize>,
+        message: String,
+    },
+}
+
+/// The `:{line}` of an error message, or nothing when the line is not known.
+fn at_line(line: Option<usize>) -> String {
+    line.map(|l| format!(":{l}")).unwrap_or_default()
 }

@@ -35,11 +35,19 @@ pub fn load_obj(path: &Path, files: &dyn FileSource) -> Result<ObjMesh, SceneErr
     let shown = super::shown(path);
     let err = |message: String| SceneError::Obj {
         path: shown.clone(),
+        line: None,
         message,
     };
     let bytes = files.read(path).map_err(|source| SceneError::Io {
         path: shown.clone(),
         source,
+    })?;
+    // Before tobj, whose errors name no line: the scan rejects what tobj would (and a few
+    // things it lets through) with the line at fault.
+    let scan = scan_obj(&bytes).map_err(|bad| SceneError::Obj {
+        path: shown.clone(),
+        line: Some(bad.line),
+        message: bad.message,
     })?;
     let options = tobj::LoadOptions {
         triangulate: true,
@@ -82,7 +90,6 @@ pub fn load_obj(path: &Path, files: &dyn FileSource) -> Result<ObjMesh, SceneErr
     if let Ok(mtls) = materials {
         out.materials = mtls.iter().map(map_mtl).collect();
     }
-    let scan = scan_obj(&bytes);
     let names: Vec<&str> = out.materials.iter().map(|m| m.name.as_str()).collect();
     if failed_mtl_count == 0 {
         for (line, name) in &scan.usemtl {
@@ -111,6 +118,8 @@ pub fn load_obj(path: &Path, files: &dyn FileSource) -> Result<ObjMesh, SceneErr
         let base_n = out.normals.len() as u32;
         for (i, p) in m.positions.chunks_exact(3).enumerate() {
             let v = Vec3::new(p[0], p[1], p[2]);
+            // The scan rejects these with their line; this is a fallback in case tobj's
+            // arithmetic ever differs from the scan's.
             if !v.is_finite() {
                 return Err(err(format!(
                     "object `{}`: vertex {} has a non-finite coordinate {v}",
@@ -152,30 +161,294 @@ struct ObjScan {
     usemtl: Vec<(usize, String)>,
 }
 
-fn scan_obj(bytes: &[u8]) -> ObjScan {
+/// The first line of an OBJ file that the scan rejects: its 1-based number and why.
+#[derive(Debug)]
+struct BadLine {
+    line: usize,
+    message: String,
+}
+
+/// The three kinds of element a face corner refers to, in corner order (`v/vt/vn`).
+const ELEMENTS: [(&str, &str); 3] = [
+    ("vertex", "vertices"),
+    ("texture coordinate", "texture coordinates"),
+    ("normal", "normals"),
+];
+
+/// Walks every line of an OBJ file once, before tobj sees it, collecting what tobj does not
+/// report ([`ObjScan`]) and rejecting the first malformed line with its number, since tobj's
+/// errors name no line.
+///
+/// Lines are what tobj reads (`BufRead::lines`): split at `\n`, so a `\r\n` ending leaves a
+/// `\r` that splitting at whitespace drops, and a trailing `\` continues nothing (tobj does
+/// not join lines, so a `\` among numbers or indices is an error, and line numbers are the
+/// file's own). Keywords tobj skips (`#`, `o`, `g`, `s`, `mtllib`, `p`, unknown ones) are not
+/// looked at. Indices follow tobj: negative ones count back from the elements defined so
+/// far; positive ones may refer forward, so those are checked against the file's totals once
+/// the walk is done, and such an error is reported only when no line is rejected on sight.
+/// Besides an entry per face, the walk allocates only for `usemtl` names, messages and the
+/// rare forward reference.
+fn scan_obj(bytes: &[u8]) -> Result<ObjScan, BadLine> {
     let mut scan = ObjScan {
         faces: Vec::new(),
         usemtl: Vec::new(),
     };
-    for (i, line) in bytes.split(|&b| b == b'\n').enumerate() {
-        let line = String::from_utf8_lossy(line);
-        let mut words = line.split_whitespace();
+    // Elements defined so far, in `ELEMENTS` order.
+    let mut defined = [0usize; 3];
+    // Per element, the (line, index) of each reference beyond what was defined at that
+    // line and beyond every earlier such reference: the first line whose index exceeds the
+    // file's total is always among them (any earlier reference is at most that total).
+    // The third field is the message's subject (a face or a line).
+    let mut forward: [Vec<(usize, usize, &str)>; 3] = Default::default();
+    for (i, raw) in bytes.split(|&b| b == b'\n').enumerate() {
+        let line = i + 1;
+        let bad = |message: String| BadLine { line, message };
+        let Ok(text) = std::str::from_utf8(raw) else {
+            return Err(bad("the line is not valid UTF-8 text".into()));
+        };
+        let mut words = text.split_whitespace();
         match words.next() {
-            Some("f") => {
-                let corners: Vec<&str> = words.collect();
-                let has = corners
-                    .iter()
-                    .all(|c| c.split('/').nth(2).is_some_and(|n| !n.is_empty()));
-                scan.faces.push((corners.len().saturating_sub(2), has));
+            Some("v") => {
+                check_position(words, defined[0] + 1).map_err(bad)?;
+                defined[0] += 1;
+            }
+            Some("vt") => {
+                check_numbers(words, 2..=3, "texture coordinate (`vt`)", "u v or u v w")
+                    .map_err(bad)?;
+                defined[1] += 1;
+            }
+            Some("vn") => {
+                check_numbers(words, 3..=3, "normal (`vn`)", "x y z").map_err(bad)?;
+                defined[2] += 1;
+            }
+            Some(keyword @ ("f" | "l")) => {
+                let face = keyword == "f";
+                // tobj drops `l` lines of one or two points unchecked and turns longer
+                // ones into triangles like faces.
+                let polygon = face || words.clone().nth(2).is_some();
+                let what = if face { "face (`f`)" } else { "line (`l`)" };
+                let subject = if face { "a face" } else { "a line (`l`)" };
+                let mut corners = 0usize;
+                let mut all_normals = true;
+                for word in words {
+                    corners += 1;
+                    let Some(corner) = parse_corner(word) else {
+                        return Err(bad(format!(
+                            "malformed {what}: corner {} is not `v`, `v/vt`, `v//vn` or \
+                             `v/vt/vn` with integer indices{}",
+                            quoted(word),
+                            continuation_hint(word)
+                        )));
+                    };
+                    all_normals &= corner[2].is_some();
+                    if !polygon {
+                        continue;
+                    }
+                    for (k, index) in corner.into_iter().enumerate() {
+                        let Some(index) = index else { continue };
+                        let (one, many) = ELEMENTS[k];
+                        if index == 0 {
+                            return Err(bad(format!(
+                                "malformed {what}: {one} index 0 (OBJ indices start at 1)"
+                            )));
+                        }
+                        let back = index.unsigned_abs();
+                        if index < 0 && back > defined[k] {
+                            return Err(bad(format!(
+                                "{subject} refers to {one} {index}, which does not exist \
+                                 (only {} {many} are defined before this line)",
+                                defined[k]
+                            )));
+                        }
+                        let records = &mut forward[k];
+                        if index > 0
+                            && back > defined[k]
+                            && records.last().is_none_or(|&(_, max, _)| back > max)
+                        {
+                            records.push((line, back, subject));
+                        }
+                    }
+                }
+                if face && corners < 3 {
+                    return Err(bad(format!(
+                        "malformed face (`f`): {corners} corners, a face needs at least 3"
+                    )));
+                }
+                if polygon {
+                    scan.faces.push((corners - 2, all_normals));
+                }
             }
             Some("usemtl") => {
-                let name = line.trim().strip_prefix("usemtl").unwrap_or("").trim();
-                scan.usemtl.push((i + 1, name.to_string()));
+                // tobj's reading of the name, so that it is looked up as tobj does.
+                let name = text.split_once(' ').map_or("", |(_, rest)| rest.trim());
+                if name.is_empty() {
+                    return Err(bad("`usemtl` names no material".into()));
+                }
+                scan.usemtl.push((line, name.to_string()));
             }
             _ => {}
         }
     }
-    scan
+    let first_beyond = (0..3)
+        .filter_map(|k| {
+            let &(line, index, subject) = forward[k]
+                .iter()
+                .find(|&&(_, index, _)| index > defined[k])?;
+            Some((line, k, index, subject))
+        })
+        .min();
+    if let Some((line, k, index, subject)) = first_beyond {
+        let (one, many) = ELEMENTS[k];
+        return Err(BadLine {
+            line,
+            message: format!(
+                "{subject} refers to {one} {index}, which does not exist (the file defines \
+                 {} {many})",
+                defined[k]
+            ),
+        });
+    }
+    Ok(scan)
+}
+
+/// The indices of one face corner as written: `v`, `v/vt`, `v//vn` or `v/vt/vn`, each an
+/// integer as tobj reads it (`isize`, negative counting back). `None` for anything else.
+/// Byte by byte rather than through `split('/')` and `str::parse`: faces are most of a
+/// large mesh's lines, and this runs on every corner.
+fn parse_corner(word: &str) -> Option<[Option<isize>; 3]> {
+    let mut fields = [None; 3];
+    let mut rest = word.as_bytes();
+    for (k, field) in fields.iter_mut().enumerate() {
+        let end = rest.iter().position(|&b| b == b'/').unwrap_or(rest.len());
+        let (text, tail) = rest.split_at(end);
+        // Only `vt` may be empty, and only before a `vn` (`v//vn`).
+        if !(text.is_empty() && k == 1 && !tail.is_empty()) {
+            *field = Some(parse_index(text)?);
+        }
+        match tail.split_first() {
+            None => return Some(fields),
+            Some((_, after)) => rest = after,
+        }
+    }
+    // A fourth `/`-separated field.
+    None
+}
+
+/// An index as `isize::from_str` reads it (an optional sign, then decimal digits, no
+/// overflow), without going through `str`.
+fn parse_index(text: &[u8]) -> Option<isize> {
+    let (negative, digits) = match text {
+        [b'-', rest @ ..] => (true, rest),
+        [b'+', rest @ ..] => (false, rest),
+        _ => (false, text),
+    };
+    if digits.is_empty() {
+        return None;
+    }
+    let mut value: isize = 0;
+    for &b in digits {
+        let digit = b.wrapping_sub(b'0');
+        if digit > 9 {
+            return None;
+        }
+        value = value.checked_mul(10)?;
+        value = if negative {
+            value.checked_sub(digit as isize)?
+        } else {
+            value.checked_add(digit as isize)?
+        };
+    }
+    Some(value)
+}
+
+/// A `v` line's fields: x y z, then tobj's optional w (which divides x y z and must not be
+/// 0) or r g b; the coordinates, after any division, must be finite. `number` is the
+/// vertex's 1-based index, for the message.
+fn check_position(words: std::str::SplitWhitespace, number: usize) -> Result<(), String> {
+    let mut values = [0f32; 4];
+    let mut count = 0usize;
+    for word in words {
+        let value: f32 = word.parse().map_err(|_| {
+            format!(
+                "malformed vertex position (`v`): {} is not a number{}",
+                quoted(word),
+                continuation_hint(word)
+            )
+        })?;
+        if let Some(slot) = values.get_mut(count) {
+            *slot = value;
+        }
+        count += 1;
+    }
+    let [mut x, mut y, mut z, w] = values;
+    match count {
+        3 | 6 => {}
+        4 if w == 0.0 => {
+            return Err("malformed vertex position (`v`): the weight w is 0".into());
+        }
+        4 => [x, y, z] = [x / w, y / w, z / w],
+        _ => {
+            return Err(format!(
+                "malformed vertex position (`v`): expected x y z, x y z w or x y z r g b, \
+                 found {count} numbers"
+            ));
+        }
+    }
+    if !(x.is_finite() && y.is_finite() && z.is_finite()) {
+        return Err(format!(
+            "vertex {number} has a non-finite coordinate: {x} {y} {z}"
+        ));
+    }
+    Ok(())
+}
+
+/// Checks that a line's fields after its keyword are a count of numbers within `allowed`;
+/// `what` and `form` name the element and its fields in the message.
+fn check_numbers(
+    words: std::str::SplitWhitespace,
+    allowed: std::ops::RangeInclusive<usize>,
+    what: &str,
+    form: &str,
+) -> Result<(), String> {
+    let mut count = 0usize;
+    for word in words {
+        if word.parse::<f32>().is_err() {
+            return Err(format!(
+                "malformed {what}: {} is not a number{}",
+                quoted(word),
+                continuation_hint(word)
+            ));
+        }
+        count += 1;
+    }
+    if allowed.contains(&count) {
+        Ok(())
+    } else {
+        Err(format!(
+            "malformed {what}: expected {form}, found {count} numbers"
+        ))
+    }
+}
+
+/// A word of the file as a message shows it: quoted, escaped onto one line, and cut short.
+fn quoted(word: &str) -> String {
+    const MAX: usize = 32;
+    let cut: String = word.chars().take(MAX).collect();
+    let more = if word.chars().nth(MAX).is_some() {
+        "…"
+    } else {
+        ""
+    };
+    format!("`{}{more}`", cut.escape_debug())
+}
+
+/// Why a word ending in `\` failed: OBJ's line continuation, which tobj does not support.
+fn continuation_hint(word: &str) -> &'static str {
+    if word.ends_with('\\') {
+        " (tobj does not join lines continued with `\\`)"
+    } else {
+        ""
+    }
 }
 
 /// The MTL mapping of the scene format: Kd, Ke, illum 3 / Pm (conductors, rough with Pr),
