@@ -70,6 +70,12 @@ fn assert_fails(dir: &TempDir, args: &[&str], needles: &[&str]) {
     for n in needles {
         assert!(errors[0].contains(n), "missing `{n}`: {ctx}");
     }
+    // A cause is said once, even when the error's own message already quotes it.
+    let parts: Vec<&str> = errors[0].split(": ").collect();
+    assert!(
+        parts.windows(2).all(|w| w[0] != w[1]),
+        "repeated cause: {ctx}"
+    );
     assert_eq!(dir.listing(), before, "{ctx}");
 }
 
