@@ -13,10 +13,14 @@ pub const PATHS_PER_DISPATCH: u64 = 1 << 21;
 const WORKGROUP: u32 = 8;
 /// Texels per row of the table textures. mirror: shaders/bindings.wgsl `TABLE_WIDTH_LOG2`
 pub const TABLE_WIDTH: u32 = 1 << 12;
-/// The scene tables (all of them) read as textures.
-const TEXTURE_TABLES: usize = 6;
+
+/// Rows of a table texture written per upload step: wgpu stages each write in memory of
+/// its own, so bounded steps keep the upload from doubling the scene's footprint.
+const UPLOAD_ROWS: usize = 256;
 
 /// Uploads a table of 16-byte texels as an Rgba32Uint texture `TABLE_WIDTH` texels wide.
+/// The table is written from where it lies, in steps of [`UPLOAD_ROWS`] rows, each
+/// finished before the next, so no copy of the whole table is ever made.
 fn table_texture(
     ctx: &GpuContext,
     what: &'static str,
@@ -32,17 +36,13 @@ fn table_texture(
             limit: max_rows * TABLE_WIDTH as u64 * 16,
         });
     }
-    let row_bytes = TABLE_WIDTH as usize * 16;
-    let mut padded = data.to_vec();
-    padded.resize(rows as usize * row_bytes, 0);
-    let size = wgpu::Extent3d {
-        width: TABLE_WIDTH,
-        height: rows as u32,
-        depth_or_array_layers: 1,
-    };
     let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some(what),
-        size,
+        size: wgpu::Extent3d {
+            width: TABLE_WIDTH,
+            height: rows as u32,
+            depth_or_array_layers: 1,
+        },
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
@@ -50,25 +50,49 @@ fn table_texture(
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
-    ctx.queue.write_texture(
-        texture.as_image_copy(),
-        &padded,
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(row_bytes as u32),
-            rows_per_image: Some(rows as u32),
-        },
-        size,
-    );
+    let row_bytes = TABLE_WIDTH as usize * 16;
+    let write = |first_row: usize, bytes: &[u8]| {
+        let n = (bytes.len() / row_bytes) as u32;
+        let mut dst = texture.as_image_copy();
+        dst.origin.y = first_row as u32;
+        ctx.queue.write_texture(
+            dst,
+            bytes,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row_bytes as u32),
+                rows_per_image: Some(n),
+            },
+            wgpu::Extent3d {
+                width: TABLE_WIDTH,
+                height: n,
+                depth_or_array_layers: 1,
+            },
+        );
+    };
+    let full = data.len() / row_bytes;
+    for (i, chunk) in data[..full * row_bytes]
+        .chunks(UPLOAD_ROWS * row_bytes)
+        .enumerate()
+    {
+        write(i * UPLOAD_ROWS, chunk);
+        ctx.queue.submit([]);
+        ctx.wait()?;
+    }
+    if full < rows as usize {
+        // The last row, zero-padded (an empty table is one row of zeros).
+        let mut last = vec![0u8; row_bytes];
+        let tail = &data[full * row_bytes..];
+        last[..tail.len()].copy_from_slice(tail);
+        write(full, &last);
+    }
     Ok(texture.create_view(&Default::default()))
 }
 
-/// A scene uploaded to one device: its buffers, the scene bind group's layout, and the
-/// uniform buffer of per-dispatch parameters.
+/// A scene uploaded to one device: its tables as textures, the scene bind group's layout.
 pub struct GpuScene {
-    /// The tables read as texels (BVH nodes, triangle corners), then those read as storage.
+    /// BVH nodes, triangle corners, shading data, materials, emitters, emitter CDF.
     views: Vec<wgpu::TextureView>,
-    buffers: Vec<wgpu::Buffer>,
     pub layout: wgpu::BindGroupLayout,
 }
 
@@ -92,49 +116,24 @@ fn params_stride(ctx: &GpuContext) -> u64 {
 }
 
 impl GpuScene {
-    /// Uploads the scene's tables, checking each against the adapter's binding limit.
+    /// Uploads the scene's tables, checking each against the adapter's texture limit.
     pub fn new(ctx: &GpuContext, scene: &RenderScene) -> Result<Self, GpuError> {
         let materials: Vec<GpuMaterial> = scene.materials.iter().map(GpuMaterial::from).collect();
-        // wgpu rejects empty bindings: an empty table gets one unused zero element.
-        fn bytes<T: bytemuck::Pod + Default>(v: &[T]) -> Vec<u8> {
-            if v.is_empty() {
-                bytemuck::bytes_of(&T::default()).to_vec()
-            } else {
-                bytemuck::cast_slice(v).to_vec()
-            }
-        }
-        let tables: [(&'static str, Vec<u8>); 6] = [
-            ("BVH nodes", bytes(&scene.bvh.nodes)),
-            ("triangles", bytes(&scene.tris)),
-            ("triangle shading data", bytes(&scene.shading)),
-            ("materials", bytes(&materials)),
-            ("emitters", bytes(&scene.emitters)),
-            ("emitter CDF", bytes(&scene.emitter_cdf)),
+        let tables: [(&'static str, &[u8]); 6] = [
+            ("BVH nodes", bytemuck::cast_slice(&scene.bvh.nodes)),
+            ("triangles", bytemuck::cast_slice(&scene.tris)),
+            (
+                "triangle shading data",
+                bytemuck::cast_slice(&scene.shading),
+            ),
+            ("materials", bytemuck::cast_slice(&materials)),
+            ("emitters", bytemuck::cast_slice(&scene.emitters)),
+            ("emitter CDF", bytemuck::cast_slice(&scene.emitter_cdf)),
         ];
-        let limit = ctx.limits.max_storage_buffer_binding_size;
-        let mut views = Vec::new();
-        let mut buffers = Vec::new();
-        for (i, (what, data)) in tables.iter().enumerate() {
-            if i < TEXTURE_TABLES {
-                views.push(table_texture(ctx, what, data)?);
-                continue;
-            }
-            if data.len() as u64 > limit {
-                return Err(GpuError::TooLarge {
-                    what,
-                    bytes: data.len() as u64,
-                    limit,
-                });
-            }
-            buffers.push(
-                ctx.device
-                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                        label: Some(what),
-                        contents: data,
-                        usage: wgpu::BufferUsages::STORAGE,
-                    }),
-            );
-        }
+        let views = tables
+            .iter()
+            .map(|(what, data)| table_texture(ctx, what, data))
+            .collect::<Result<Vec<_>, _>>()?;
         let mut entries = vec![wgpu::BindGroupLayoutEntry {
             binding: 0,
             visibility: wgpu::ShaderStages::COMPUTE,
@@ -146,7 +145,7 @@ impl GpuScene {
             count: None,
         }];
         entries.extend(
-            (1..=TEXTURE_TABLES as u32).map(|binding| wgpu::BindGroupLayoutEntry {
+            (1..=views.len() as u32).map(|binding| wgpu::BindGroupLayoutEntry {
                 binding,
                 visibility: wgpu::ShaderStages::COMPUTE,
                 ty: wgpu::BindingType::Texture {
@@ -157,7 +156,6 @@ impl GpuScene {
                 count: None,
             }),
         );
-        entries.extend((TEXTURE_TABLES as u32 + 1..=6).map(|b| storage_entry(b, true)));
         let layout = ctx
             .device
             .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -165,11 +163,7 @@ impl GpuScene {
                 entries: &entries,
             });
         ctx.check()?;
-        Ok(Self {
-            views,
-            buffers,
-            layout,
-        })
+        Ok(Self { views, layout })
     }
 
     /// The scene bind group, with `params` (one block per dispatch, at `params_stride`).
@@ -189,15 +183,6 @@ impl GpuScene {
                 .map(|(i, v)| wgpu::BindGroupEntry {
                     binding: i as u32 + 1,
                     resource: wgpu::BindingResource::TextureView(v),
-                }),
-        );
-        entries.extend(
-            self.buffers
-                .iter()
-                .enumerate()
-                .map(|(i, b)| wgpu::BindGroupEntry {
-                    binding: (TEXTURE_TABLES + i) as u32 + 1,
-                    resource: b.as_entire_binding(),
                 }),
         );
         ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
