@@ -71,10 +71,14 @@ fn intersect_triangle(ray: ShearedRay, tri: TriVerts, t_max: f32) -> TriHit {
     let p0 = to_ray_frame(ray, tri.v0.xyz);
     let p1 = to_ray_frame(ray, tri.v1.xyz);
     let p2 = to_ray_frame(ray, tri.v2.xyz);
+    // A hit needs the three edge functions free of opposite signs (zero is either).
     let e0 = p1.x * p2.y - p1.y * p2.x;
     let e1 = p2.x * p0.y - p2.y * p0.x;
+    if (e0 < 0.0 && e1 > 0.0) || (e0 > 0.0 && e1 < 0.0) {
+        return miss;
+    }
     let e2 = p0.x * p1.y - p0.y * p1.x;
-    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+    if (e2 < 0.0 && (e0 > 0.0 || e1 > 0.0)) || (e2 > 0.0 && (e0 < 0.0 || e1 < 0.0)) {
         return miss;
     }
     let det = e0 + e1 + e2;

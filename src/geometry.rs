@@ -104,10 +104,14 @@ pub fn intersect_triangle(ray: &ShearedRay, tri: &TriVerts, t_max: f32) -> Optio
         _ => [a0, a1, a2],
     };
     let (p0, p1, p2) = (to_frame(a0), to_frame(a1), to_frame(a2));
+    // A hit needs the three edge functions free of opposite signs (zero is either).
     let e0 = p1.x * p2.y - p1.y * p2.x;
     let e1 = p2.x * p0.y - p2.y * p0.x;
+    if (e0 < 0.0 && e1 > 0.0) || (e0 > 0.0 && e1 < 0.0) {
+        return None;
+    }
     let e2 = p0.x * p1.y - p0.y * p1.x;
-    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+    if (e2 < 0.0 && (e0 > 0.0 || e1 > 0.0)) || (e2 > 0.0 && (e0 < 0.0 || e1 < 0.0)) {
         return None;
     }
     let det = e0 + e1 + e2;
