@@ -17,8 +17,19 @@ struct Hit {
 }
 
 // mirror: src/bvh/traverse.rs `traverse_closest`
-fn traverse_closest(ray: Ray, t_max_in: f32) -> Hit {
-    var best = Hit(t_max_in, 0.0, 0.0, NO_HIT);
+fn traverse_closest(ray: Ray, t_max: f32) -> Hit {
+    return walk(ray, t_max, false);
+}
+
+// mirror: src/bvh/traverse.rs `traverse_any`
+fn traverse_any(ray: Ray, t_max: f32) -> bool {
+    return walk(ray, t_max, true).tri != NO_HIT;
+}
+
+// The leaves the ray may reach, nearer child first: the closest hit, or with `any_hit`
+// the first found. mirror: src/bvh/traverse.rs `walk`
+fn walk(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
+    var best = Hit(t_max, 0.0, 0.0, NO_HIT);
     let sheared = sheared_ray(ray);
     let root = load_node(0);
     if root.count == 0u && root.left_or_first == 0u {
@@ -37,6 +48,9 @@ fn traverse_closest(ray: Ray, t_max_in: f32) -> Hit {
                 let h = intersect_triangle(sheared, load_tri(i), best.t);
                 if h.hit {
                     best = Hit(h.t, h.u, h.v, i);
+                    if any_hit {
+                        return best;
+                    }
                 }
             }
             if sp == 0u {
@@ -75,63 +89,4 @@ fn traverse_closest(ray: Ray, t_max_in: f32) -> Hit {
         }
     }
     return best;
-}
-
-// mirror: src/bvh/traverse.rs `traverse_any`
-fn traverse_any(ray: Ray, t_max: f32) -> bool {
-    let sheared = sheared_ray(ray);
-    let root = load_node(0);
-    if root.count == 0u && root.left_or_first == 0u {
-        return false;
-    }
-    let inv_dir = safe_inverse(ray.dir);
-    if intersect_aabb(ray.origin, inv_dir, root.min, root.max, t_max) == T_INF {
-        return false;
-    }
-    var sp = 0u;
-    var node = 0u;
-    loop {
-        let n = load_node(node);
-        if n.count > 0u {
-            for (var i = n.left_or_first; i < n.left_or_first + n.count; i++) {
-                if intersect_triangle(sheared, load_tri(i), t_max).hit {
-                    return true;
-                }
-            }
-            if sp == 0u {
-                break;
-            }
-            sp -= 1u;
-            node = stack[sp];
-            continue;
-        }
-        var a = node + 1u;
-        var b = n.left_or_first;
-        let ca = load_node(a);
-        let cb = load_node(b);
-        var ta = intersect_aabb(ray.origin, inv_dir, ca.min, ca.max, t_max);
-        var tb = intersect_aabb(ray.origin, inv_dir, cb.min, cb.max, t_max);
-        if tb < ta {
-            let t = ta;
-            ta = tb;
-            tb = t;
-            let k = a;
-            a = b;
-            b = k;
-        }
-        if ta == T_INF {
-            if sp == 0u {
-                break;
-            }
-            sp -= 1u;
-            node = stack[sp];
-            continue;
-        }
-        node = a;
-        if tb != T_INF {
-            stack[sp] = b;
-            sp += 1u;
-        }
-    }
-    return false;
 }

@@ -60,6 +60,7 @@ pub fn traverse_any(nodes: &[BvhNode], tris: &[TriVerts], ray: &Ray, t_max: f32)
 
 /// Visits the leaves the ray may reach, nearer child first. `leaf(first, count, t_max)`
 /// returns whether to stop and the (possibly shortened) ray extent.
+/// mirror: shaders/traverse.wgsl `walk`
 #[inline]
 fn walk(
     nodes: &[BvhNode],
