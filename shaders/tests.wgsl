@@ -9,6 +9,20 @@ fn case_index(gid: vec3<u32>) -> u32 {
     return gid.x + gid.y * 65535u * 64u;
 }
 
+fn case_count() -> u32 {
+    return arrayLength(&test_in) / 2u;
+}
+
+// Word k (0 or 1) of case i's input.
+fn case_in(i: u32, k: u32) -> vec4<u32> {
+    return test_in[2u * i + k];
+}
+
+fn case_out(i: u32, a: vec4<u32>, b: vec4<u32>) {
+    test_out[2u * i] = a;
+    test_out[2u * i + 1u] = b;
+}
+
 fn f4(v: vec4<u32>) -> vec4<f32> {
     return bitcast<vec4<f32>>(v);
 }
@@ -18,81 +32,75 @@ fn u4(v: vec4<f32>) -> vec4<u32> {
 }
 
 fn case_ray(i: u32) -> Ray {
-    return Ray(f4(test_in[2u * i]).xyz, f4(test_in[2u * i + 1u]).xyz);
+    return Ray(f4(case_in(i, 0u)).xyz, f4(case_in(i, 1u)).xyz);
 }
 
 // in: (pixel, sample, seed, bounce * 16 + dim) | out: (rng_u32, rng_1d bits, pcg4d.yz)
 @compute @workgroup_size(64)
 fn test_rng(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = case_index(gid);
-    if 2u * i >= arrayLength(&test_in) { return; }
-    let k = test_in[2u * i];
+    if i >= case_count() { return; }
+    let k = case_in(i, 0u);
     let rng = Rng(k.x, k.y, k.z);
     let bounce = k.w / DIMS_PER_BOUNCE;
     let dim = k.w % DIMS_PER_BOUNCE;
     let h = pcg4d(vec4<u32>(k.x, k.y, k.w, k.z));
-    test_out[2u * i] = vec4<u32>(rng_u32(rng, bounce, dim), bitcast<u32>(rng_1d(rng, bounce, dim)), h.y, h.z);
-    test_out[2u * i + 1u] = h;
+    case_out(i, vec4<u32>(rng_u32(rng, bounce, dim), bitcast<u32>(rng_1d(rng, bounce, dim)), h.y, h.z), h);
 }
 
 // in: (origin, tri index), (dir, t_max) | out: (hit, t, u, v)
 @compute @workgroup_size(64)
 fn test_intersect_triangle(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = case_index(gid);
-    if 2u * i >= arrayLength(&test_in) { return; }
-    let tri = test_in[2u * i].w;
-    let t_max = f4(test_in[2u * i + 1u]).w;
+    if i >= case_count() { return; }
+    let tri = case_in(i, 0u).w;
+    let t_max = f4(case_in(i, 1u)).w;
     let h = intersect_triangle(sheared_ray(case_ray(i)), load_tri(tri), t_max);
-    test_out[2u * i] = vec4<u32>(select(0u, 1u, h.hit), bitcast<u32>(h.t), bitcast<u32>(h.u), bitcast<u32>(h.v));
-    test_out[2u * i + 1u] = vec4<u32>(0u);
+    case_out(i, vec4<u32>(select(0u, 1u, h.hit), bitcast<u32>(h.t), bitcast<u32>(h.u), bitcast<u32>(h.v)), vec4<u32>(0u));
 }
 
 // in: (origin, node index), (dir, t_max) | out: (t_near of the node's box)
 @compute @workgroup_size(64)
 fn test_intersect_aabb(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = case_index(gid);
-    if 2u * i >= arrayLength(&test_in) { return; }
-    let node = load_node(test_in[2u * i].w);
+    if i >= case_count() { return; }
+    let node = load_node(case_in(i, 0u).w);
     let ray = case_ray(i);
-    let t = intersect_aabb(ray.origin, safe_inverse(ray.dir), node.min, node.max, f4(test_in[2u * i + 1u]).w);
-    test_out[2u * i] = vec4<u32>(bitcast<u32>(t), 0u, 0u, 0u);
-    test_out[2u * i + 1u] = vec4<u32>(0u);
+    let t = intersect_aabb(ray.origin, safe_inverse(ray.dir), node.min, node.max, f4(case_in(i, 1u)).w);
+    case_out(i, vec4<u32>(bitcast<u32>(t), 0u, 0u, 0u), vec4<u32>(0u));
 }
 
 // in: (origin, _), (dir, t_max) | out: (tri, t, u, v), (any-hit, ...)
 @compute @workgroup_size(64)
 fn test_traverse(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = case_index(gid);
-    if 2u * i >= arrayLength(&test_in) { return; }
+    if i >= case_count() { return; }
     let ray = case_ray(i);
-    let t_max = f4(test_in[2u * i + 1u]).w;
+    let t_max = f4(case_in(i, 1u)).w;
     let h = traverse_closest(ray, t_max);
-    test_out[2u * i] = vec4<u32>(h.tri, bitcast<u32>(h.t), bitcast<u32>(h.u), bitcast<u32>(h.v));
-    test_out[2u * i + 1u] = vec4<u32>(select(0u, 1u, traverse_any(ray, t_max)), 0u, 0u, 0u);
+    case_out(i, vec4<u32>(h.tri, bitcast<u32>(h.t), bitcast<u32>(h.u), bitcast<u32>(h.v)), vec4<u32>(select(0u, 1u, traverse_any(ray, t_max)), 0u, 0u, 0u));
 }
 
 // in: (u0, u1, u2, u3) as float bits | out: (disk.xy, triangle.xy), (cosine hemisphere xyz, pdf)
 @compute @workgroup_size(64)
 fn test_sampling(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = case_index(gid);
-    if 2u * i >= arrayLength(&test_in) { return; }
-    let u = f4(test_in[2u * i]);
+    if i >= case_count() { return; }
+    let u = f4(case_in(i, 0u));
     let d = sample_concentric_disk(u.xy);
     let b = sample_uniform_triangle(u.zw);
     let c = sample_cosine_hemisphere(u.xy);
-    test_out[2u * i] = u4(vec4<f32>(d, b));
-    test_out[2u * i + 1u] = u4(vec4<f32>(c, cosine_hemisphere_pdf(c.z)));
+    case_out(i, u4(vec4<f32>(d, b)), u4(vec4<f32>(c, cosine_hemisphere_pdf(c.z))));
 }
 
 // in: (u, _, _, _) | out: (emitter index, its triangle, power_heuristic(u, 1 - u) bits, _)
 @compute @workgroup_size(64)
 fn test_light_pick(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = case_index(gid);
-    if 2u * i >= arrayLength(&test_in) { return; }
-    let u = f4(test_in[2u * i]).x;
+    if i >= case_count() { return; }
+    let u = f4(case_in(i, 0u)).x;
     let k = sample_cdf(u);
-    test_out[2u * i] = vec4<u32>(k, load_emitter(k), bitcast<u32>(power_heuristic(u, 1.0 - u)), 0u);
-    test_out[2u * i + 1u] = vec4<u32>(0u);
+    case_out(i, vec4<u32>(k, load_emitter(k), bitcast<u32>(power_heuristic(u, 1.0 - u)), 0u), vec4<u32>(0u));
 }
 
 // in: (wo xyz, material), (u_lobe, u1, u2, _) | out: (wi xyz, pdf), (weight xyz, flags:
@@ -100,27 +108,25 @@ fn test_light_pick(@builtin(global_invocation_id) gid: vec3<u32>) {
 @compute @workgroup_size(64)
 fn test_bsdf_sample(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = case_index(gid);
-    if 2u * i >= arrayLength(&test_in) { return; }
-    let a = test_in[2u * i];
-    let u = f4(test_in[2u * i + 1u]);
+    if i >= case_count() { return; }
+    let a = case_in(i, 0u);
+    let u = f4(case_in(i, 1u));
     let m = load_material(a.w);
     let s = bsdf_sample(m, f4(a).xyz, u.x, u.yz);
     let flags = select(0u, 1u, s.valid) | select(0u, 2u, s.delta);
-    test_out[2u * i] = u4(vec4<f32>(s.wi, s.pdf));
-    test_out[2u * i + 1u] = vec4<u32>(u4(vec4<f32>(s.weight, 0.0)).xyz, flags);
+    case_out(i, u4(vec4<f32>(s.wi, s.pdf)), vec4<u32>(u4(vec4<f32>(s.weight, 0.0)).xyz, flags));
 }
 
 // in: (wo xyz, material), (wi xyz, _) | out: (f cos xyz, pdf)
 @compute @workgroup_size(64)
 fn test_bsdf_eval(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = case_index(gid);
-    if 2u * i >= arrayLength(&test_in) { return; }
-    let a = test_in[2u * i];
+    if i >= case_count() { return; }
+    let a = case_in(i, 0u);
     let wo = f4(a).xyz;
-    let wi = f4(test_in[2u * i + 1u]).xyz;
+    let wi = f4(case_in(i, 1u)).xyz;
     let m = load_material(a.w);
-    test_out[2u * i] = u4(vec4<f32>(bsdf_eval(m, wo, wi), bsdf_pdf(m, wo, wi)));
-    test_out[2u * i + 1u] = vec4<u32>(0u);
+    case_out(i, u4(vec4<f32>(bsdf_eval(m, wo, wi), bsdf_pdf(m, wo, wi))), vec4<u32>(0u));
 }
 
 // in: (x, y, sample, _) | out: (camera ray origin, _), (dir, _) ; and the full path:
@@ -128,22 +134,20 @@ fn test_bsdf_eval(@builtin(global_invocation_id) gid: vec3<u32>) {
 @compute @workgroup_size(64)
 fn test_camera_ray(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = case_index(gid);
-    if 2u * i >= arrayLength(&test_in) { return; }
-    let k = test_in[2u * i];
+    if i >= case_count() { return; }
+    let k = case_in(i, 0u);
     let rng = Rng(k.y * params.width + k.x, k.z, params.seed);
     let ray = generate_camera_ray(k.x, k.y, rng);
-    test_out[2u * i] = u4(vec4<f32>(ray.origin, 0.0));
-    test_out[2u * i + 1u] = u4(vec4<f32>(ray.dir, 0.0));
+    case_out(i, u4(vec4<f32>(ray.origin, 0.0)), u4(vec4<f32>(ray.dir, 0.0)));
 }
 
 // in: (x, y, sample, _) | out: (radiance xyz, rays)
 @compute @workgroup_size(64)
 fn test_trace_path(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = case_index(gid);
-    if 2u * i >= arrayLength(&test_in) { return; }
-    let k = test_in[2u * i];
+    if i >= case_count() { return; }
+    let k = case_in(i, 0u);
     let rng = Rng(k.y * params.width + k.x, k.z, params.seed);
     let l = trace_path(generate_camera_ray(k.x, k.y, rng), rng);
-    test_out[2u * i] = u4(l);
-    test_out[2u * i + 1u] = vec4<u32>(0u);
+    case_out(i, u4(l), vec4<u32>(0u));
 }
