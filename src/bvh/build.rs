@@ -19,6 +19,9 @@ pub struct BuildParams {
     pub intersect_cost: f32,
     /// Leaves never hold more than this, whatever the SAH prefers.
     pub max_leaf_size: usize,
+    /// Give a node of `n` triangles only `max(n, 4)` bins when that is fewer: most of the
+    /// others would stay empty, and the sweep over them dominates small nodes.
+    pub shrink_bins: bool,
 }
 
 impl BuildParams {
@@ -29,13 +32,16 @@ impl BuildParams {
             traversal_cost: 1.0,
             intersect_cost: 1.0,
             max_leaf_size: 16,
+            shrink_bins: true,
         }
     }
 
-    /// 32 bins per axis: a slower build, the baseline the fast one is measured against.
+    /// 32 bins per axis at every node: a slower build, the baseline the fast one is
+    /// measured against.
     pub fn precise() -> Self {
         Self {
             bins: 32,
+            shrink_bins: false,
             ..Self::fast()
         }
     }
@@ -262,10 +268,13 @@ fn bin_scale(b: &Bounds, bins: usize) -> Vec3A {
     )
 }
 
-/// Bins for a node of `n` triangles: small nodes get fewer, as more bins than triangles
-/// mostly stay empty and only lengthen the sweep.
+/// Bins for a node of `n` triangles (see [`BuildParams::shrink_bins`]).
 fn bins_for(ctx: &Context, n: usize) -> usize {
-    ctx.bins.min(n.max(4))
+    if ctx.params.shrink_bins {
+        ctx.bins.min(n.max(4))
+    } else {
+        ctx.bins
+    }
 }
 
 /// The cheapest binned split and its SAH cost.
