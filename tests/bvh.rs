@@ -194,3 +194,24 @@ fn sah_leaves_vary_in_size_and_the_tree_costs_less_than_a_flat_list() {
         precise.stats.sah_cost
     );
 }
+
+/// The tree is the same whatever the number of threads that build it: subtrees are built
+/// in parallel, but each writes only the node slots it owns.
+#[test]
+fn build_is_independent_of_the_thread_count() {
+    let (v, f) = icosphere(6);
+    let mut corners: Vec<[Vec3; 3]> = f.iter().map(|t| t.map(|k| v[k as usize])).collect();
+    corners.extend(generated_mesh());
+    let bounds: Vec<Aabb> = corners.iter().map(|c| Aabb::from_points(c)).collect();
+    let build = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| Bvh::build(&bounds, &BuildParams::default()).unwrap())
+    };
+    let (one, four) = (build(1), build(4));
+    assert!(one.nodes.len() > 10_000);
+    assert!(one.nodes == four.nodes, "the trees differ");
+    assert_eq!(one.order, four.order);
+}
