@@ -250,15 +250,7 @@ fn missing_mtl_is_a_warning() {
 
 #[test]
 fn missing_mtl_warning_reaches_scene_load() {
-    let dir = temp_dir("missing-mtl-scene");
-    std::fs::copy(data("missing_mtl.obj"), dir.join("m.obj")).unwrap();
-    std::fs::write(
-        dir.join("s.toml"),
-        "[camera]\nposition = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\n[[objects]]\nmesh = \"m.obj\"\n",
-    )
-    .unwrap();
-    let result = load_scene(&dir.join("s.toml"));
-    std::fs::remove_dir_all(&dir).unwrap();
+    let (_, result) = load_through_scene("missing-mtl-scene", "missing_mtl.obj");
     let s = result.unwrap();
     assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
     assert!(s.warnings[0].contains("m.obj"), "{:?}", s.warnings);
@@ -468,15 +460,7 @@ fn valid_crlf_file_with_every_corner_form_loads() {
 
 #[test]
 fn scene_file_error_names_the_obj_and_its_line() {
-    let dir = temp_dir("obj-line-scene");
-    std::fs::copy(data("bad_vn.obj"), dir.join("m.obj")).unwrap();
-    std::fs::write(
-        dir.join("s.toml"),
-        "[camera]\nposition = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\n[[objects]]\nmesh = \"m.obj\"\n",
-    )
-    .unwrap();
-    let result = load_scene(&dir.join("s.toml"));
-    std::fs::remove_dir_all(&dir).unwrap();
+    let (dir, result) = load_through_scene("obj-line-scene", "bad_vn.obj");
     let msg = result.unwrap_err().to_string();
     let expected = format!("{}:5: malformed normal (`vn`)", dir.join("m.obj").display());
     assert!(msg.starts_with(&expected), "{msg}");
@@ -589,6 +573,24 @@ fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("meshtrace-test-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
+}
+
+/// Loads `tests/data/{obj}`, copied to `m.obj`, through a scene file naming it, in a fresh
+/// folder `name`; returns the folder (removed again) and the result.
+fn load_through_scene(
+    name: &str,
+    obj: &str,
+) -> (PathBuf, Result<meshtrace::scene::Scene, SceneError>) {
+    let dir = temp_dir(name);
+    std::fs::copy(data(obj), dir.join("m.obj")).unwrap();
+    std::fs::write(
+        dir.join("s.toml"),
+        "[camera]\nposition = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\n[[objects]]\nmesh = \"m.obj\"\n",
+    )
+    .unwrap();
+    let result = load_scene(&dir.join("s.toml"));
+    std::fs::remove_dir_all(&dir).unwrap();
+    (dir, result)
 }
 
 #[test]
