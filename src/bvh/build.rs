@@ -4,7 +4,7 @@
 
 use super::{Bvh, BvhNode, BvhStats};
 use crate::math::Aabb;
-use glam::{IVec3, Vec3A};
+use glam::Vec3A;
 use rayon::prelude::*;
 
 /// How to build: bin count and the SAH's cost model. Leaf sizes are not fixed: a node
@@ -249,12 +249,11 @@ fn build_node(
     }
 }
 
-/// Which bin of each axis a doubled centroid falls in.
+/// Which bin of each axis a doubled centroid falls in. Clamped as floats, in SIMD, so the
+/// conversions to integers need no range checks of their own.
 #[inline]
 fn bin_index(c: Vec3A, b: &Bounds, scale: Vec3A, bins: usize) -> [usize; 3] {
-    let k = ((c - b.cmin) * scale)
-        .as_ivec3()
-        .clamp(IVec3::ZERO, IVec3::splat(bins as i32 - 1));
+    let k = ((c - b.cmin) * scale).clamp(Vec3A::ZERO, Vec3A::splat((bins - 1) as f32));
     [k.x as usize, k.y as usize, k.z as usize]
 }
 
@@ -349,11 +348,11 @@ fn partition(
 ) -> (usize, Bounds, Bounds) {
     let nb = bins_for(ctx, refs.len());
     let scale = bin_scale(b, nb);
-    let (axis, last) = (split.axis, nb as i32 - 1);
+    let (axis, last) = (split.axis, (nb - 1) as f32);
     // `bin_index` on one axis only: the same arithmetic, so the counts match the bins'.
     let goes_left = |r: &PrimRef| {
-        let k = (r.centroid2()[axis] - b.cmin[axis]) * scale[axis];
-        ((k as i32).clamp(0, last) as usize) < split.bin
+        let k = ((r.centroid2()[axis] - b.cmin[axis]) * scale[axis]).clamp(0.0, last);
+        (k as usize) < split.bin
     };
     let (mut left, mut right) = (Bounds::EMPTY, Bounds::EMPTY);
     let (mut i, mut j) = (0, refs.len());
