@@ -249,8 +249,8 @@ fn build_node(
     }
 }
 
-/// Which bin of each axis a doubled centroid falls in. Clamped as floats, in SIMD, so the
-/// conversions to integers need no range checks of their own.
+/// Which bin of each axis a doubled centroid falls in. Clamped as floats, by one SIMD min
+/// and max, rather than as integers lane by lane.
 #[inline]
 fn bin_index(c: Vec3A, b: &Bounds, scale: Vec3A, bins: usize) -> [usize; 3] {
     let k = ((c - b.cmin) * scale).clamp(Vec3A::ZERO, Vec3A::splat((bins - 1) as f32));
