@@ -299,7 +299,8 @@ fn find_split_in<const N: usize>(
     for r in refs {
         let k = bin_index(r.centroid2(), b, scale, nb);
         for (axis, &k) in k.iter().enumerate() {
-            let bin = &mut bins[axis][k];
+            // k < nb <= N, and N is a power of two: the mask only drops the bounds check.
+            let bin = &mut bins[axis][k & (N - 1)];
             bin.min = bin.min.min(r.min);
             bin.max = bin.max.max(r.max);
             bin.count += 1;
