@@ -1,6 +1,6 @@
 //! The bounding volume hierarchy over the scene's triangles.
 //!
-//! `build` makes a binned-SAH tree, `flatten` lays it out depth-first as the 32-byte
+//! `build` makes a binned-SAH tree and lays it out depth-first as the 32-byte
 //! [`BvhNode`]s that both the CPU and the GPU traverse, `traverse` holds the closest-hit
 //! and any-hit kernels, and `validate` checks the invariants the kernels rely on.
 //! This module does no I/O.
@@ -9,7 +9,7 @@ mod build;
 mod traverse;
 mod validate;
 
-pub use build::BuildParams;
+pub use build::{BuildParams, MAX_BINS};
 pub use traverse::{Hit, traverse_any, traverse_closest};
 pub use validate::validate;
 
