@@ -105,7 +105,8 @@ pub struct RenderArgs {
     /// Seed of the random sequences; the same seed gives the same image.
     #[arg(long)]
     pub seed: Option<u32>,
-    /// Renderer; by default the GPU, falling back to the CPU where no adapter exists.
+    /// Renderer; by default the GPU on a hardware adapter, else the CPU (which is faster
+    /// than a software adapter such as lavapipe, and makes the same image).
     #[arg(long, value_enum)]
     pub device: Option<Device>,
     /// GPU adapter: an index or a name substring from `meshtrace adapters` (or set WGPU_ADAPTER_NAME).
@@ -202,10 +203,23 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     let total = settings.width as u64 * settings.height as u64 * settings.spp as u64;
     let bar = progress_bar(total, args.quiet);
     let start = Instant::now();
+    let chosen = args.adapter.is_some() || std::env::var_os("WGPU_ADAPTER_NAME").is_some();
     let gpu = match args.device {
         Some(Device::Cpu) => None,
         Some(Device::Gpu) => Some(GpuContext::new(args.adapter.as_deref())?),
         None => match GpuContext::new(args.adapter.as_deref()) {
+            // Software adapters are picked last, so this one is all there is. Unless asked
+            // for by name, it loses to the CPU renderer on the very cores it would run on
+            // (BENCHMARKS.md), and both make the same image.
+            Ok(ctx) if ctx.adapter.software && !chosen => {
+                if !args.quiet {
+                    eprintln!(
+                        "notice: the Vulkan adapter, {}, is a software driver; rendering with the faster CPU renderer (--device gpu uses the adapter anyway)",
+                        ctx.adapter.name
+                    );
+                }
+                None
+            }
             Ok(ctx) => Some(ctx),
             Err(GpuError::NoAdapter) => {
                 eprintln!(

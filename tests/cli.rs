@@ -341,3 +341,32 @@ fn interruption_writes_the_partial_image_unless_told_not_to() {
         let _ = std::fs::remove_file(dir.0.join("part.png"));
     }
 }
+
+/// With no `--device`, a software adapter (lavapipe) gives way to the faster CPU renderer,
+/// saying so; naming the adapter uses it. Only where every adapter is a software one.
+#[test]
+fn a_software_adapter_gives_way_to_the_cpu_unless_named() {
+    let out = Command::new(env!("CARGO_BIN_EXE_meshtrace"))
+        .arg("adapters")
+        .env("NODEVICE_SELECT", "1")
+        .output()
+        .unwrap();
+    let listing = String::from_utf8_lossy(&out.stdout).into_owned();
+    let adapters: Vec<&str> = listing.lines().filter(|l| l.contains("(Vulkan,")).collect();
+    if adapters.is_empty() || !adapters.iter().all(|l| l.contains("(Vulkan, Cpu,")) {
+        eprintln!("skipped: needs software Vulkan adapters only; found {adapters:?}");
+        return;
+    }
+    let dir = TempDir::new("software");
+    let args = [
+        "render", "-o", "a.png", "--spp", "1", "--width", "8", "--height", "8",
+    ];
+    let (code, stderr) = run(&dir, &args);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stderr.contains("is a software driver"), "{stderr}");
+    assert!(stderr.contains("on the CPU"), "{stderr}");
+    let (code, stderr) = run(&dir, &[&args[..], &["--adapter", "0"]].concat());
+    assert_eq!(code, 0, "{stderr}");
+    assert!(!stderr.contains("software driver"), "{stderr}");
+    assert!(!stderr.contains("on the CPU"), "{stderr}");
+}

@@ -12,6 +12,9 @@ pub struct AdapterSummary {
     pub backend: String,
     pub device_type: String,
     pub driver: String,
+    /// A driver that runs on the CPU, such as lavapipe: the GPU renderer works there, but
+    /// the CPU renderer is faster on the same cores.
+    pub software: bool,
 }
 
 fn instance() -> wgpu::Instance {
@@ -38,6 +41,7 @@ fn summary(index: usize, a: &wgpu::Adapter) -> AdapterSummary {
         backend: format!("{:?}", info.backend),
         device_type: format!("{:?}", info.device_type),
         driver,
+        software: info.device_type == wgpu::DeviceType::Cpu,
     }
 }
 
@@ -61,7 +65,8 @@ pub struct GpuContext {
 
 impl GpuContext {
     /// Opens the adapter named by `spec` (an index or a case-insensitive name substring),
-    /// else by `WGPU_ADAPTER_NAME`, else the first discrete GPU, else the first adapter.
+    /// else by `WGPU_ADAPTER_NAME`, else the first of the best kind: discrete, integrated,
+    /// virtual, other, and software last.
     pub fn new(spec: Option<&str>) -> Result<Self, GpuError> {
         let instance = instance();
         let all = adapters(&instance);
@@ -72,9 +77,8 @@ impl GpuContext {
         let spec = spec.or(env.as_deref());
         let index = match spec {
             Some(s) => pick(&all, s)?,
-            None => all
-                .iter()
-                .position(|a| a.get_info().device_type == wgpu::DeviceType::DiscreteGpu)
+            None => (0..all.len())
+                .min_by_key(|&i| preference(all[i].get_info().device_type))
                 .unwrap_or(0),
         };
         let adapter = &all[index];
@@ -125,6 +129,17 @@ impl GpuContext {
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| GpuError::Fault(e.to_string()))?;
         self.check()
+    }
+}
+
+/// The rank of an adapter kind when none is asked for; lower is preferred.
+fn preference(kind: wgpu::DeviceType) -> u8 {
+    match kind {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Other => 3,
+        wgpu::DeviceType::Cpu => 4,
     }
 }
 
