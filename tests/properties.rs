@@ -634,3 +634,87 @@ fn syntax_error_quoting_a_carriage_return_is_one_line() {
     let msg = err.to_string();
     assert!(!msg.contains(['\n', '\r']), "not one line: {msg:?}");
 }
+
+// ---------------------------------------------------------------------------------------
+// Watertightness
+// ---------------------------------------------------------------------------------------
+
+/// Möller–Trumbore as the triangle test was before it became watertight: here only to show
+/// that the rays of `no_ray_escapes_a_closed_mesh` do find the gaps of a test that is not.
+fn moller_trumbore_hits(ray: &Ray, [v0, v1, v2]: [Vec3; 3]) -> bool {
+    let (e1, e2) = (v1 - v0, v2 - v0);
+    let p = ray.dir.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 {
+        return false;
+    }
+    let inv = 1.0 / det;
+    let s = ray.origin - v0;
+    let u = s.dot(p) * inv;
+    let q = s.cross(e1);
+    let v = ray.dir.dot(q) * inv;
+    u >= 0.0 && v >= 0.0 && u + v <= 1.0 && e2.dot(q) * inv > 0.0
+}
+
+/// Rays from inside a closed mesh, aimed exactly at its vertices and edge midpoints (where
+/// neighbouring triangles meet) and in random directions, all hit it: no ray slips between
+/// two triangles that share an edge. Far from the origin, so that rounding is coarse.
+#[test]
+fn no_ray_escapes_a_closed_mesh() {
+    let (v, f) = meshtrace::scene::sphere::icosphere(4);
+    let (scale, offset) = (Vec3::new(1.7, 0.9, 1.3), Vec3::new(1000.25, -3.5, 7.0));
+    let verts: Vec<Vec3> = v.iter().map(|&p| p * scale + offset).collect();
+    let tris: Vec<[Vec3; 3]> = f.iter().map(|t| t.map(|k| verts[k as usize])).collect();
+    let bounds: Vec<Aabb> = tris.iter().map(|c| Aabb::from_points(c)).collect();
+    let bvh = Bvh::build(&bounds, &BuildParams::default()).unwrap();
+    let leaf_tris: Vec<TriVerts> = bvh
+        .order
+        .iter()
+        .map(|&i| TriVerts::new(tris[i as usize]))
+        .collect();
+    let mut targets: Vec<Vec3> = verts.clone();
+    for t in &f {
+        for k in 0..3 {
+            targets.push(0.5 * (verts[t[k] as usize] + verts[t[(k + 1) % 3] as usize]));
+        }
+    }
+    let mut state = 0x9e3779b9u32;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 17;
+        state ^= state << 5;
+        state as f32 / u32::MAX as f32
+    };
+    for _ in 0..20_000 {
+        targets.push(offset + Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5));
+    }
+    let origins = [offset, offset + Vec3::new(0.1, -0.2, 0.05)];
+    let (mut escapes, mut mt_escapes, mut rays) = (Vec::new(), 0, 0);
+    for origin in origins {
+        for &target in &targets {
+            let ray = Ray::new(origin, target - origin);
+            if ray.dir == Vec3::ZERO {
+                continue;
+            }
+            rays += 1;
+            if traverse_closest(&bvh.nodes, &leaf_tris, &ray, T_INF).is_none() {
+                escapes.push(ray);
+            }
+            mt_escapes += !tris.iter().any(|&t| moller_trumbore_hits(&ray, t)) as usize;
+        }
+    }
+    eprintln!(
+        "{rays} rays from inside: {} escape (Möller–Trumbore: {mt_escapes})",
+        escapes.len()
+    );
+    assert!(
+        escapes.is_empty(),
+        "{} rays escape, e.g. {:?}",
+        escapes.len(),
+        &escapes[..escapes.len().min(3)]
+    );
+    assert!(
+        mt_escapes > 0,
+        "the rays no longer probe the edges: Möller–Trumbore lets none escape"
+    );
+}
