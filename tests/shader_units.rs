@@ -713,6 +713,75 @@ fn traversal_rays(rs: &RenderScene, r: &mut SplitMix, n: usize) -> Vec<Case> {
     cases
 }
 
+/// The GPU twin of tests/properties.rs `no_ray_escapes_a_closed_mesh`: rays from inside a
+/// closed icosphere far from the origin, aimed at its vertices, edge midpoints and random
+/// points, all hit it (closest and any hit), however the driver contracts the arithmetic.
+#[test]
+fn no_ray_escapes_a_closed_mesh() {
+    let Some(ctx) = common::gpu("no_ray_escapes_a_closed_mesh") else {
+        return;
+    };
+    let (verts, faces) = meshtrace::scene::sphere::icosphere(4);
+    let (scale, offset) = (Vec3::new(1.7, 0.9, 1.3), Vec3::new(1000.25, -3.5, 7.0));
+    let mesh = Mesh {
+        positions: verts.iter().map(|&v| v * scale + offset).collect(),
+        triangles: faces
+            .iter()
+            .map(|&p| Triangle {
+                p,
+                n: [NO_NORMAL; 3],
+                material: 0,
+            })
+            .collect(),
+        ..Mesh::default()
+    };
+    let mut targets = mesh.positions.clone();
+    for t in &faces {
+        for k in 0..3 {
+            let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
+            targets.push(0.5 * (mesh.positions[a] + mesh.positions[b]));
+        }
+    }
+    let mut r = SplitMix(7);
+    targets.extend((0..20_000).map(|_| offset + r.vec3(-0.5, 0.5)));
+    let camera = Camera::new(offset + 5.0 * Vec3::Z, offset, Vec3::Y, 40.0, 0.0, None).unwrap();
+    let settings = RenderSettings {
+        width: 8,
+        height: 8,
+        spp: 1,
+        max_depth: 2,
+        seed: 0,
+    };
+    let sky = Sky::Constant(Vec3::ONE);
+    let scene = common::scene(mesh, mesh_materials(), camera, sky, settings);
+    let rs = RenderScene::new(&scene, &BuildParams::default()).expect("BVH");
+    let cases: Vec<Case> = [offset, offset + Vec3::new(0.1, -0.2, 0.05)]
+        .iter()
+        .flat_map(|&o| targets.iter().map(move |&t| (o, t - o)))
+        .filter(|&(_, d)| d != Vec3::ZERO)
+        .map(|(o, d)| [word(o, 0), word(d, b(T_INF))])
+        .collect();
+    let out = run(&ctx, &rs, &settings, "test_traverse", &cases);
+    let escapes: Vec<&Case> = cases
+        .iter()
+        .zip(&out)
+        .filter(|(_, o)| o[0][0] == u32::MAX || o[1][0] != 1)
+        .map(|(c, _)| c)
+        .collect();
+    eprintln!(
+        "no_ray_escapes_a_closed_mesh: {} rays from inside, {} escape on the GPU",
+        cases.len(),
+        escapes.len()
+    );
+    assert!(
+        escapes.is_empty(),
+        "{} rays escape, e.g. origin {} dir {}",
+        escapes.len(),
+        v3(escapes[0][0]),
+        v3(escapes[0][1])
+    );
+}
+
 #[test]
 fn traverse_matches() {
     let Some(ctx) = common::gpu("traverse_matches") else {
