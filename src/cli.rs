@@ -419,6 +419,22 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
                     m.unit
                 );
             }
+            // The comparison the numbers are for, from medians of this one run.
+            for g in measures.iter().filter(|m| m.device == "gpu") {
+                if let Some(c) = measures
+                    .iter()
+                    .find(|c| c.device == "cpu" && c.measure == g.measure && c.median > 0.0)
+                {
+                    println!(
+                        "{:<22} {:<6} {:<16} {:>12.3} {:>18}  GPU/CPU",
+                        g.scene,
+                        "ratio",
+                        g.measure,
+                        g.median / c.median,
+                        ""
+                    );
+                }
+            }
         }
         all.extend(measures);
     }
