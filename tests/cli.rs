@@ -2,6 +2,8 @@
 //! file and the line or field at fault, and leaves no output file behind. And on good input,
 //! it writes the image and nothing else.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -369,4 +371,69 @@ fn a_software_adapter_gives_way_to_the_cpu_unless_named() {
     assert_eq!(code, 0, "{stderr}");
     assert!(!stderr.contains("software driver"), "{stderr}");
     assert!(!stderr.contains("on the CPU"), "{stderr}");
+}
+
+/// `bench --json` gives one object per (scene, device, measure) with its unit; the table
+/// ends each scene with GPU/CPU ratio rows when both devices ran.
+#[test]
+fn bench_reports_every_measure() {
+    let dir = TempDir::new("bench");
+    let small = [
+        "bench",
+        "builtin:cornell",
+        "--repeats",
+        "1",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "1",
+    ];
+    let out = Command::new(env!("CARGO_BIN_EXE_meshtrace"))
+        .args(small)
+        .args(["--device", "cpu", "--json"])
+        .current_dir(&dir.0)
+        .env("NODEVICE_SELECT", "1")
+        .output()
+        .unwrap();
+    let json = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for (device, measure, unit) in [
+        ("host", "bvh_build", "Mtris/s"),
+        ("host", "sah_cost", "cost"),
+        ("cpu", "primary_rays", "Mrays/s"),
+        ("cpu", "incoherent_rays", "Mrays/s"),
+        ("cpu", "shadow_rays", "Mrays/s"),
+        ("cpu", "path_samples", "Msamples/s"),
+        ("cpu", "path_rays", "Mrays/s"),
+    ] {
+        let object = format!(
+            r#"{{"scene": "cornell", "device": "{device}", "measure": "{measure}", "unit": "{unit}", "median": "#
+        );
+        assert_eq!(json.matches(&object).count(), 1, "{object} in {json}");
+    }
+    assert!(json.trim_start().starts_with('[') && json.trim_end().ends_with(']'));
+    if common::gpu("bench_reports_every_measure, GPU part").is_none() {
+        return;
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_meshtrace"))
+        .args(small)
+        .current_dir(&dir.0)
+        .env("NODEVICE_SELECT", "1")
+        .output()
+        .unwrap();
+    let table = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let ratios: Vec<&str> = table.lines().filter(|l| l.contains(" ratio ")).collect();
+    assert_eq!(ratios.len(), 5, "{table}");
+    assert!(ratios.iter().all(|l| l.ends_with("GPU/CPU")), "{table}");
 }
