@@ -232,6 +232,7 @@ fn build_node(
     node[0] = BvhNode {
         min: b.min.into(),
         max: b.max.into(),
+        // Until `compact`: the second child's slot, relative to this one.
         left_or_first: 2 * split_at as u32,
         count: 0,
     };
