@@ -42,6 +42,7 @@ fn to_ray_frame(ray: ShearedRay, v: vec3<f32>) -> vec3<f32> {
 }
 
 // gamma(n) = n u / (1 - n u), u = 2^-24: the rounding bound of n operations (pbrt-v4).
+// mirror: src/geometry.rs `GAMMA_2` `GAMMA_3`
 const GAMMA_2: f32 = 1.1920930376163597e-7;
 const GAMMA_3: f32 = 1.788139627478813e-7;
 

@@ -137,6 +137,11 @@ const fn gamma(n: f32) -> f32 {
     n * u / (1.0 - n * u)
 }
 
+/// `γ(2)`. mirror: shaders/intersect.wgsl `GAMMA_2`
+pub const GAMMA_2: f32 = gamma(2.0);
+/// `γ(3)`. mirror: shaders/intersect.wgsl `GAMMA_3`
+pub const GAMMA_3: f32 = gamma(3.0);
+
 /// A bound on the rounding of the sum of [`intersect_triangle`]'s edge functions: that of
 /// the sheared corners (`γ(3)` of their unsheared terms) carried through the products,
 /// plus that of the products themselves. Only called for hits, so its cost is rarely paid.
@@ -145,7 +150,7 @@ fn edge_rounding(ray: &ShearedRay, tri: &TriVerts, p: [Vec3; 3]) -> f32 {
     let s = ray.shear;
     let err = |v: [f32; 4]| {
         let a = permute(Vec3::new(v[0], v[1], v[2]) - ray.origin, ray.kz).abs();
-        gamma(3.0) * Vec3::new(a.x + s.x.abs() * a.z, a.y + s.y.abs() * a.z, 0.0)
+        GAMMA_3 * Vec3::new(a.x + s.x.abs() * a.z, a.y + s.y.abs() * a.z, 0.0)
     };
     let d = [err(tri.v0), err(tri.v1), err(tri.v2)];
     let edge = |i: usize, j: usize| {
@@ -154,14 +159,14 @@ fn edge_rounding(ray: &ShearedRay, tri: &TriVerts, p: [Vec3; 3]) -> f32 {
             + a.x * d[j].y
             + b.x * d[i].y
             + a.y * d[j].x
-            + gamma(2.0) * (a.x * b.y + a.y * b.x)
+            + GAMMA_2 * (a.x * b.y + a.y * b.x)
     };
     edge(1, 2) + edge(2, 0) + edge(0, 1)
 }
 
 /// Relative slack of the slab test: `2 γ(3)` (PBR 4th ed., 6.8.2) bounds the rounding of
-/// each slab distance.
-const SLAB_SLACK: f32 = 1.0 + 2.0 * gamma(3.0);
+/// each slab distance. mirror: shaders/intersect.wgsl `SLAB_SLACK`
+pub const SLAB_SLACK: f32 = 1.0 + 2.0 * GAMMA_3;
 
 /// Conservative slab test: the distance at which the ray enters the box, or [`T_INF`]
 /// if it misses it before `t_max`. The exit distance is widened by the rounding bound,

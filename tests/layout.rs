@@ -315,18 +315,34 @@ fn constants_match_rust() {
         dims.sort();
         dims.dedup();
         assert_eq!(dims.len(), 11, "DIM_* values collide");
-        // T_INF is the largest finite float on both sides.
-        let (_, t_inf) = module
-            .constants
-            .iter()
-            .find(|(_, c)| c.name.as_deref() == Some("T_INF"))
-            .expect("T_INF");
-        match module.global_expressions[t_inf.init] {
-            naga::Expression::Literal(naga::Literal::F32(v)) => {
-                assert_eq!(v, meshtrace::geometry::T_INF, "{what}: T_INF")
-            }
-            ref e => panic!("T_INF is {e:?}"),
+        // Floats: T_INF is the largest finite float on both sides; the rounding bounds of
+        // the intersection tests are the same bits.
+        use meshtrace::geometry::{GAMMA_2, GAMMA_3, SLAB_SLACK, T_INF};
+        let floats = [
+            ("T_INF", T_INF),
+            ("GAMMA_2", GAMMA_2),
+            ("GAMMA_3", GAMMA_3),
+            ("SLAB_SLACK", SLAB_SLACK),
+        ];
+        for (name, value) in floats {
+            assert_eq!(
+                wgsl_f32_const(&module, name).to_bits(),
+                value.to_bits(),
+                "{what}: WGSL `{name}` differs from Rust"
+            );
         }
+    }
+}
+
+fn wgsl_f32_const(module: &naga::Module, name: &str) -> f32 {
+    let (_, c) = module
+        .constants
+        .iter()
+        .find(|(_, c)| c.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("WGSL constant `{name}` not found"));
+    match module.global_expressions[c.init] {
+        naga::Expression::Literal(naga::Literal::F32(v)) => v,
+        ref e => panic!("WGSL constant `{name}` is not an f32 literal: {e:?}"),
     }
 }
 
