@@ -713,19 +713,18 @@ fn traversal_rays(rs: &RenderScene, r: &mut SplitMix, n: usize) -> Vec<Case> {
     cases
 }
 
-/// The GPU twin of tests/properties.rs `no_ray_escapes_a_closed_mesh`: rays from inside a
-/// closed icosphere far from the origin, aimed at its vertices, edge midpoints and random
-/// points, all hit it (closest and any hit), however the driver contracts the arithmetic.
+/// The GPU twin of tests/properties.rs `no_ray_escapes_a_closed_mesh`: every ray of
+/// [`common::closed_mesh_probe`] hits the mesh (closest and any hit), however the driver
+/// contracts the arithmetic.
 #[test]
 fn no_ray_escapes_a_closed_mesh() {
     let Some(ctx) = common::gpu("no_ray_escapes_a_closed_mesh") else {
         return;
     };
-    let (verts, faces) = meshtrace::scene::sphere::icosphere(4);
-    let (scale, offset) = (Vec3::new(1.7, 0.9, 1.3), Vec3::new(1000.25, -3.5, 7.0));
+    let probe = common::closed_mesh_probe();
     let mesh = Mesh {
-        positions: verts.iter().map(|&v| v * scale + offset).collect(),
-        triangles: faces
+        triangles: probe
+            .faces
             .iter()
             .map(|&p| Triangle {
                 p,
@@ -733,18 +732,11 @@ fn no_ray_escapes_a_closed_mesh() {
                 material: 0,
             })
             .collect(),
+        positions: probe.positions,
         ..Mesh::default()
     };
-    let mut targets = mesh.positions.clone();
-    for t in &faces {
-        for k in 0..3 {
-            let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
-            targets.push(0.5 * (mesh.positions[a] + mesh.positions[b]));
-        }
-    }
-    let mut r = SplitMix(7);
-    targets.extend((0..20_000).map(|_| offset + r.vec3(-0.5, 0.5)));
-    let camera = Camera::new(offset + 5.0 * Vec3::Z, offset, Vec3::Y, 40.0, 0.0, None).unwrap();
+    let centre = probe.rays[0].0;
+    let camera = Camera::new(centre + 5.0 * Vec3::Z, centre, Vec3::Y, 40.0, 0.0, None).unwrap();
     let settings = RenderSettings {
         width: 8,
         height: 8,
@@ -755,11 +747,10 @@ fn no_ray_escapes_a_closed_mesh() {
     let sky = Sky::Constant(Vec3::ONE);
     let scene = common::scene(mesh, mesh_materials(), camera, sky, settings);
     let rs = RenderScene::new(&scene, &BuildParams::default()).expect("BVH");
-    let cases: Vec<Case> = [offset, offset + Vec3::new(0.1, -0.2, 0.05)]
+    let cases: Vec<Case> = probe
+        .rays
         .iter()
-        .flat_map(|&o| targets.iter().map(move |&t| (o, t - o)))
-        .filter(|&(_, d)| d != Vec3::ZERO)
-        .map(|(o, d)| [word(o, 0), word(d, b(T_INF))])
+        .map(|&(o, d)| [word(o, 0), word(d, b(T_INF))])
         .collect();
     let out = run(&ctx, &rs, &settings, "test_traverse", &cases);
     let escapes: Vec<&Case> = cases

@@ -96,3 +96,45 @@ pub fn mean_and_stderr(values: &[f32]) -> (f64, f64) {
         / (n - 1.0);
     (mean, (var / n).sqrt())
 }
+
+/// A closed icosphere (level 4) far from the origin, where rounding is coarse, and the rays
+/// that probe it from inside: from two interior points towards every vertex, every edge
+/// midpoint (where neighbouring triangles meet) and 20,000 random points. A watertight
+/// triangle test lets none of them escape.
+pub struct ClosedMeshProbe {
+    pub positions: Vec<Vec3>,
+    pub faces: Vec<[u32; 3]>,
+    /// (origin, direction) of every ray.
+    pub rays: Vec<(Vec3, Vec3)>,
+}
+
+pub fn closed_mesh_probe() -> ClosedMeshProbe {
+    let (v, faces) = meshtrace::scene::sphere::icosphere(4);
+    let (scale, offset) = (Vec3::new(1.7, 0.9, 1.3), Vec3::new(1000.25, -3.5, 7.0));
+    let positions: Vec<Vec3> = v.iter().map(|&p| p * scale + offset).collect();
+    let mut targets = positions.clone();
+    for t in &faces {
+        for k in 0..3 {
+            let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
+            targets.push(0.5 * (positions[a] + positions[b]));
+        }
+    }
+    let mut state = 0x9e3779b9u32;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 17;
+        state ^= state << 5;
+        state as f32 / u32::MAX as f32 - 0.5
+    };
+    targets.extend((0..20_000).map(|_| offset + Vec3::new(next(), next(), next())));
+    let rays = [offset, offset + Vec3::new(0.1, -0.2, 0.05)]
+        .iter()
+        .flat_map(|&o| targets.iter().map(move |&t| (o, t - o)))
+        .filter(|&(_, d)| d != Vec3::ZERO)
+        .collect();
+    ClosedMeshProbe {
+        positions,
+        faces,
+        rays,
+    }
+}
