@@ -43,14 +43,19 @@ fn data(name: &str) -> PathBuf {
         .join(name)
 }
 
-/// Runs `meshtrace args...` in `dir`; returns (exit code, stderr).
-fn run(dir: &TempDir, args: &[&str]) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_meshtrace"))
+/// Runs `meshtrace args...` in `dir`; returns its output.
+fn output(dir: &TempDir, args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_meshtrace"))
         .args(args)
         .current_dir(&dir.0)
         .env("NODEVICE_SELECT", "1")
         .output()
-        .unwrap();
+        .unwrap()
+}
+
+/// Runs `meshtrace args...` in `dir`; returns (exit code, stderr).
+fn run(dir: &TempDir, args: &[&str]) -> (i32, String) {
+    let out = output(dir, args);
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
     (out.status.code().unwrap_or(-1), stderr)
 }
@@ -282,10 +287,7 @@ fn a_render_writes_exactly_its_output() {
     assert_eq!(code, 0, "{stderr}");
     assert!(stderr.contains("16x16 at 1 spp on the CPU"), "{stderr}");
     let (code, stdout) = {
-        let out = Command::new(env!("CARGO_BIN_EXE_meshtrace"))
-            .args(["info", "builtin:cornell"])
-            .output()
-            .unwrap();
+        let out = output(&dir, &["info", "builtin:cornell"]);
         (
             out.status.code(),
             String::from_utf8_lossy(&out.stdout).into_owned(),
@@ -348,18 +350,13 @@ fn interruption_writes_the_partial_image_unless_told_not_to() {
 /// saying so; naming the adapter uses it. Only where every adapter is a software one.
 #[test]
 fn a_software_adapter_gives_way_to_the_cpu_unless_named() {
-    let out = Command::new(env!("CARGO_BIN_EXE_meshtrace"))
-        .arg("adapters")
-        .env("NODEVICE_SELECT", "1")
-        .output()
-        .unwrap();
-    let listing = String::from_utf8_lossy(&out.stdout).into_owned();
+    let dir = TempDir::new("software");
+    let listing = String::from_utf8_lossy(&output(&dir, &["adapters"]).stdout).into_owned();
     let adapters: Vec<&str> = listing.lines().filter(|l| l.contains("(Vulkan,")).collect();
     if adapters.is_empty() || !adapters.iter().all(|l| l.contains("(Vulkan, Cpu,")) {
         eprintln!("skipped: needs software Vulkan adapters only; found {adapters:?}");
         return;
     }
-    let dir = TempDir::new("software");
     let args = [
         "render", "-o", "a.png", "--spp", "1", "--width", "8", "--height", "8",
     ];
@@ -390,13 +387,7 @@ fn bench_reports_every_measure() {
         "--spp",
         "1",
     ];
-    let out = Command::new(env!("CARGO_BIN_EXE_meshtrace"))
-        .args(small)
-        .args(["--device", "cpu", "--json"])
-        .current_dir(&dir.0)
-        .env("NODEVICE_SELECT", "1")
-        .output()
-        .unwrap();
+    let out = output(&dir, &[&small[..], &["--device", "cpu", "--json"]].concat());
     let json = String::from_utf8_lossy(&out.stdout);
     assert!(
         out.status.success(),
@@ -421,12 +412,7 @@ fn bench_reports_every_measure() {
     if common::gpu("bench_reports_every_measure, GPU part").is_none() {
         return;
     }
-    let out = Command::new(env!("CARGO_BIN_EXE_meshtrace"))
-        .args(small)
-        .current_dir(&dir.0)
-        .env("NODEVICE_SELECT", "1")
-        .output()
-        .unwrap();
+    let out = output(&dir, &small);
     let table = String::from_utf8_lossy(&out.stdout);
     assert!(
         out.status.success(),
