@@ -203,24 +203,23 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     let total = settings.width as u64 * settings.height as u64 * settings.spp as u64;
     let bar = progress_bar(total, args.quiet);
     let start = Instant::now();
-    let chosen = args.adapter.is_some() || std::env::var_os("WGPU_ADAPTER_NAME").is_some();
     let gpu = match args.device {
         Some(Device::Cpu) => None,
         Some(Device::Gpu) => Some(GpuContext::new(args.adapter.as_deref())?),
-        None => match GpuContext::new(args.adapter.as_deref()) {
-            // Software adapters are picked last, so this one is all there is. Unless asked
+        None => match gpu::choose_adapter(args.adapter.as_deref()) {
+            // Software adapters are ranked last, so this one is all there is. Unless asked
             // for by name, it loses to the CPU renderer on the very cores it would run on
-            // (BENCHMARKS.md), and both make the same image.
-            Ok(ctx) if ctx.adapter.software && !chosen => {
+            // (BENCHMARKS.md), and both make the same image; no device is opened for it.
+            Ok((adapter, false)) if adapter.software => {
                 if !args.quiet {
                     eprintln!(
                         "notice: the Vulkan adapter, {}, is a software driver; rendering with the faster CPU renderer (--device gpu uses the adapter anyway)",
-                        ctx.adapter.name
+                        adapter.name
                     );
                 }
                 None
             }
-            Ok(ctx) => Some(ctx),
+            Ok(_) => Some(GpuContext::new(args.adapter.as_deref())?),
             Err(GpuError::NoAdapter) => {
                 eprintln!(
                     "notice: no Vulkan adapter found; rendering on the CPU (install mesa-vulkan-drivers for lavapipe)"

@@ -68,19 +68,8 @@ impl GpuContext {
     /// else by `WGPU_ADAPTER_NAME`, else the first of the best kind: discrete, integrated,
     /// virtual, other, and software last.
     pub fn new(spec: Option<&str>) -> Result<Self, GpuError> {
-        let instance = instance();
-        let all = adapters(&instance);
-        if all.is_empty() {
-            return Err(GpuError::NoAdapter);
-        }
-        let env = std::env::var("WGPU_ADAPTER_NAME").ok();
-        let spec = spec.or(env.as_deref());
-        let index = match spec {
-            Some(s) => pick(&all, s)?,
-            None => (0..all.len())
-                .min_by_key(|&i| preference(all[i].get_info().device_type))
-                .unwrap_or(0),
-        };
+        let all = adapters(&instance());
+        let (index, _) = choose(&all, spec)?;
         let adapter = &all[index];
         let limits = adapter.limits();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
@@ -129,6 +118,32 @@ impl GpuContext {
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| GpuError::Fault(e.to_string()))?;
         self.check()
+    }
+}
+
+/// The adapter [`GpuContext::new`] would open for `spec`, and whether it was asked for
+/// (by `spec` or `WGPU_ADAPTER_NAME`) rather than ranked; no device is opened.
+pub fn choose_adapter(spec: Option<&str>) -> Result<(AdapterSummary, bool), GpuError> {
+    let all = adapters(&instance());
+    let (index, named) = choose(&all, spec)?;
+    Ok((summary(index, &all[index]), named))
+}
+
+/// The index of the adapter named by `spec`, else by `WGPU_ADAPTER_NAME`, else of the best
+/// kind, and whether it was named.
+fn choose(all: &[wgpu::Adapter], spec: Option<&str>) -> Result<(usize, bool), GpuError> {
+    if all.is_empty() {
+        return Err(GpuError::NoAdapter);
+    }
+    let env = std::env::var("WGPU_ADAPTER_NAME").ok();
+    match spec.or(env.as_deref()) {
+        Some(s) => Ok((pick(all, s)?, true)),
+        None => Ok((
+            (0..all.len())
+                .min_by_key(|&i| preference(all[i].get_info().device_type))
+                .unwrap_or(0),
+            false,
+        )),
     }
 }
 

@@ -13,7 +13,7 @@ pub mod layout;
 mod renderer;
 pub mod shader;
 
-pub use context::{AdapterSummary, GpuContext, list_adapters};
+pub use context::{AdapterSummary, GpuContext, choose_adapter, list_adapters};
 pub use renderer::{GpuScene, render};
 
 /// What can go wrong on the GPU path; each message says what to do about it.
