@@ -22,6 +22,10 @@ pub struct BuildParams {
     /// Give a node of `n` triangles only `max(n, 4)` bins when that is fewer: most of the
     /// others would stay empty, and the sweep over them dominates small nodes.
     pub shrink_bins: bool,
+    /// Nodes of at most this many triangles try every split of their centroids sorted
+    /// along each axis instead of binning: exact, and cheaper than bins at that size.
+    /// 0 turns it off.
+    pub exact_below: usize,
 }
 
 impl BuildParams {
@@ -33,6 +37,7 @@ impl BuildParams {
             intersect_cost: 1.0,
             max_leaf_size: 16,
             shrink_bins: true,
+            exact_below: 8,
         }
     }
 
@@ -42,6 +47,7 @@ impl BuildParams {
         Self {
             bins: 32,
             shrink_bins: false,
+            exact_below: 0,
             ..Self::fast()
         }
     }
@@ -68,6 +74,11 @@ struct PrimRef {
 }
 
 impl PrimRef {
+    const EMPTY: PrimRef = PrimRef {
+        min: Vec3A::INFINITY,
+        max: Vec3A::NEG_INFINITY,
+    };
+
     /// Twice the centroid: binning needs only its order.
     fn centroid2(&self) -> Vec3A {
         self.min + self.max
@@ -154,7 +165,10 @@ pub fn build(bounds: &[Aabb], params: &BuildParams) -> Bvh {
         .reduce(|| Bounds::EMPTY, Bounds::union);
     let mut slots = vec![BvhNode::default(); 2 * n - 1];
     let ctx = Context {
-        params,
+        params: &BuildParams {
+            exact_below: params.exact_below.min(EXACT_MAX),
+            ..params.clone()
+        },
         bins: params.bins.clamp(2, MAX_BINS),
     };
     build_node(&ctx, &mut refs, &mut order, root, 0, &mut slots);
@@ -186,10 +200,16 @@ const EMPTY_BIN: Bin = Bin {
     count: 0,
 };
 
-/// A chosen split: the axis and the first bin of the right side.
+/// A chosen split: the axis, the first bin of the right side, and the boxes of both
+/// sides, which the bins already hold.
 struct Split {
     axis: usize,
     bin: usize,
+    left: (Vec3A, Vec3A),
+    right: (Vec3A, Vec3A),
+    /// Triangles on the left, which the partition must reproduce: the boxes above hold
+    /// exactly the triangles the bins counted.
+    left_count: usize,
 }
 
 /// Builds the subtree over `refs` (with their input indices in `ids`; the first sits at
@@ -215,17 +235,13 @@ fn build_node(
     if n == 1 {
         return leaf(slots);
     }
-    let (split_at, left, right) = match find_split(ctx, refs, &b) {
-        Some((cost, split)) if cost < p.intersect_cost * n as f32 || n > p.max_leaf_size => {
-            partition(ctx, refs, ids, &b, &split)
-        }
-        Some(_) => return leaf(slots),
-        // All centroids coincide: no plane separates them.
-        None if n <= p.max_leaf_size => return leaf(slots),
-        None => {
-            let half = n / 2;
-            (half, Bounds::of(&refs[..half]), Bounds::of(&refs[half..]))
-        }
+    let split = if n <= p.exact_below {
+        exact_split(p, refs, ids, &b)
+    } else {
+        binned_split(ctx, refs, ids, &b)
+    };
+    let Some((split_at, left, right)) = split else {
+        return leaf(slots);
     };
     let (node, rest) = slots.split_at_mut(1);
     let (left_slots, right_slots) = rest.split_at_mut(2 * split_at - 1);
@@ -250,11 +266,117 @@ fn build_node(
     }
 }
 
+/// The binned split of a node, partitioned: the left count and both sides' bounds, or
+/// `None` when the node should stay a leaf.
+fn binned_split(
+    ctx: &Context,
+    refs: &mut [PrimRef],
+    ids: &mut [u32],
+    b: &Bounds,
+) -> Option<(usize, Bounds, Bounds)> {
+    let p = ctx.params;
+    let n = refs.len();
+    match find_split(ctx, refs, b) {
+        Some((cost, split)) if cost < p.intersect_cost * n as f32 || n > p.max_leaf_size => {
+            Some(partition(ctx, refs, ids, b, &split))
+        }
+        Some(_) => None,
+        // All centroids coincide: no plane separates them.
+        None if n <= p.max_leaf_size => None,
+        None => {
+            let half = n / 2;
+            Some((half, Bounds::of(&refs[..half]), Bounds::of(&refs[half..])))
+        }
+    }
+}
+
+/// The most triangles [`BuildParams::exact_below`] may name.
+const EXACT_MAX: usize = 8;
+
+/// The best split of a small node over every prefix of its centroids sorted along each
+/// axis, applied to `refs` and `ids` like [`binned_split`]. Every binned split is one of
+/// these candidates, so the result is never worse than binning's.
+fn exact_split(
+    p: &BuildParams,
+    refs: &mut [PrimRef],
+    ids: &mut [u32],
+    b: &Bounds,
+) -> Option<(usize, Bounds, Bounds)> {
+    let n = refs.len();
+    debug_assert!((2..=EXACT_MAX).contains(&n));
+    // (area-weighted cost, axis, order along it, left count)
+    let mut best: Option<(f32, [usize; EXACT_MAX], usize)> = None;
+    for axis in 0..3 {
+        let mut order = [0usize; EXACT_MAX];
+        order.iter_mut().enumerate().for_each(|(i, o)| *o = i);
+        let key = |i: usize| refs[i].centroid2()[axis];
+        // Insertion sort: stable, and the fastest at this size.
+        for i in 1..n {
+            let mut j = i;
+            while j > 0 && key(order[j - 1]) > key(order[j]) {
+                order.swap(j - 1, j);
+                j -= 1;
+            }
+        }
+        let mut right_cost = [0.0f32; EXACT_MAX];
+        let (mut min, mut max) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+        for k in (1..n).rev() {
+            min = min.min(refs[order[k]].min);
+            max = max.max(refs[order[k]].max);
+            right_cost[k] = area(min, max) * (n - k) as f32;
+        }
+        let (mut min, mut max) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+        for k in 1..n {
+            min = min.min(refs[order[k - 1]].min);
+            max = max.max(refs[order[k - 1]].max);
+            let cost = area(min, max) * k as f32 + right_cost[k];
+            if best.as_ref().is_none_or(|(c, ..)| cost < *c) {
+                best = Some((cost, order, k));
+            }
+        }
+    }
+    let (cost, order, split_at) = best?;
+    let parent_area = area(b.min, b.max).max(f32::MIN_POSITIVE);
+    let cost = p.traversal_cost + p.intersect_cost * cost / parent_area;
+    if cost >= p.intersect_cost * n as f32 && n <= p.max_leaf_size {
+        return None;
+    }
+    let mut old_refs = [PrimRef::EMPTY; EXACT_MAX];
+    let mut old_ids = [0u32; EXACT_MAX];
+    old_refs[..n].copy_from_slice(refs);
+    old_ids[..n].copy_from_slice(ids);
+    for (k, &i) in order[..n].iter().enumerate() {
+        refs[k] = old_refs[i];
+        ids[k] = old_ids[i];
+    }
+    Some((
+        split_at,
+        Bounds::of(&refs[..split_at]),
+        Bounds::of(&refs[split_at..]),
+    ))
+}
+
 /// Which bin of each axis a doubled centroid falls in. Clamped as floats, by one SIMD min
 /// and max, rather than as integers lane by lane.
 #[inline]
 fn bin_index(c: Vec3A, b: &Bounds, scale: Vec3A, bins: usize) -> [usize; 3] {
     let k = ((c - b.cmin) * scale).clamp(Vec3A::ZERO, Vec3A::splat((bins - 1) as f32));
+    truncate(k)
+}
+
+/// `k` truncated lane by lane; `k` is in `0..MAX_BINS`. On x86-64 one instruction
+/// converts all lanes, where `as` would convert them one by one and test each for
+/// saturation.
+#[inline]
+fn truncate(k: Vec3A) -> [usize; 3] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{__m128, _mm_cvttps_epi32};
+        // SAFETY: SSE2 is part of every x86-64 target.
+        let k: [i32; 4] = bytemuck::cast(unsafe { _mm_cvttps_epi32(__m128::from(k)) });
+        [k[0] as usize, k[1] as usize, k[2] as usize]
+    }
+    #[cfg(not(target_arch = "x86_64"))]
     [k.x as usize, k.y as usize, k.z as usize]
 }
 
@@ -308,39 +430,92 @@ fn find_split_in<const N: usize>(
         }
     }
     // Costs are compared as area-weighted counts; the SAH's constants apply at the end.
-    let mut best: Option<(f32, Split)> = None;
-    let mut right_cost = [0.0f32; N];
-    for (axis, bins) in bins.iter().enumerate() {
-        if scale[axis] == 0.0 {
-            continue;
-        }
-        let (mut min, mut max, mut count) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY, 0u32);
-        for k in (1..nb).rev() {
-            min = min.min(bins[k].min);
-            max = max.max(bins[k].max);
-            count += bins[k].count;
-            right_cost[k] = area(min, max) * count as f32;
-        }
-        let (mut min, mut max, mut count) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY, 0u32);
-        for k in 1..nb {
-            min = min.min(bins[k - 1].min);
-            max = max.max(bins[k - 1].max);
-            count += bins[k - 1].count;
-            if count == 0 || count as usize == refs.len() {
-                continue;
-            }
-            let cost = area(min, max) * count as f32 + right_cost[k];
-            if best.as_ref().is_none_or(|(c, _)| cost < *c) {
-                best = Some((cost, Split { axis, bin: k }));
+    // The three axes sweep together, one SIMD lane each.
+    let n = refs.len() as u32;
+    let mut right_cost = [Vec3A::ZERO; N];
+    let mut side = Side::EMPTY;
+    for k in (1..nb).rev() {
+        side.grow([&bins[0][k], &bins[1][k], &bins[2][k]]);
+        right_cost[k] = side.cost();
+    }
+    let (mut best, mut best_bin) = (Vec3A::INFINITY, [0usize; 3]);
+    let mut side = Side::EMPTY;
+    for k in 1..nb {
+        side.grow([&bins[0][k - 1], &bins[1][k - 1], &bins[2][k - 1]]);
+        // A plane with everything on one side splits nothing.
+        let valid = side.count.map(|c| c != 0 && c != n);
+        let cost = side.cost() + right_cost[k];
+        for axis in 0..3 {
+            if valid[axis] && cost[axis] < best[axis] {
+                best[axis] = cost[axis];
+                best_bin[axis] = k;
             }
         }
     }
+    // The first axis wins ties, as a sweep axis by axis would have it.
+    let axis = (0..3).fold(0, |a, i| if best[i] < best[a] { i } else { a });
+    let (cost, bin) = (best[axis], best_bin[axis]);
+    if cost == f32::INFINITY {
+        return None;
+    }
+    let union = |bins: &[Bin]| {
+        bins.iter().fold((Vec3A::INFINITY, Vec3A::NEG_INFINITY), |(min, max), b| {
+            (min.min(b.min), max.max(b.max))
+        })
+    };
     let parent_area = area(b.min, b.max).max(f32::MIN_POSITIVE);
-    best.map(|(c, split)| (p.traversal_cost + p.intersect_cost * c / parent_area, split))
+    let split = Split {
+        axis,
+        bin,
+        left: union(&bins[axis][..bin]),
+        right: union(&bins[axis][bin..nb]),
+        left_count: bins[axis][..bin].iter().map(|b| b.count as usize).sum(),
+    };
+    Some((p.traversal_cost + p.intersect_cost * cost / parent_area, split))
+}
+
+/// One side of a plane in each axis's sweep: the union of the bins passed so far.
+struct Side {
+    min: [Vec3A; 3],
+    max: [Vec3A; 3],
+    count: [u32; 3],
+}
+
+impl Side {
+    const EMPTY: Side = Side {
+        min: [Vec3A::INFINITY; 3],
+        max: [Vec3A::NEG_INFINITY; 3],
+        count: [0; 3],
+    };
+
+    fn grow(&mut self, bins: [&Bin; 3]) {
+        for (axis, bin) in bins.into_iter().enumerate() {
+            self.min[axis] = self.min[axis].min(bin.min);
+            self.max[axis] = self.max[axis].max(bin.max);
+            self.count[axis] += bin.count;
+        }
+    }
+
+    /// Area times count for each axis's side, in the lane of that axis.
+    fn cost(&self) -> Vec3A {
+        let [e0, e1, e2] =
+            std::array::from_fn(|a| (self.max[a] - self.min[a]).max(Vec3A::ZERO));
+        let x = Vec3A::new(e0.x, e1.x, e2.x);
+        let y = Vec3A::new(e0.y, e1.y, e2.y);
+        let z = Vec3A::new(e0.z, e1.z, e2.z);
+        let count = Vec3A::new(
+            self.count[0] as f32,
+            self.count[1] as f32,
+            self.count[2] as f32,
+        );
+        2.0 * (x * y + y * z + z * x) * count
+    }
 }
 
 /// Moves the triangles left of the split to the front (ids alongside); returns their
-/// count and the bounds of both sides.
+/// count and the bounds of both sides. The boxes come from the bins; each side's centroid
+/// bounds are the parent's clipped to (twice) that side's box, which holds every centroid
+/// of it: looser than a pass over the triangles would find, and that pass is saved.
 fn partition(
     ctx: &Context,
     refs: &mut [PrimRef],
@@ -348,28 +523,36 @@ fn partition(
     b: &Bounds,
     split: &Split,
 ) -> (usize, Bounds, Bounds) {
-    let nb = bins_for(ctx, refs.len());
-    let scale = bin_scale(b, nb);
-    let (axis, last) = (split.axis, (nb - 1) as f32);
-    // `bin_index` on one axis only: the same arithmetic, so the counts match the bins'.
-    let goes_left = |r: &PrimRef| {
-        let k = ((r.centroid2()[axis] - b.cmin[axis]) * scale[axis]).clamp(0.0, last);
-        (k as usize) < split.bin
-    };
-    let (mut left, mut right) = (Bounds::EMPTY, Bounds::EMPTY);
+    let scale = bin_scale(b, bins_for(ctx, refs.len()))[split.axis];
+    let (axis, cmin, bin) = (split.axis, b.cmin[split.axis], split.bin as f32);
+    // `bin_index` on one axis with the same arithmetic, so the counts match the bins'.
+    // Its clamp and truncation change nothing here: below 0 stays below `bin`, above the
+    // last bin stays at or above it, and truncation keeps `k < bin` for whole `bin`.
+    let goes_left = |r: &PrimRef| ((r.min[axis] + r.max[axis]) - cmin) * scale < bin;
     let (mut i, mut j) = (0, refs.len());
-    while i < j {
-        if goes_left(&refs[i]) {
-            left.grow(&refs[i]);
+    loop {
+        while i < j && goes_left(&refs[i]) {
             i += 1;
-        } else {
-            j -= 1;
-            refs.swap(i, j);
-            ids.swap(i, j);
-            right.grow(&refs[j]);
         }
+        while i < j && !goes_left(&refs[j - 1]) {
+            j -= 1;
+        }
+        if i + 1 >= j {
+            break;
+        }
+        refs.swap(i, j - 1);
+        ids.swap(i, j - 1);
+        i += 1;
+        j -= 1;
     }
-    (i, left, right)
+    let side = |(min, max): (Vec3A, Vec3A)| Bounds {
+        min,
+        max,
+        cmin: b.cmin.max(2.0 * min),
+        cmax: b.cmax.min(2.0 * max),
+    };
+    debug_assert_eq!(i, split.left_count, "partition and bins disagree");
+    (i, side(split.left), side(split.right))
 }
 
 /// Lays the used slots out depth-first (first child right after its parent) and fills in
