@@ -1,6 +1,6 @@
 //! Binned SAH construction (Wald 2007, "On fast Construction of SAH-based Bounding Volume
-//! Hierarchies") over triangle boxes partitioned in place, then a depth-first compaction
-//! into [`BvhNode`]s.
+//! Hierarchies") over triangle boxes partitioned in place, laid out depth-first as
+//! [`BvhNode`]s.
 
 use super::{Bvh, BvhNode, BvhStats};
 use crate::math::Aabb;
@@ -131,9 +131,8 @@ fn area(min: Vec3A, max: Vec3A) -> f32 {
     2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
 }
 
-/// Builds the tree. Each subtree of `n` triangles owns `2n - 1` node slots, enough for
-/// any shape, so subtrees are written in parallel without coordination; [`compact`] then
-/// lays the used slots out depth-first.
+/// Builds the tree. Large subtrees are built by parallel tasks into their own arrays,
+/// which are then copied once into the depth-first layout, in parallel too.
 pub fn build(bounds: &[Aabb], params: &BuildParams) -> Bvh {
     let n = bounds.len();
     let mut stats = BvhStats {
@@ -163,7 +162,6 @@ pub fn build(bounds: &[Aabb], params: &BuildParams) -> Bvh {
         .par_chunks(PARALLEL_THRESHOLD)
         .map(Bounds::of)
         .reduce(|| Bounds::EMPTY, Bounds::union);
-    let mut slots = vec![BvhNode::default(); 2 * n - 1];
     let ctx = Context {
         params: &BuildParams {
             exact_below: params.exact_below.min(EXACT_MAX),
@@ -171,10 +169,12 @@ pub fn build(bounds: &[Aabb], params: &BuildParams) -> Bvh {
         },
         bins: params.bins.clamp(2, MAX_BINS),
     };
-    build_node(&ctx, &mut refs, &mut order, root, 0, &mut slots);
+    let part = build_part(&ctx, &mut refs, &mut order, root, 0);
     drop(refs);
-    let nodes = compact(&slots, &mut stats, params);
-    stats.nodes = nodes.len();
+    let mut nodes = bytemuck::zeroed_vec(part.len());
+    part.write(&mut nodes, 0);
+    drop(part);
+    fill_stats(&nodes, &mut stats, params);
     Bvh {
         nodes,
         order,
@@ -212,57 +212,141 @@ struct Split {
     left_count: usize,
 }
 
+/// A built subtree: its nodes depth-first, or, where the build forked into two tasks, its
+/// root and the two parts the tasks built. [`Part::write`] joins them into one array.
+enum Part {
+    /// Interior nodes link to their second child by index from the first node here.
+    Nodes(Vec<BvhNode>),
+    Fork {
+        root: BvhNode,
+        children: Box<[Part; 2]>,
+        len: usize,
+    },
+}
+
+impl Part {
+    fn len(&self) -> usize {
+        match self {
+            Part::Nodes(nodes) => nodes.len(),
+            Part::Fork { len, .. } => *len,
+        }
+    }
+
+    /// Writes the part into `out` (exactly its length), which begins at node `base` of
+    /// the final array.
+    fn write(&self, out: &mut [BvhNode], base: u32) {
+        match self {
+            Part::Nodes(nodes) => {
+                for (dst, src) in out.iter_mut().zip(nodes) {
+                    *dst = *src;
+                    if !src.is_leaf() {
+                        dst.left_or_first += base;
+                    }
+                }
+            }
+            Part::Fork { root, children, .. } => {
+                let [left, right] = &**children;
+                let (first, rest) = out.split_at_mut(1);
+                let (lo, ro) = rest.split_at_mut(left.len());
+                let right_base = base + 1 + left.len() as u32;
+                first[0] = BvhNode {
+                    left_or_first: right_base,
+                    ..*root
+                };
+                rayon::join(
+                    || left.write(lo, base + 1),
+                    || right.write(ro, right_base),
+                );
+            }
+        }
+    }
+}
+
 /// Builds the subtree over `refs` (with their input indices in `ids`; the first sits at
-/// leaf position `offset`) into `slots`, whose first entry is the subtree's root.
-fn build_node(
+/// leaf position `offset`), forking into parallel tasks while it is large.
+fn build_part(
     ctx: &Context,
     refs: &mut [PrimRef],
     ids: &mut [u32],
     b: Bounds,
     offset: u32,
-    slots: &mut [BvhNode],
-) {
-    let p = ctx.params;
+) -> Part {
     let n = refs.len();
-    let leaf = |slots: &mut [BvhNode]| {
-        slots[0] = BvhNode {
-            min: b.min.into(),
-            max: b.max.into(),
-            left_or_first: offset,
-            count: n as u32,
-        };
-    };
-    if n == 1 {
-        return leaf(slots);
+    if n < PARALLEL_THRESHOLD {
+        let mut nodes = Vec::with_capacity(2 * n - 1);
+        build_nodes(ctx, refs, ids, b, offset, &mut nodes);
+        return Part::Nodes(nodes);
     }
-    let split = if n <= p.exact_below {
-        exact_split(p, refs, ids, &b)
-    } else {
-        binned_split(ctx, refs, ids, &b)
-    };
-    let Some((split_at, left, right)) = split else {
-        return leaf(slots);
-    };
-    let (node, rest) = slots.split_at_mut(1);
-    let (left_slots, right_slots) = rest.split_at_mut(2 * split_at - 1);
-    node[0] = BvhNode {
-        min: b.min.into(),
-        max: b.max.into(),
-        // Until `compact`: the second child's slot, relative to this one.
-        left_or_first: 2 * split_at as u32,
-        count: 0,
+    let Some((split_at, left, right)) = split_node(ctx, refs, ids, &b) else {
+        return Part::Nodes(vec![leaf_node(&b, offset, n)]);
     };
     let (lr, rr) = refs.split_at_mut(split_at);
     let (li, ri) = ids.split_at_mut(split_at);
     let right_offset = offset + split_at as u32;
-    if n >= PARALLEL_THRESHOLD {
-        rayon::join(
-            || build_node(ctx, lr, li, left, offset, left_slots),
-            || build_node(ctx, rr, ri, right, right_offset, right_slots),
-        );
-    } else {
-        build_node(ctx, lr, li, left, offset, left_slots);
-        build_node(ctx, rr, ri, right, right_offset, right_slots);
+    let (l, r) = rayon::join(
+        || build_part(ctx, lr, li, left, offset),
+        || build_part(ctx, rr, ri, right, right_offset),
+    );
+    Part::Fork {
+        root: interior_node(&b),
+        len: 1 + l.len() + r.len(),
+        children: Box::new([l, r]),
+    }
+}
+
+/// [`build_part`] on one thread, appending the subtree's nodes depth-first to `out`.
+fn build_nodes(
+    ctx: &Context,
+    refs: &mut [PrimRef],
+    ids: &mut [u32],
+    b: Bounds,
+    offset: u32,
+    out: &mut Vec<BvhNode>,
+) {
+    let n = refs.len();
+    let Some((split_at, left, right)) = split_node(ctx, refs, ids, &b) else {
+        return out.push(leaf_node(&b, offset, n));
+    };
+    let index = out.len();
+    out.push(interior_node(&b));
+    let (lr, rr) = refs.split_at_mut(split_at);
+    let (li, ri) = ids.split_at_mut(split_at);
+    build_nodes(ctx, lr, li, left, offset, out);
+    out[index].left_or_first = out.len() as u32;
+    build_nodes(ctx, rr, ri, right, offset + split_at as u32, out);
+}
+
+fn leaf_node(b: &Bounds, offset: u32, n: usize) -> BvhNode {
+    BvhNode {
+        min: b.min.into(),
+        max: b.max.into(),
+        left_or_first: offset,
+        count: n as u32,
+    }
+}
+
+/// An interior node; its link to the second child is filled in once that is placed.
+fn interior_node(b: &Bounds) -> BvhNode {
+    BvhNode {
+        min: b.min.into(),
+        max: b.max.into(),
+        left_or_first: 0,
+        count: 0,
+    }
+}
+
+/// How a node splits: the left count and both sides' bounds, with `refs` and `ids`
+/// partitioned to match; `None` when it stays a leaf.
+fn split_node(
+    ctx: &Context,
+    refs: &mut [PrimRef],
+    ids: &mut [u32],
+    b: &Bounds,
+) -> Option<(usize, Bounds, Bounds)> {
+    match refs.len() {
+        1 => None,
+        n if n <= ctx.params.exact_below => exact_split(ctx.params, refs, ids, b),
+        _ => binned_split(ctx, refs, ids, b),
     }
 }
 
@@ -555,20 +639,13 @@ fn partition(
     (i, side(split.left), side(split.right))
 }
 
-/// Lays the used slots out depth-first (first child right after its parent) and fills in
-/// the statistics.
-fn compact(slots: &[BvhNode], stats: &mut BvhStats, p: &BuildParams) -> Vec<BvhNode> {
-    let mut out: Vec<BvhNode> = Vec::with_capacity(slots.len() / 2 + 1);
-    let root_area = slots[0].bounds().area().max(f32::MIN_POSITIVE);
-    // (slot, depth, index in `out` of the parent whose second child this is)
-    let mut stack: Vec<(usize, u32, Option<usize>)> = vec![(0, 0, None)];
-    while let Some((slot, depth, parent)) = stack.pop() {
-        if let Some(parent) = parent {
-            out[parent].left_or_first = out.len() as u32;
-        }
-        let node = slots[slot];
-        let index = out.len();
-        out.push(node);
+/// Fills in the tree's statistics from its final layout.
+fn fill_stats(nodes: &[BvhNode], stats: &mut BvhStats, p: &BuildParams) {
+    stats.nodes = nodes.len();
+    let root_area = nodes[0].bounds().area().max(f32::MIN_POSITIVE);
+    let mut stack: Vec<(usize, u32)> = vec![(0, 0)];
+    while let Some((index, depth)) = stack.pop() {
+        let node = &nodes[index];
         stats.depth = stats.depth.max(depth);
         let rel_area = node.bounds().area() / root_area;
         if node.is_leaf() {
@@ -581,10 +658,8 @@ fn compact(slots: &[BvhNode], stats: &mut BvhStats, p: &BuildParams) -> Vec<BvhN
             stats.leaf_sizes[c] += 1;
         } else {
             stats.sah_cost += rel_area * p.traversal_cost;
-            // The second child is visited after the whole first subtree.
-            stack.push((slot + node.left_or_first as usize, depth + 1, Some(index)));
-            stack.push((slot + 1, depth + 1, None));
+            stack.push((node.left_or_first as usize, depth + 1));
+            stack.push((index + 1, depth + 1));
         }
     }
-    out
 }
