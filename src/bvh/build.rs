@@ -200,6 +200,19 @@ const EMPTY_BIN: Bin = Bin {
     count: 0,
 };
 
+/// Nodes of at least this many triangles bin them in parallel.
+const PARALLEL_BINNING: usize = 1 << 16;
+
+/// The bins of two sets of triangles, as one.
+fn merge_bins<const N: usize>(mut a: [[Bin; N]; 3], b: [[Bin; N]; 3]) -> [[Bin; N]; 3] {
+    for (a, b) in a.iter_mut().flatten().zip(b.iter().flatten()) {
+        a.min = a.min.min(b.min);
+        a.max = a.max.max(b.max);
+        a.count += b.count;
+    }
+    a
+}
+
 /// A chosen split: the axis, the first bin of the right side, and the boxes of both
 /// sides, which the bins already hold.
 struct Split {
@@ -388,16 +401,22 @@ fn exact_split(
 ) -> Option<(usize, Bounds, Bounds)> {
     let n = refs.len();
     debug_assert!((2..=EXACT_MAX).contains(&n));
-    // (area-weighted cost, axis, order along it, left count)
+    // (area-weighted cost, order along the axis, left count)
     let mut best: Option<(f32, [usize; EXACT_MAX], usize)> = None;
-    for axis in 0..3 {
-        let mut order = [0usize; EXACT_MAX];
-        order.iter_mut().enumerate().for_each(|(i, o)| *o = i);
-        let key = |i: usize| refs[i].centroid2()[axis];
+    let identity: [usize; EXACT_MAX] = std::array::from_fn(|i| i);
+    if n == 2 {
+        // One way to split two, whatever the axis.
+        let cost = area(refs[0].min, refs[0].max) + area(refs[1].min, refs[1].max);
+        best = Some((cost, identity, 1));
+    }
+    let centroids: [Vec3A; EXACT_MAX] =
+        std::array::from_fn(|i| refs.get(i).map_or(Vec3A::ZERO, PrimRef::centroid2));
+    for axis in (0..3).filter(|_| n > 2) {
+        let mut order = identity;
         // Insertion sort: stable, and the fastest at this size.
         for i in 1..n {
             let mut j = i;
-            while j > 0 && key(order[j - 1]) > key(order[j]) {
+            while j > 0 && centroids[order[j - 1]][axis] > centroids[order[j]][axis] {
                 order.swap(j - 1, j);
                 j -= 1;
             }
@@ -425,13 +444,15 @@ fn exact_split(
     if cost >= p.intersect_cost * n as f32 && n <= p.max_leaf_size {
         return None;
     }
-    let mut old_refs = [PrimRef::EMPTY; EXACT_MAX];
-    let mut old_ids = [0u32; EXACT_MAX];
-    old_refs[..n].copy_from_slice(refs);
-    old_ids[..n].copy_from_slice(ids);
-    for (k, &i) in order[..n].iter().enumerate() {
-        refs[k] = old_refs[i];
-        ids[k] = old_ids[i];
+    if order != identity {
+        let mut old_refs = [PrimRef::EMPTY; EXACT_MAX];
+        let mut old_ids = [0u32; EXACT_MAX];
+        old_refs[..n].copy_from_slice(refs);
+        old_ids[..n].copy_from_slice(ids);
+        for (k, &i) in order[..n].iter().enumerate() {
+            refs[k] = old_refs[i];
+            ids[k] = old_ids[i];
+        }
     }
     Some((
         split_at,
@@ -502,17 +523,28 @@ fn find_split_in<const N: usize>(
 ) -> Option<(f32, Split)> {
     let p = ctx.params;
     let scale = bin_scale(b, nb);
-    let mut bins = [[EMPTY_BIN; N]; 3];
-    for r in refs {
-        let k = bin_index(r.centroid2(), b, scale, nb);
-        for (axis, &k) in k.iter().enumerate() {
-            // k < nb <= N, and N is a power of two: the mask only drops the bounds check.
-            let bin = &mut bins[axis][k & (N - 1)];
-            bin.min = bin.min.min(r.min);
-            bin.max = bin.max.max(r.max);
-            bin.count += 1;
+    let fill = |refs: &[PrimRef]| {
+        let mut bins = [[EMPTY_BIN; N]; 3];
+        for r in refs {
+            let k = bin_index(r.centroid2(), b, scale, nb);
+            for (axis, &k) in k.iter().enumerate() {
+                // k < nb <= N, a power of two: the mask only drops the bounds check.
+                let bin = &mut bins[axis][k & (N - 1)];
+                bin.min = bin.min.min(r.min);
+                bin.max = bin.max.max(r.max);
+                bin.count += 1;
+            }
         }
-    }
+        bins
+    };
+    // The top nodes bin in parallel, or the first levels would leave threads idle.
+    let bins = if refs.len() >= PARALLEL_BINNING {
+        refs.par_chunks(PARALLEL_BINNING / 4)
+            .map(fill)
+            .reduce(|| [[EMPTY_BIN; N]; 3], merge_bins)
+    } else {
+        fill(refs)
+    };
     // Costs are compared as area-weighted counts; the SAH's constants apply at the end.
     // The three axes sweep together, one SIMD lane each.
     let n = refs.len() as u32;
