@@ -26,6 +26,8 @@ pub struct BuildParams {
     /// along each axis instead of binning: exact, and cheaper than bins at that size.
     /// 0 turns it off.
     pub exact_below: usize,
+    /// Nodes of many triangles choose their split from bins of an even sample of them.
+    pub sample: bool,
 }
 
 impl BuildParams {
@@ -38,6 +40,7 @@ impl BuildParams {
             max_leaf_size: 16,
             shrink_bins: true,
             exact_below: 8,
+            sample: true,
         }
     }
 
@@ -48,6 +51,7 @@ impl BuildParams {
             bins: 32,
             shrink_bins: false,
             exact_below: 0,
+            sample: false,
             ..Self::fast()
         }
     }
@@ -213,17 +217,27 @@ fn merge_bins<const N: usize>(mut a: [[Bin; N]; 3], b: [[Bin; N]; 3]) -> [[Bin; 
     a
 }
 
-/// A chosen split: the axis, the first bin of the right side, and the boxes of both
-/// sides, which the bins already hold.
+/// A chosen split: the axis, the first bin of the right side, and what the bins know of
+/// both sides.
 struct Split {
     axis: usize,
     bin: usize,
+    /// `None` where the bins held only a sample of the triangles.
+    sides: Option<Sides>,
+}
+
+/// The boxes of both sides of a split, from bins that held every triangle.
+struct Sides {
     left: (Vec3A, Vec3A),
     right: (Vec3A, Vec3A),
     /// Triangles on the left, which the partition must reproduce: the boxes above hold
     /// exactly the triangles the bins counted.
     left_count: usize,
 }
+
+/// Nodes of at least four times this many triangles bin only this many (or up to twice
+/// as many), evenly spaced: enough to place the plane as well as all of them would.
+const SAMPLES: usize = 4096;
 
 /// A built subtree: its nodes depth-first, or, where the build forked into two tasks, its
 /// root and the two parts the tasks built. [`Part::write`] joins them into one array.
@@ -523,8 +537,7 @@ fn find_split_in<const N: usize>(
 ) -> Option<(f32, Split)> {
     let p = ctx.params;
     let scale = bin_scale(b, nb);
-    let fill = |refs: &[PrimRef]| {
-        let mut bins = [[EMPTY_BIN; N]; 3];
+    let fill = |bins: &mut [[Bin; N]; 3], refs: &mut dyn Iterator<Item = &PrimRef>| {
         for r in refs {
             let k = bin_index(r.centroid2(), b, scale, nb);
             for (axis, &k) in k.iter().enumerate() {
@@ -535,19 +548,27 @@ fn find_split_in<const N: usize>(
                 bin.count += 1;
             }
         }
-        bins
     };
-    // The top nodes bin in parallel, or the first levels would leave threads idle.
-    let bins = if refs.len() >= PARALLEL_BINNING {
-        refs.par_chunks(PARALLEL_BINNING / 4)
-            .map(fill)
-            .reduce(|| [[EMPTY_BIN; N]; 3], merge_bins)
+    // Large nodes bin an even sample of their triangles; the rest bin in parallel at the
+    // top, or the first levels would leave threads idle.
+    let sampled = ctx.params.sample && refs.len() >= 4 * SAMPLES;
+    let stride = if sampled { refs.len() / SAMPLES } else { 1 };
+    let mut bins = [[EMPTY_BIN; N]; 3];
+    if !sampled && refs.len() >= PARALLEL_BINNING {
+        bins = refs
+            .par_chunks(PARALLEL_BINNING / 4)
+            .map(|chunk| {
+                let mut bins = [[EMPTY_BIN; N]; 3];
+                fill(&mut bins, &mut chunk.iter());
+                bins
+            })
+            .reduce(|| [[EMPTY_BIN; N]; 3], merge_bins);
     } else {
-        fill(refs)
-    };
+        fill(&mut bins, &mut refs.iter().step_by(stride));
+    }
     // Costs are compared as area-weighted counts; the SAH's constants apply at the end.
     // The three axes sweep together, one SIMD lane each.
-    let n = refs.len() as u32;
+    let n = refs.len().div_ceil(stride) as u32;
     let mut right_cost = [Vec3A::ZERO; N];
     let mut side = Side::EMPTY;
     for k in (1..nb).rev() {
@@ -583,10 +604,14 @@ fn find_split_in<const N: usize>(
     let split = Split {
         axis,
         bin,
-        left: union(&bins[axis][..bin]),
-        right: union(&bins[axis][bin..nb]),
-        left_count: bins[axis][..bin].iter().map(|b| b.count as usize).sum(),
+        sides: (!sampled).then(|| Sides {
+            left: union(&bins[axis][..bin]),
+            right: union(&bins[axis][bin..nb]),
+            left_count: bins[axis][..bin].iter().map(|b| b.count as usize).sum(),
+        }),
     };
+    // A sample's costs count each triangle for `stride`.
+    let cost = cost * (refs.len() as f32 / n as f32);
     Some((p.traversal_cost + p.intersect_cost * cost / parent_area, split))
 }
 
@@ -661,14 +686,19 @@ fn partition(
         i += 1;
         j -= 1;
     }
+    let Some(sides) = &split.sides else {
+        let (l, r) = refs.split_at(i);
+        let (left, right) = rayon::join(|| Bounds::of(l), || Bounds::of(r));
+        return (i, left, right);
+    };
     let side = |(min, max): (Vec3A, Vec3A)| Bounds {
         min,
         max,
         cmin: b.cmin.max(2.0 * min),
         cmax: b.cmax.min(2.0 * max),
     };
-    debug_assert_eq!(i, split.left_count, "partition and bins disagree");
-    (i, side(split.left), side(split.right))
+    debug_assert_eq!(i, sides.left_count, "partition and bins disagree");
+    (i, side(sides.left), side(sides.right))
 }
 
 /// Fills in the tree's statistics from its final layout.
