@@ -161,7 +161,7 @@ pub fn build(bounds: &[Aabb], params: &BuildParams) -> Bvh {
             max: b.max.into(),
         })
         .collect();
-    let mut order: Vec<u32> = (0..n as u32).collect();
+    let mut order: Vec<u32> = (0..n as u32).into_par_iter().collect();
     let root = refs
         .par_chunks(PARALLEL_THRESHOLD)
         .map(Bounds::of)
@@ -176,9 +176,14 @@ pub fn build(bounds: &[Aabb], params: &BuildParams) -> Bvh {
     let part = build_part(&ctx, &mut refs, &mut order, root, 0);
     drop(refs);
     let mut nodes = bytemuck::zeroed_vec(part.len());
-    part.write(&mut nodes, 0);
+    let tally = part.write(&mut nodes, 0, 0, params);
     drop(part);
-    fill_stats(&nodes, &mut stats, params);
+    let root_area = f64::from(nodes[0].bounds().area()).max(f64::from(f32::MIN_POSITIVE));
+    stats.nodes = nodes.len();
+    stats.leaves = tally.leaves;
+    stats.leaf_sizes = tally.leaf_sizes;
+    stats.depth = tally.depth;
+    stats.sah_cost = (tally.cost / root_area) as f32;
     Bvh {
         nodes,
         order,
@@ -260,8 +265,8 @@ impl Part {
     }
 
     /// Writes the part into `out` (exactly its length), which begins at node `base` of
-    /// the final array.
-    fn write(&self, out: &mut [BvhNode], base: u32) {
+    /// the final array, and tallies it; its root is at `depth`.
+    fn write(&self, out: &mut [BvhNode], base: u32, depth: u32, p: &BuildParams) -> Tally {
         match self {
             Part::Nodes(nodes) => {
                 for (dst, src) in out.iter_mut().zip(nodes) {
@@ -270,6 +275,7 @@ impl Part {
                         dst.left_or_first += base;
                     }
                 }
+                Tally::of(nodes, depth, p)
             }
             Part::Fork { root, children, .. } => {
                 let [left, right] = &**children;
@@ -280,10 +286,13 @@ impl Part {
                     left_or_first: right_base,
                     ..*root
                 };
-                rayon::join(
-                    || left.write(lo, base + 1),
-                    || right.write(ro, right_base),
+                let mut tally = Tally::default();
+                tally.add(root, depth, p);
+                let (l, r) = rayon::join(
+                    || left.write(lo, base + 1, depth + 1, p),
+                    || right.write(ro, right_base, depth + 1, p),
                 );
+                tally.merge(l).merge(r)
             }
         }
     }
@@ -701,27 +710,59 @@ fn partition(
     (i, side(sides.left), side(sides.right))
 }
 
-/// Fills in the tree's statistics from its final layout.
-fn fill_stats(nodes: &[BvhNode], stats: &mut BvhStats, p: &BuildParams) {
-    stats.nodes = nodes.len();
-    let root_area = nodes[0].bounds().area().max(f32::MIN_POSITIVE);
-    let mut stack: Vec<(usize, u32)> = vec![(0, 0)];
-    while let Some((index, depth)) = stack.pop() {
-        let node = &nodes[index];
-        stats.depth = stats.depth.max(depth);
-        let rel_area = node.bounds().area() / root_area;
+/// What [`BvhStats`] counts, over one part of the tree; parts are tallied in parallel as
+/// they are written, then merged.
+#[derive(Default)]
+struct Tally {
+    leaves: usize,
+    leaf_sizes: Vec<usize>,
+    depth: u32,
+    /// SAH cost times the root's area.
+    cost: f64,
+}
+
+impl Tally {
+    fn add(&mut self, node: &BvhNode, depth: u32, p: &BuildParams) {
+        self.depth = self.depth.max(depth);
+        let area = f64::from(node.bounds().area());
         if node.is_leaf() {
-            stats.leaves += 1;
-            stats.sah_cost += rel_area * p.intersect_cost * node.count as f32;
+            self.leaves += 1;
+            self.cost += area * f64::from(p.intersect_cost) * f64::from(node.count);
             let c = node.count as usize;
-            if stats.leaf_sizes.len() <= c {
-                stats.leaf_sizes.resize(c + 1, 0);
+            if self.leaf_sizes.len() <= c {
+                self.leaf_sizes.resize(c + 1, 0);
             }
-            stats.leaf_sizes[c] += 1;
+            self.leaf_sizes[c] += 1;
         } else {
-            stats.sah_cost += rel_area * p.traversal_cost;
-            stack.push((node.left_or_first as usize, depth + 1));
-            stack.push((index + 1, depth + 1));
+            self.cost += area * f64::from(p.traversal_cost);
         }
+    }
+
+    /// The tally of `nodes`, a depth-first subtree whose root is at `depth`.
+    fn of(nodes: &[BvhNode], depth: u32, p: &BuildParams) -> Tally {
+        let mut tally = Tally::default();
+        let mut stack: Vec<(usize, u32)> = vec![(0, depth)];
+        while let Some((index, depth)) = stack.pop() {
+            let node = &nodes[index];
+            tally.add(node, depth, p);
+            if !node.is_leaf() {
+                stack.push((node.left_or_first as usize, depth + 1));
+                stack.push((index + 1, depth + 1));
+            }
+        }
+        tally
+    }
+
+    fn merge(mut self, o: Tally) -> Tally {
+        self.leaves += o.leaves;
+        if self.leaf_sizes.len() < o.leaf_sizes.len() {
+            self.leaf_sizes.resize(o.leaf_sizes.len(), 0);
+        }
+        for (a, b) in self.leaf_sizes.iter_mut().zip(&o.leaf_sizes) {
+            *a += b;
+        }
+        self.depth = self.depth.max(o.depth);
+        self.cost += o.cost;
+        self
     }
 }
