@@ -53,6 +53,10 @@ fn rays(bounds: Aabb, n: u32) -> Vec<Ray> {
 }
 
 fn check(name: &str, corners: &[[Vec3; 3]]) {
+    check_rays(name, corners, 100_000);
+}
+
+fn check_rays(name: &str, corners: &[[Vec3; 3]], n_rays: u32) {
     let bounds: Vec<Aabb> = corners.iter().map(|c| Aabb::from_points(c)).collect();
     let bvh = Bvh::build(&bounds, &BuildParams::default()).expect("the tree fits the stack");
     validate(&bvh, &bounds).unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -62,7 +66,7 @@ fn check(name: &str, corners: &[[Vec3; 3]]) {
         .map(|&i| TriVerts::new(corners[i as usize]))
         .collect();
     let all = bounds.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
-    let rays = rays(all, 100_000);
+    let rays = rays(all, n_rays);
     // Bounding spheres (inflated by 1e-4 of the scene size) let the brute force skip
     // triangles whose sphere the ray's line misses, a test that can never reject a hit.
     let pad = 1e-4 * all.extent().length();
@@ -134,6 +138,30 @@ fn check(name: &str, corners: &[[Vec3; 3]]) {
 #[test]
 fn closest_hit_matches_brute_force_on_a_generated_mesh() {
     check("generated", &generated_mesh());
+}
+
+/// Nodes of 16384 triangles or more choose their split from a sample: the tree must still
+/// hold every triangle where its boxes say, and cost about what binning all of them does.
+#[test]
+fn sampled_splits_keep_the_tree_exact_and_cheap() {
+    let (v, f) = icosphere(5);
+    let mut corners: Vec<[Vec3; 3]> = f
+        .iter()
+        .map(|t| t.map(|k| v[k as usize] * 3.0 + Vec3::new(-1.0, 0.0, 2.0)))
+        .collect();
+    corners.extend(generated_mesh());
+    assert!(corners.len() >= 4 * 4096, "the root must be sampled");
+    check_rays("sphere and soup", &corners, 20_000);
+    let bounds: Vec<Aabb> = corners.iter().map(|c| Aabb::from_points(c)).collect();
+    let fast = Bvh::build(&bounds, &BuildParams::default()).unwrap().stats;
+    let precise = Bvh::build(&bounds, &BuildParams::precise()).unwrap().stats;
+    eprintln!(
+        "SAH cost: {} sampled, 16 bins; {} with 32 bins everywhere (ratio {:.4})",
+        fast.sah_cost,
+        precise.sah_cost,
+        fast.sah_cost / precise.sah_cost
+    );
+    assert!(fast.sah_cost <= precise.sah_cost * 1.05);
 }
 
 #[test]

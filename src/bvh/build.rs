@@ -26,12 +26,15 @@ pub struct BuildParams {
     /// along each axis instead of binning: exact, and cheaper than bins at that size.
     /// 0 turns it off.
     pub exact_below: usize,
-    /// Nodes of many triangles choose their split from bins of an even sample of them.
+    /// Nodes of at least 16384 triangles choose their split from bins of an even sample
+    /// of 4096 to 8191 of them, which places the plane as well at a fraction of the cost.
     pub sample: bool,
 }
 
 impl BuildParams {
-    /// The default: 16 bins per axis.
+    /// The default: 16 bins per axis (fewer for small nodes), exact splits for nodes of
+    /// up to 8 triangles, sampled binning for large ones. Its SAH cost stays within 1% of
+    /// [`BuildParams::precise`]'s on the meshes the tests and the bench build.
     pub fn fast() -> Self {
         Self {
             bins: 16,
@@ -44,8 +47,8 @@ impl BuildParams {
         }
     }
 
-    /// 32 bins per axis at every node: a slower build, the baseline the fast one is
-    /// measured against.
+    /// 32 bins per axis at every node, every triangle binned: a slower build, the
+    /// baseline the fast one is measured against.
     pub fn precise() -> Self {
         Self {
             bins: 32,
@@ -605,9 +608,10 @@ fn find_split_in<const N: usize>(
         return None;
     }
     let union = |bins: &[Bin]| {
-        bins.iter().fold((Vec3A::INFINITY, Vec3A::NEG_INFINITY), |(min, max), b| {
-            (min.min(b.min), max.max(b.max))
-        })
+        bins.iter()
+            .fold((Vec3A::INFINITY, Vec3A::NEG_INFINITY), |(min, max), b| {
+                (min.min(b.min), max.max(b.max))
+            })
     };
     let parent_area = area(b.min, b.max).max(f32::MIN_POSITIVE);
     let split = Split {
@@ -621,7 +625,10 @@ fn find_split_in<const N: usize>(
     };
     // A sample's costs count each triangle for `stride`.
     let cost = cost * (refs.len() as f32 / n as f32);
-    Some((p.traversal_cost + p.intersect_cost * cost / parent_area, split))
+    Some((
+        p.traversal_cost + p.intersect_cost * cost / parent_area,
+        split,
+    ))
 }
 
 /// One side of a plane in each axis's sweep: the union of the bins passed so far.
@@ -648,8 +655,7 @@ impl Side {
 
     /// Area times count for each axis's side, in the lane of that axis.
     fn cost(&self) -> Vec3A {
-        let [e0, e1, e2] =
-            std::array::from_fn(|a| (self.max[a] - self.min[a]).max(Vec3A::ZERO));
+        let [e0, e1, e2] = std::array::from_fn(|a| (self.max[a] - self.min[a]).max(Vec3A::ZERO));
         let x = Vec3A::new(e0.x, e1.x, e2.x);
         let y = Vec3A::new(e0.y, e1.y, e2.y);
         let z = Vec3A::new(e0.z, e1.z, e2.z);
