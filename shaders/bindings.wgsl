@@ -1,4 +1,5 @@
-// The scene, group 0: the tables of src/render/mod.rs `RenderScene`, uploaded as they are.
+// The scene, group 0: the tables of src/render/mod.rs `RenderScene`, uploaded as they are
+// (bindings_uniform.wgsl packs small ones into one uniform array instead).
 //
 // Each table is read as texels of an Rgba32Uint texture, row-major, TABLE_WIDTH texels a
 // row: a texel fetch is a cheap gather on every device, while lavapipe (Mesa 22.3) lowers

@@ -242,7 +242,7 @@ pub fn bench_scene(
     if let Some(ctx) = gpu {
         for (measure, set, any) in sets {
             let entry = if any { "bench_any" } else { "bench_closest" };
-            let kernel = Kernel::new(ctx, &rs, &settings, &shader::bench_source(), entry)?;
+            let kernel = Kernel::new(ctx, &rs, &settings, shader::bench_source, entry)?;
             let words = ray_words(set);
             let n = set.len() as f64 / 1e6;
             let rates = timed(opts.repeats, n, || {

@@ -4,6 +4,7 @@ mod common;
 
 use meshtrace::bvh::BuildParams;
 use meshtrace::film::Film;
+use meshtrace::gpu::TableStorage;
 use meshtrace::render::{RenderJob, RenderScene, cpu};
 use meshtrace::scene::{RenderSettings, builtin};
 
@@ -129,6 +130,52 @@ fn gpu_renders_are_deterministic() {
     };
     assert_eq!(bits(&a.0), bits(&b.0));
     assert_eq!(a.1, b.1, "ray counts");
+}
+
+/// Tables packed into one uniform array and tables as textures are read through the same
+/// `load_*` functions: the images are the same bits, so a wrong offset in the packing
+/// shows as a different image.
+#[test]
+fn table_storages_render_the_same_bits() {
+    let Some(ctx) = common::gpu("table_storages_render_the_same_bits") else {
+        return;
+    };
+    let (rs, s) = cornell(48, 8, 4);
+    let job = RenderJob::new(s);
+    let render = |storage| meshtrace::gpu::render_with(&ctx, &rs, &job, storage, &|_| {}).unwrap();
+    let bits = |f: &Film| {
+        f.sum
+            .iter()
+            .flat_map(|p| p.to_array().map(f32::to_bits))
+            .collect::<Vec<_>>()
+    };
+    let (textures, uniform) = (
+        render(TableStorage::Textures),
+        render(TableStorage::Uniform),
+    );
+    assert!(
+        bits(&textures.0).iter().any(|&b| b != 0),
+        "a black image proves nothing"
+    );
+    assert!(
+        bits(&textures.0) == bits(&uniform.0),
+        "the two table storages render differently"
+    );
+    assert_eq!(textures.1, uniform.1, "ray counts");
+    // And both replay the CPU's paths, as in gpu_replays_the_cpu_paths.
+    let (gpu, cpu) = (
+        channels(&uniform.0),
+        channels(&cpu::render(&rs, &job, &|_| {}).0),
+    );
+    let close = gpu
+        .iter()
+        .zip(&cpu)
+        .filter(|(g, c)| (*g - *c).abs() <= 1e-3 * c.abs() + 1e-5)
+        .count();
+    assert!(
+        close as f64 >= 0.99 * gpu.len() as f64,
+        "the GPU and CPU paths differ"
+    );
 }
 
 /// Renders of disjoint sample ranges merge into the full render, bit for bit on the CPU.

@@ -6,7 +6,7 @@
 use meshtrace::bvh::BvhNode;
 use meshtrace::geometry::TriVerts;
 use meshtrace::gpu::layout::{GpuMaterial, GpuParams};
-use meshtrace::gpu::shader;
+use meshtrace::gpu::{TableStorage, shader};
 use meshtrace::render::TriShading;
 use meshtrace::render::rng;
 use meshtrace::scene::MaterialKind;
@@ -23,21 +23,29 @@ fn parse_and_validate(what: &str, source: &str) -> naga::Module {
     module
 }
 
-fn modules() -> [(&'static str, naga::Module); 2] {
-    [
-        (
-            "render_source",
-            parse_and_validate("render_source", &shader::render_source()),
-        ),
-        (
-            "test_source",
-            parse_and_validate("test_source", &shader::test_source()),
-        ),
-    ]
+/// Every module the host compiles: each entry-point file with each way of binding tables.
+/// The test modules come first, one per [`TableStorage`].
+fn modules() -> Vec<(String, naga::Module)> {
+    type Source = fn(TableStorage) -> String;
+    let sources: [(&str, Source); 3] = [
+        ("test_source", shader::test_source),
+        ("render_source", shader::render_source),
+        ("bench_source", shader::bench_source),
+    ];
+    sources
+        .iter()
+        .flat_map(|&(name, source)| {
+            [TableStorage::Textures, TableStorage::Uniform].map(|storage| {
+                let what = format!("{name}({storage:?})");
+                let module = parse_and_validate(&what, &source(storage));
+                (what, module)
+            })
+        })
+        .collect()
 }
 
 #[test]
-fn both_modules_parse_and_validate() {
+fn every_module_parses_and_validates() {
     for (what, m) in modules() {
         assert!(
             !m.entry_points.is_empty(),
@@ -331,6 +339,20 @@ fn constants_match_rust() {
                 "{what}: WGSL `{name}` differs from Rust"
             );
         }
+        // Each way of binding the tables has its size constant.
+        let (name, value) = if what.contains("Uniform") {
+            (
+                "UNIFORM_TABLE_TEXELS",
+                meshtrace::gpu::UNIFORM_TABLE_TEXELS as u32,
+            )
+        } else {
+            ("TABLE_WIDTH_LOG2", meshtrace::gpu::TABLE_WIDTH.ilog2())
+        };
+        assert_eq!(
+            wgsl_u32_const(&module, name),
+            value,
+            "{what}: WGSL `{name}` differs from Rust"
+        );
     }
 }
 

@@ -3,7 +3,7 @@
 //! kernels of `shaders/bench.wgsl` (one ray in, one hit out).
 
 use super::layout::GpuParams;
-use super::renderer::{GpuScene, params_buffer, pipeline, read_back};
+use super::renderer::{GpuScene, TableStorage, params_buffer, pipeline, read_back};
 use super::{GpuContext, GpuError, shader};
 use crate::render::RenderScene;
 use crate::scene::RenderSettings;
@@ -21,20 +21,22 @@ pub struct Kernel<'a> {
 }
 
 impl<'a> Kernel<'a> {
-    /// Uploads `scene` and compiles `entry` of `source` (a module joined by [`shader`]).
+    /// Uploads `scene` as the renderer would and compiles `entry` of the module that
+    /// `source` joins (a function of [`shader`]) for that upload.
     pub fn new(
         ctx: &'a GpuContext,
         scene: &RenderScene,
         settings: &RenderSettings,
-        source: &str,
+        source: fn(TableStorage) -> String,
         entry: &str,
     ) -> Result<Self, GpuError> {
-        let gpu_scene = GpuScene::new(ctx, scene)?;
+        let gpu_scene = GpuScene::new(ctx, scene, TableStorage::choose(ctx, scene))?;
+        let source = source(gpu_scene.storage());
         let mut p = GpuParams::new(scene, settings);
         p.sample_end = settings.spp;
         let params = params_buffer(ctx, &[p]);
         let scene_group = gpu_scene.bind_group(ctx, &params);
-        let (pipeline, io_layout) = pipeline(ctx, &gpu_scene, source, entry, 1, 1)?;
+        let (pipeline, io_layout) = pipeline(ctx, &gpu_scene, &source, entry, 1, 1)?;
         Ok(Self {
             ctx,
             pipeline,
@@ -112,6 +114,6 @@ pub fn run_test_kernel(
     input: &[[u32; 4]],
 ) -> Result<Vec<[u32; 4]>, GpuError> {
     assert!(input.len() % 2 == 0, "two input words per case");
-    let kernel = Kernel::new(ctx, scene, settings, &shader::test_source(), entry)?;
+    let kernel = Kernel::new(ctx, scene, settings, shader::test_source, entry)?;
     Ok(kernel.run(input, input.len() / 2, input.len())?.0)
 }

@@ -14,7 +14,9 @@ mod renderer;
 pub mod shader;
 
 pub use context::{AdapterSummary, GpuContext, choose_adapter, list_adapters};
-pub use renderer::{GpuScene, render};
+pub use renderer::{
+    GpuScene, TABLE_WIDTH, TableStorage, UNIFORM_TABLE_TEXELS, render, render_with,
+};
 
 /// What can go wrong on the GPU path; each message says what to do about it.
 #[derive(Debug, thiserror::Error)]

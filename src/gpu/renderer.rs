@@ -89,10 +89,95 @@ fn table_texture(
     Ok(texture.create_view(&Default::default()))
 }
 
-/// A scene uploaded to one device: its tables as textures, the scene bind group's layout.
+/// How the scene's tables are bound: the shaders read them through the same `load_*`
+/// functions either way (`shaders/bindings.wgsl`, `shaders/bindings_uniform.wgsl`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TableStorage {
+    /// One Rgba32Uint texture per table: any size, and fast on GPUs.
+    Textures,
+    /// All tables packed into one 64 KiB uniform array: small scenes only. lavapipe
+    /// gathers uniform loads far more cheaply than it fetches texels.
+    Uniform,
+}
+
+/// Texels (16 bytes) of the packed uniform array, header included.
+/// mirror: shaders/bindings_uniform.wgsl `UNIFORM_TABLE_TEXELS`
+pub const UNIFORM_TABLE_TEXELS: usize = 4096;
+
+/// Texels of the packed array's header: where each table starts.
+const UNIFORM_HEADER_TEXELS: usize = 2;
+
+impl TableStorage {
+    /// The storage for `scene` on this device: the packed uniform array on software
+    /// adapters when the scene fits, textures otherwise.
+    pub fn choose(ctx: &GpuContext, scene: &RenderScene) -> Self {
+        let fits = packed_texels(&scene_tables(scene, &materials(scene))).is_some_and(|texels| {
+            texels * 16 <= ctx.limits.max_uniform_buffer_binding_size as usize
+        });
+        if ctx.adapter.software && fits {
+            TableStorage::Uniform
+        } else {
+            TableStorage::Textures
+        }
+    }
+}
+
+fn materials(scene: &RenderScene) -> Vec<GpuMaterial> {
+    scene.materials.iter().map(GpuMaterial::from).collect()
+}
+
+/// The six tables in binding order, named for errors.
+fn scene_tables<'a>(
+    scene: &'a RenderScene,
+    materials: &'a [GpuMaterial],
+) -> [(&'static str, &'a [u8]); 6] {
+    [
+        ("BVH nodes", bytemuck::cast_slice(&scene.bvh.nodes)),
+        ("triangles", bytemuck::cast_slice(&scene.tris)),
+        (
+            "triangle shading data",
+            bytemuck::cast_slice(&scene.shading),
+        ),
+        ("materials", bytemuck::cast_slice(materials)),
+        ("emitters", bytemuck::cast_slice(&scene.emitters)),
+        ("emitter CDF", bytemuck::cast_slice(&scene.emitter_cdf)),
+    ]
+}
+
+/// Texels the packed uniform array needs for `tables`, if they fit in it.
+fn packed_texels(tables: &[(&str, &[u8]); 6]) -> Option<usize> {
+    let texels = UNIFORM_HEADER_TEXELS
+        + tables
+            .iter()
+            .map(|(_, data)| data.len().div_ceil(16))
+            .sum::<usize>();
+    (texels <= UNIFORM_TABLE_TEXELS).then_some(texels)
+}
+
+/// The packed uniform array: a header of first texels, then each table, 16-byte aligned.
+fn pack_tables(tables: &[(&str, &[u8]); 6]) -> Vec<u8> {
+    let mut header = [0u32; 4 * UNIFORM_HEADER_TEXELS];
+    let mut body = Vec::new();
+    for (i, (_, data)) in tables.iter().enumerate() {
+        header[i] = (UNIFORM_HEADER_TEXELS + body.len() / 16) as u32;
+        body.extend_from_slice(data);
+        body.resize(body.len().next_multiple_of(16), 0);
+    }
+    let mut out = bytemuck::cast_slice(&header).to_vec();
+    out.extend(body);
+    out.resize(UNIFORM_TABLE_TEXELS * 16, 0);
+    out
+}
+
+/// What a scene's tables were uploaded as.
+enum Tables {
+    Textures(Vec<wgpu::TextureView>),
+    Uniform(wgpu::Buffer),
+}
+
+/// A scene uploaded to one device: its tables, the scene bind group's layout.
 pub struct GpuScene {
-    /// BVH nodes, triangle corners, shading data, materials, emitters, emitter CDF.
-    views: Vec<wgpu::TextureView>,
+    tables: Tables,
     pub layout: wgpu::BindGroupLayout,
 }
 
@@ -116,24 +201,15 @@ fn params_stride(ctx: &GpuContext) -> u64 {
 }
 
 impl GpuScene {
-    /// Uploads the scene's tables, checking each against the adapter's texture limit.
-    pub fn new(ctx: &GpuContext, scene: &RenderScene) -> Result<Self, GpuError> {
-        let materials: Vec<GpuMaterial> = scene.materials.iter().map(GpuMaterial::from).collect();
-        let tables: [(&'static str, &[u8]); 6] = [
-            ("BVH nodes", bytemuck::cast_slice(&scene.bvh.nodes)),
-            ("triangles", bytemuck::cast_slice(&scene.tris)),
-            (
-                "triangle shading data",
-                bytemuck::cast_slice(&scene.shading),
-            ),
-            ("materials", bytemuck::cast_slice(&materials)),
-            ("emitters", bytemuck::cast_slice(&scene.emitters)),
-            ("emitter CDF", bytemuck::cast_slice(&scene.emitter_cdf)),
-        ];
-        let views = tables
-            .iter()
-            .map(|(what, data)| table_texture(ctx, what, data))
-            .collect::<Result<Vec<_>, _>>()?;
+    /// Uploads the scene's tables as `storage` says, checking them against the adapter's
+    /// limits.
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &RenderScene,
+        storage: TableStorage,
+    ) -> Result<Self, GpuError> {
+        let materials = materials(scene);
+        let tables = scene_tables(scene, &materials);
         let mut entries = vec![wgpu::BindGroupLayoutEntry {
             binding: 0,
             visibility: wgpu::ShaderStages::COMPUTE,
@@ -144,18 +220,57 @@ impl GpuScene {
             },
             count: None,
         }];
-        entries.extend(
-            (1..=views.len() as u32).map(|binding| wgpu::BindGroupLayoutEntry {
-                binding,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Uint,
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-                count: None,
-            }),
-        );
+        let tables = match storage {
+            TableStorage::Textures => {
+                let views = tables
+                    .iter()
+                    .map(|(what, data)| table_texture(ctx, what, data))
+                    .collect::<Result<Vec<_>, _>>()?;
+                entries.extend((1..=views.len() as u32).map(|binding| {
+                    wgpu::BindGroupLayoutEntry {
+                        binding,
+                        visibility: wgpu::ShaderStages::COMPUTE,
+                        ty: wgpu::BindingType::Texture {
+                            sample_type: wgpu::TextureSampleType::Uint,
+                            view_dimension: wgpu::TextureViewDimension::D2,
+                            multisampled: false,
+                        },
+                        count: None,
+                    }
+                }));
+                Tables::Textures(views)
+            }
+            TableStorage::Uniform => {
+                let bytes = (UNIFORM_TABLE_TEXELS * 16) as u64;
+                if packed_texels(&tables).is_none()
+                    || bytes > ctx.limits.max_uniform_buffer_binding_size
+                {
+                    return Err(GpuError::TooLarge {
+                        what: "packed scene tables",
+                        bytes,
+                        limit: ctx.limits.max_uniform_buffer_binding_size,
+                    });
+                }
+                let buffer = ctx
+                    .device
+                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("scene tables"),
+                        contents: &pack_tables(&tables),
+                        usage: wgpu::BufferUsages::UNIFORM,
+                    });
+                entries.push(wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: wgpu::BufferSize::new(bytes),
+                    },
+                    count: None,
+                });
+                Tables::Uniform(buffer)
+            }
+        };
         let layout = ctx
             .device
             .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -163,7 +278,15 @@ impl GpuScene {
                 entries: &entries,
             });
         ctx.check()?;
-        Ok(Self { views, layout })
+        Ok(Self { tables, layout })
+    }
+
+    /// How the tables were uploaded; the shader source must match it.
+    pub fn storage(&self) -> TableStorage {
+        match self.tables {
+            Tables::Textures(_) => TableStorage::Textures,
+            Tables::Uniform(_) => TableStorage::Uniform,
+        }
     }
 
     /// The scene bind group, with `params` (one block per dispatch, at `params_stride`).
@@ -176,15 +299,18 @@ impl GpuScene {
                 size: wgpu::BufferSize::new(size_of::<GpuParams>() as u64),
             }),
         }];
-        entries.extend(
-            self.views
-                .iter()
-                .enumerate()
-                .map(|(i, v)| wgpu::BindGroupEntry {
+        match &self.tables {
+            Tables::Textures(views) => {
+                entries.extend(views.iter().enumerate().map(|(i, v)| wgpu::BindGroupEntry {
                     binding: i as u32 + 1,
                     resource: wgpu::BindingResource::TextureView(v),
-                }),
-        );
+                }))
+            }
+            Tables::Uniform(buffer) => entries.push(wgpu::BindGroupEntry {
+                binding: 1,
+                resource: buffer.as_entire_binding(),
+            }),
+        }
         ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("scene"),
             layout: &self.layout,
@@ -336,6 +462,17 @@ pub fn render(
     job: &RenderJob,
     progress: &dyn Fn(u64),
 ) -> Result<(Film, u64), GpuError> {
+    render_with(ctx, scene, job, TableStorage::choose(ctx, scene), progress)
+}
+
+/// [`render`] with the tables stored as `storage` says; the image is the same either way.
+pub fn render_with(
+    ctx: &GpuContext,
+    scene: &RenderScene,
+    job: &RenderJob,
+    storage: TableStorage,
+    progress: &dyn Fn(u64),
+) -> Result<(Film, u64), GpuError> {
     let (w, h) = (job.settings.width, job.settings.height);
     let pixels = w as u64 * h as u64;
     let accum_bytes = pixels * 16;
@@ -347,12 +484,18 @@ pub fn render(
             limit,
         });
     }
-    let gpu_scene = GpuScene::new(ctx, scene)?;
+    let gpu_scene = GpuScene::new(ctx, scene, storage)?;
     let blocks = plan_dispatches(&GpuParams::new(scene, &job.settings), job);
     let params = params_buffer(ctx, &blocks);
     let scene_group = gpu_scene.bind_group(ctx, &params);
-    let (pipeline, io_layout) =
-        pipeline(ctx, &gpu_scene, &shader::render_source(), "render", 0, 1)?;
+    let (pipeline, io_layout) = pipeline(
+        ctx,
+        &gpu_scene,
+        &shader::render_source(storage),
+        "render",
+        0,
+        1,
+    )?;
     let accum = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("accumulation"),
         size: accum_bytes,

@@ -2,10 +2,20 @@
 //! the path tracer's stages; `render.wgsl` adds the render kernel, `tests.wgsl` the
 //! shader unit-test kernels and `bench.wgsl` the ray-throughput kernels.
 
-/// The shared library, in dependency order.
-pub const LIBRARY: &[(&str, &str)] = &[
-    ("types.wgsl", include_str!("../../shaders/types.wgsl")),
-    ("bindings.wgsl", include_str!("../../shaders/bindings.wgsl")),
+use super::TableStorage;
+
+const TYPES: (&str, &str) = ("types.wgsl", include_str!("../../shaders/types.wgsl"));
+
+/// How the tables are bound, one file per [`TableStorage`].
+const TEXTURE_BINDINGS: (&str, &str) =
+    ("bindings.wgsl", include_str!("../../shaders/bindings.wgsl"));
+const UNIFORM_BINDINGS: (&str, &str) = (
+    "bindings_uniform.wgsl",
+    include_str!("../../shaders/bindings_uniform.wgsl"),
+);
+
+/// The shared library after the types and bindings, in dependency order.
+const LIBRARY: &[(&str, &str)] = &[
     ("rng.wgsl", include_str!("../../shaders/rng.wgsl")),
     ("sampling.wgsl", include_str!("../../shaders/sampling.wgsl")),
     (
@@ -25,26 +35,30 @@ const RENDER: &str = include_str!("../../shaders/render.wgsl");
 const TESTS: &str = include_str!("../../shaders/tests.wgsl");
 const BENCH: &str = include_str!("../../shaders/bench.wgsl");
 
-fn join(extra: &str) -> String {
+fn join(tables: TableStorage, extra: &str) -> String {
+    let bindings = match tables {
+        TableStorage::Textures => TEXTURE_BINDINGS,
+        TableStorage::Uniform => UNIFORM_BINDINGS,
+    };
     let mut src = String::new();
-    for (name, text) in LIBRARY {
+    for (name, text) in [TYPES, bindings].iter().chain(LIBRARY) {
         src.push_str(&format!("// ---- {name}\n{text}\n"));
     }
     src.push_str(extra);
     src
 }
 
-/// The module with the `render` entry point.
-pub fn render_source() -> String {
-    join(RENDER)
+/// The module with the `render` entry point, for tables bound as `tables` says.
+pub fn render_source(tables: TableStorage) -> String {
+    join(tables, RENDER)
 }
 
 /// The module with the `test_*` entry points.
-pub fn test_source() -> String {
-    join(TESTS)
+pub fn test_source(tables: TableStorage) -> String {
+    join(tables, TESTS)
 }
 
 /// The module with the `bench_*` ray-throughput entry points.
-pub fn bench_source() -> String {
-    join(BENCH)
+pub fn bench_source(tables: TableStorage) -> String {
+    join(tables, BENCH)
 }
