@@ -66,7 +66,8 @@ impl Default for BuildParams {
     }
 }
 
-/// Subtrees of at least this many triangles are built in parallel.
+/// Subtrees of at least this many triangles fork into two parallel tasks, each building
+/// its own [`Part`].
 const PARALLEL_THRESHOLD: usize = 4096;
 
 /// The most bins [`BuildParams::bins`] may ask for; the bins live on the stack.
@@ -92,7 +93,8 @@ impl PrimRef {
     }
 }
 
-/// A box and the box of the doubled centroids of what it holds.
+/// A box and a box holding the doubled centroids of what it holds (the tightest one, or
+/// a looser one derived from the parent's; it only places the bins).
 #[derive(Clone, Copy)]
 struct Bounds {
     min: Vec3A,
@@ -669,9 +671,10 @@ impl Side {
 }
 
 /// Moves the triangles left of the split to the front (ids alongside); returns their
-/// count and the bounds of both sides. The boxes come from the bins; each side's centroid
-/// bounds are the parent's clipped to (twice) that side's box, which holds every centroid
-/// of it: looser than a pass over the triangles would find, and that pass is saved.
+/// count and the bounds of both sides. Where the bins held every triangle, the boxes come
+/// from them and each side's centroid bounds are the parent's clipped to (twice) that
+/// side's box, which holds every centroid of it: looser than a pass over the triangles
+/// would find, and that pass is saved. After a sampled split, a pass measures both sides.
 fn partition(
     ctx: &Context,
     refs: &mut [PrimRef],
