@@ -21,6 +21,24 @@ fn cornell(width: u32, spp: u32, seed: u32) -> (RenderScene, RenderSettings) {
     (rs, settings)
 }
 
+/// The film's sums as bits, for exact comparisons.
+fn bits(film: &Film) -> Vec<u32> {
+    film.sum
+        .iter()
+        .flat_map(|p| p.to_array().map(f32::to_bits))
+        .collect()
+}
+
+/// The fraction of pixel channels of `gpu` within float rounding (1e-3 relative) of `cpu`.
+fn fraction_close(gpu: &[f64], cpu: &[f64]) -> f64 {
+    let close = gpu
+        .iter()
+        .zip(cpu)
+        .filter(|(g, c)| (*g - *c).abs() <= 1e-3 * c.abs() + 1e-5)
+        .count();
+    close as f64 / gpu.len() as f64
+}
+
 fn channels(film: &Film) -> Vec<f64> {
     film.mean()
         .iter()
@@ -102,12 +120,7 @@ fn gpu_replays_the_cpu_paths() {
     let job = RenderJob::new(s);
     let gpu = channels(&meshtrace::gpu::render(&ctx, &rs, &job, &|_| {}).unwrap().0);
     let cpu = channels(&cpu::render(&rs, &job, &|_| {}).0);
-    let close = gpu
-        .iter()
-        .zip(&cpu)
-        .filter(|(g, c)| (*g - *c).abs() <= 1e-3 * c.abs() + 1e-5)
-        .count();
-    let frac = close as f64 / gpu.len() as f64;
+    let frac = fraction_close(&gpu, &cpu);
     eprintln!("{:.4}% of pixel channels agree to 1e-3", 100.0 * frac);
     assert!(frac >= 0.99, "only {frac} of pixel channels agree");
 }
@@ -122,12 +135,6 @@ fn gpu_renders_are_deterministic() {
     let job = RenderJob::new(s);
     let a = meshtrace::gpu::render(&ctx, &rs, &job, &|_| {}).unwrap();
     let b = meshtrace::gpu::render(&ctx, &rs, &job, &|_| {}).unwrap();
-    let bits = |f: &Film| {
-        f.sum
-            .iter()
-            .flat_map(|p| p.to_array().map(f32::to_bits))
-            .collect::<Vec<_>>()
-    };
     assert_eq!(bits(&a.0), bits(&b.0));
     assert_eq!(a.1, b.1, "ray counts");
 }
@@ -143,12 +150,6 @@ fn table_storages_render_the_same_bits() {
     let (rs, s) = cornell(48, 8, 4);
     let job = RenderJob::new(s);
     let render = |storage| meshtrace::gpu::render_with(&ctx, &rs, &job, storage, &|_| {}).unwrap();
-    let bits = |f: &Film| {
-        f.sum
-            .iter()
-            .flat_map(|p| p.to_array().map(f32::to_bits))
-            .collect::<Vec<_>>()
-    };
     let (textures, uniform) = (
         render(TableStorage::Textures),
         render(TableStorage::Uniform),
@@ -167,13 +168,8 @@ fn table_storages_render_the_same_bits() {
         channels(&uniform.0),
         channels(&cpu::render(&rs, &job, &|_| {}).0),
     );
-    let close = gpu
-        .iter()
-        .zip(&cpu)
-        .filter(|(g, c)| (*g - *c).abs() <= 1e-3 * c.abs() + 1e-5)
-        .count();
     assert!(
-        close as f64 >= 0.99 * gpu.len() as f64,
+        fraction_close(&gpu, &cpu) >= 0.99,
         "the GPU and CPU paths differ"
     );
 }
