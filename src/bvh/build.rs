@@ -429,17 +429,28 @@ fn exact_split(
 ) -> Option<(usize, Bounds, Bounds)> {
     let n = refs.len();
     debug_assert!((2..=EXACT_MAX).contains(&n));
+    let parent_area = area(b.min, b.max).max(f32::MIN_POSITIVE);
+    let splits = |cost: f32| {
+        p.traversal_cost + p.intersect_cost * cost / parent_area < p.intersect_cost * n as f32
+            || n > p.max_leaf_size
+    };
+    if let [l, r] = refs {
+        // One way to split two, whatever the axis; nothing to sort or reorder.
+        let cost = area(l.min, l.max) + area(r.min, r.max);
+        let side = |r: &PrimRef| Bounds {
+            min: r.min,
+            max: r.max,
+            cmin: r.centroid2(),
+            cmax: r.centroid2(),
+        };
+        return splits(cost).then(|| (1, side(l), side(r)));
+    }
     // (area-weighted cost, order along the axis, left count)
     let mut best: Option<(f32, [usize; EXACT_MAX], usize)> = None;
     let identity: [usize; EXACT_MAX] = std::array::from_fn(|i| i);
-    if n == 2 {
-        // One way to split two, whatever the axis.
-        let cost = area(refs[0].min, refs[0].max) + area(refs[1].min, refs[1].max);
-        best = Some((cost, identity, 1));
-    }
     let centroids: [Vec3A; EXACT_MAX] =
         std::array::from_fn(|i| refs.get(i).map_or(Vec3A::ZERO, PrimRef::centroid2));
-    for axis in (0..3).filter(|_| n > 2) {
+    for axis in [0, 1, 2] {
         let mut order = identity;
         // Insertion sort: stable, and the fastest at this size.
         for i in 1..n {
@@ -467,9 +478,7 @@ fn exact_split(
         }
     }
     let (cost, order, split_at) = best?;
-    let parent_area = area(b.min, b.max).max(f32::MIN_POSITIVE);
-    let cost = p.traversal_cost + p.intersect_cost * cost / parent_area;
-    if cost >= p.intersect_cost * n as f32 && n <= p.max_leaf_size {
+    if !splits(cost) {
         return None;
     }
     if order != identity {
