@@ -25,7 +25,7 @@ fn parse_and_validate(what: &str, source: &str) -> naga::Module {
 
 /// Every module the host compiles: each entry-point file with each way of binding tables.
 /// The test modules come first, one per [`TableStorage`].
-fn modules() -> Vec<(String, naga::Module)> {
+fn modules() -> Vec<(String, naga::Module, TableStorage)> {
     type Source = fn(TableStorage) -> String;
     let sources: [(&str, Source); 3] = [
         ("test_source", shader::test_source),
@@ -38,7 +38,7 @@ fn modules() -> Vec<(String, naga::Module)> {
             [TableStorage::Textures, TableStorage::Uniform].map(|storage| {
                 let what = format!("{name}({storage:?})");
                 let module = parse_and_validate(&what, &source(storage));
-                (what, module)
+                (what, module, storage)
             })
         })
         .collect()
@@ -46,7 +46,7 @@ fn modules() -> Vec<(String, naga::Module)> {
 
 #[test]
 fn every_module_parses_and_validates() {
-    for (what, m) in modules() {
+    for (what, m, _) in modules() {
         assert!(
             !m.entry_points.is_empty(),
             "{what}: no entry points after parsing"
@@ -159,7 +159,7 @@ fn assert_same_layout(wgsl_name: &str, wgsl: (usize, Vec<Member>), rust: (usize,
 
 #[test]
 fn structs_match_their_rust_twins() {
-    for (what, module) in modules() {
+    for (what, module, _) in modules() {
         eprintln!("checking {what}");
         assert_same_layout(
             "BvhNode",
@@ -256,18 +256,26 @@ fn layout_check_can_fail() {
     assert!(r.is_err(), "a wrong size passed the layout check");
 }
 
-/// The value of the WGSL `const name: u32`.
-fn wgsl_u32_const(module: &naga::Module, name: &str) -> u32 {
+/// The literal initialising the WGSL constant `name`.
+fn wgsl_const_literal(module: &naga::Module, name: &str) -> naga::Literal {
     let (_, c) = module
         .constants
         .iter()
         .find(|(_, c)| c.name.as_deref() == Some(name))
         .unwrap_or_else(|| panic!("WGSL constant `{name}` not found"));
     match module.global_expressions[c.init] {
-        naga::Expression::Literal(naga::Literal::U32(v)) => v,
-        naga::Expression::Literal(naga::Literal::I32(v)) if v >= 0 => v as u32,
-        naga::Expression::Literal(naga::Literal::AbstractInt(v)) => v as u32,
-        ref e => panic!("WGSL constant `{name}` is not an integer literal: {e:?}"),
+        naga::Expression::Literal(l) => l,
+        ref e => panic!("WGSL constant `{name}` is not a literal: {e:?}"),
+    }
+}
+
+/// The value of the WGSL `const name: u32`.
+fn wgsl_u32_const(module: &naga::Module, name: &str) -> u32 {
+    match wgsl_const_literal(module, name) {
+        naga::Literal::U32(v) => v,
+        naga::Literal::I32(v) if v >= 0 => v as u32,
+        naga::Literal::AbstractInt(v) => v as u32,
+        l => panic!("WGSL constant `{name}` is not an integer: {l:?}"),
     }
 }
 
@@ -295,7 +303,7 @@ fn constants_match_rust() {
         ("MAT_DIELECTRIC", MaterialKind::Dielectric as u32),
         ("NO_HIT", u32::MAX),
     ];
-    for (what, module) in modules() {
+    for (what, module, storage) in modules() {
         for &(name, value) in expected {
             assert_eq!(
                 wgsl_u32_const(&module, name),
@@ -340,13 +348,12 @@ fn constants_match_rust() {
             );
         }
         // Each way of binding the tables has its size constant.
-        let (name, value) = if what.contains("Uniform") {
-            (
+        let (name, value) = match storage {
+            TableStorage::Uniform => (
                 "UNIFORM_TABLE_TEXELS",
                 meshtrace::gpu::UNIFORM_TABLE_TEXELS as u32,
-            )
-        } else {
-            ("TABLE_WIDTH_LOG2", meshtrace::gpu::TABLE_WIDTH.ilog2())
+            ),
+            TableStorage::Textures => ("TABLE_WIDTH_LOG2", meshtrace::gpu::TABLE_WIDTH.ilog2()),
         };
         assert_eq!(
             wgsl_u32_const(&module, name),
@@ -357,14 +364,9 @@ fn constants_match_rust() {
 }
 
 fn wgsl_f32_const(module: &naga::Module, name: &str) -> f32 {
-    let (_, c) = module
-        .constants
-        .iter()
-        .find(|(_, c)| c.name.as_deref() == Some(name))
-        .unwrap_or_else(|| panic!("WGSL constant `{name}` not found"));
-    match module.global_expressions[c.init] {
-        naga::Expression::Literal(naga::Literal::F32(v)) => v,
-        ref e => panic!("WGSL constant `{name}` is not an f32 literal: {e:?}"),
+    match wgsl_const_literal(module, name) {
+        naga::Literal::F32(v) => v,
+        l => panic!("WGSL constant `{name}` is not an f32: {l:?}"),
     }
 }
 

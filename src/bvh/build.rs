@@ -232,6 +232,8 @@ fn merge_bins<const N: usize>(mut a: [[Bin; N]; 3], b: [[Bin; N]; 3]) -> [[Bin; 
 struct Split {
     axis: usize,
     bin: usize,
+    /// The bin scale along `axis`, which the partition's test must share with binning.
+    scale: f32,
     /// `None` where the bins held only a sample of the triangles.
     sides: Option<Sides>,
 }
@@ -403,7 +405,7 @@ fn binned_split(
     let n = refs.len();
     match find_split(ctx, refs, b) {
         Some((cost, split)) if cost < p.intersect_cost * n as f32 || n > p.max_leaf_size => {
-            Some(partition(ctx, refs, ids, b, &split))
+            Some(partition(refs, ids, b, &split))
         }
         Some(_) => None,
         // All centroids coincide: no plane separates them.
@@ -437,12 +439,7 @@ fn exact_split(
     if let [l, r] = refs {
         // One way to split two, whatever the axis; nothing to sort or reorder.
         let cost = area(l.min, l.max) + area(r.min, r.max);
-        let side = |r: &PrimRef| Bounds {
-            min: r.min,
-            max: r.max,
-            cmin: r.centroid2(),
-            cmax: r.centroid2(),
-        };
+        let side = |r| Bounds::of(std::slice::from_ref(r));
         return splits(cost).then(|| (1, side(l), side(r)));
     }
     // (area-weighted cost, order along the axis, left count)
@@ -628,6 +625,7 @@ fn find_split_in<const N: usize>(
     let split = Split {
         axis,
         bin,
+        scale: scale[axis],
         sides: (!sampled).then(|| Sides {
             left: union(&bins[axis][..bin]),
             right: union(&bins[axis][bin..nb]),
@@ -685,14 +683,17 @@ impl Side {
 /// side's box, which holds every centroid of it: looser than a pass over the triangles
 /// would find, and that pass is saved. After a sampled split, a pass measures both sides.
 fn partition(
-    ctx: &Context,
     refs: &mut [PrimRef],
     ids: &mut [u32],
     b: &Bounds,
     split: &Split,
 ) -> (usize, Bounds, Bounds) {
-    let scale = bin_scale(b, bins_for(ctx, refs.len()))[split.axis];
-    let (axis, cmin, bin) = (split.axis, b.cmin[split.axis], split.bin as f32);
+    let (axis, scale, cmin, bin) = (
+        split.axis,
+        split.scale,
+        b.cmin[split.axis],
+        split.bin as f32,
+    );
     // `bin_index` on one axis with the same arithmetic, so the counts match the bins'.
     // Its clamp and truncation change nothing here: below 0 stays below `bin`, above the
     // last bin stays at or above it, and truncation keeps `k < bin` for whole `bin`.

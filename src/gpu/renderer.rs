@@ -111,9 +111,7 @@ impl TableStorage {
     /// The storage for `scene` on this device: the packed uniform array on software
     /// adapters when the scene fits, textures otherwise.
     pub fn choose(ctx: &GpuContext, scene: &RenderScene) -> Self {
-        let fits = packed_texels(&scene_tables(scene, &materials(scene))).is_some_and(|texels| {
-            texels * 16 <= ctx.limits.max_uniform_buffer_binding_size as usize
-        });
+        let fits = packed_bytes(&scene_tables(scene, &materials(scene))) <= uniform_capacity(ctx);
         if ctx.adapter.software && fits {
             TableStorage::Uniform
         } else {
@@ -144,14 +142,25 @@ fn scene_tables<'a>(
     ]
 }
 
-/// Texels the packed uniform array needs for `tables`, if they fit in it.
-fn packed_texels(tables: &[(&str, &[u8]); 6]) -> Option<usize> {
+/// Bytes the packed uniform array needs for `tables`, header included.
+fn packed_bytes(tables: &[(&str, &[u8]); 6]) -> u64 {
     let texels = UNIFORM_HEADER_TEXELS
         + tables
             .iter()
             .map(|(_, data)| data.len().div_ceil(16))
             .sum::<usize>();
-    (texels <= UNIFORM_TABLE_TEXELS).then_some(texels)
+    texels as u64 * 16
+}
+
+/// Bytes the packed uniform array can hold on this device: the WGSL array's whole size,
+/// which is always bound, or nothing where the adapter's uniform bindings are smaller.
+fn uniform_capacity(ctx: &GpuContext) -> u64 {
+    let bytes = (UNIFORM_TABLE_TEXELS * 16) as u64;
+    if bytes <= ctx.limits.max_uniform_buffer_binding_size {
+        bytes
+    } else {
+        0
+    }
 }
 
 /// The packed uniform array: a header of first texels, then each table, 16-byte aligned.
@@ -241,14 +250,12 @@ impl GpuScene {
                 Tables::Textures(views)
             }
             TableStorage::Uniform => {
-                let bytes = (UNIFORM_TABLE_TEXELS * 16) as u64;
-                if packed_texels(&tables).is_none()
-                    || bytes > ctx.limits.max_uniform_buffer_binding_size
-                {
+                let (bytes, limit) = (packed_bytes(&tables), uniform_capacity(ctx));
+                if bytes > limit {
                     return Err(GpuError::TooLarge {
                         what: "packed scene tables",
                         bytes,
-                        limit: ctx.limits.max_uniform_buffer_binding_size,
+                        limit,
                     });
                 }
                 let buffer = ctx
@@ -264,7 +271,7 @@ impl GpuScene {
                     ty: wgpu::BindingType::Buffer {
                         ty: wgpu::BufferBindingType::Uniform,
                         has_dynamic_offset: false,
-                        min_binding_size: wgpu::BufferSize::new(bytes),
+                        min_binding_size: wgpu::BufferSize::new((UNIFORM_TABLE_TEXELS * 16) as u64),
                     },
                     count: None,
                 });
