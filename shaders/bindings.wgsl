@@ -1,5 +1,5 @@
 // The scene, group 0: the tables of src/render/mod.rs `RenderScene`, uploaded as they are
-// (bindings_uniform.wgsl packs small ones into one uniform array instead).
+// (src/render/gpu/tables.rs).
 //
 // Each table is read as texels of an Rgba32Uint texture, row-major, TABLE_WIDTH texels a
 // row: a texel fetch is a cheap gather on every device, while lavapipe (Mesa 22.3) lowers
@@ -13,7 +13,7 @@
 @group(0) @binding(5) var emitters_tex: texture_2d<u32>;
 @group(0) @binding(6) var emitter_cdf_tex: texture_2d<u32>;
 
-// mirror: src/gpu/renderer.rs `TABLE_WIDTH`
+// mirror: src/render/gpu/tables.rs `TABLE_WIDTH`
 const TABLE_WIDTH_LOG2: u32 = 12u;
 
 fn table_texel(t: texture_2d<u32>, i: u32) -> vec4<u32> {

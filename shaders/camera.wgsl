@@ -1,7 +1,7 @@
-// Primary rays. mirror: src/scene/camera.rs
+// Primary rays. mirror: src/render/camera.rs
 
 // A box-filtered sample of pixel (px, py) through a pinhole or thin lens.
-// mirror: src/scene/camera.rs `Camera::generate_camera_ray`
+// mirror: src/render/camera.rs `generate_camera_ray`
 fn generate_camera_ray(px: u32, py: u32, rng: Rng) -> Ray {
     let jx = rng_1d(rng, 0u, DIM_PIXEL_X);
     let jy = rng_1d(rng, 0u, DIM_PIXEL_Y);

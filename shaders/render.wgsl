@@ -1,7 +1,9 @@
 // The render kernel: one invocation per pixel, tracing this dispatch's samples.
 
-// Per-pixel sums: radiance (xyz) and rays traced (w).
-@group(1) @binding(0) var<storage, read_write> accum: array<vec4<f32>>;
+// The film, params.film_texels texels per pixel: the radiance sum (xyz), then one texel per
+// film channel, the first being the `rays` channel (its x counts the rays traced).
+// mirror: src/film.rs `Film::texels_per_pixel`
+@group(1) @binding(0) var<storage, read_write> film: array<vec4<f32>>;
 
 fn is_finite3(v: vec3<f32>) -> bool {
     let e = bitcast<vec3<u32>>(v) & vec3<u32>(0x7f800000u);
@@ -17,7 +19,9 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let pixel = y * params.width + x;
-    var sum = accum[pixel];
+    let base = pixel * params.film_texels;
+    var radiance = film[base].xyz;
+    var rays = film[base + 1u].x;
     // Persistent paths: a lane whose path ends starts its next sample at once, so the lanes
     // of a SIMD group do not all wait for the longest path of every sample.
     var s = params.sample_start;
@@ -29,9 +33,9 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     loop {
         if path_step(&st, rng) {
             if is_finite3(st.radiance) {
-                sum += vec4<f32>(st.radiance, 0.0);
+                radiance += st.radiance;
             }
-            sum.w += f32(st.rays);
+            rays += f32(st.rays);
             s += 1u;
             if s >= params.sample_end {
                 break;
@@ -40,5 +44,6 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
             st = path_start(generate_camera_ray(x, y, rng));
         }
     }
-    accum[pixel] = sum;
+    film[base] = vec4<f32>(radiance, 0.0);
+    film[base + 1u].x = rays;
 }

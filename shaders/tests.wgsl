@@ -1,5 +1,5 @@
 // Shader unit-test kernels: each case reads two vec4<u32> and writes two. Run by
-// src/gpu/kernels.rs from tests/shader_units.rs, which compares every output with the Rust
+// src/render/gpu/kernels.rs from tests/shader_units.rs, which compares every output with the Rust
 // function of the same name.
 
 @group(1) @binding(0) var<storage, read> test_in: array<vec4<u32>>;

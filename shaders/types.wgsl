@@ -32,7 +32,7 @@ const TRI_SMOOTH: u32 = 1u;
 // The `emitters` entry that stands for the sky. mirror: src/render/mod.rs `SKY_EMITTER`
 const SKY_EMITTER: u32 = 0xffffffffu;
 
-// mirror: src/gpu/layout.rs `GpuMaterial` (48 bytes)
+// mirror: src/render/gpu/params.rs `GpuMaterial` (48 bytes)
 struct Material {
     albedo: vec3<f32>,
     kind: u32,
@@ -50,7 +50,7 @@ const MAT_CONDUCTOR: u32 = 1u;
 const MAT_ROUGH_CONDUCTOR: u32 = 2u;
 const MAT_DIELECTRIC: u32 = 3u;
 
-// mirror: src/gpu/layout.rs `GpuParams` (144 bytes): one dispatch's camera, sky and range.
+// mirror: src/render/gpu/params.rs `GpuParams` (144 bytes): one dispatch's camera, sky and range.
 struct Params {
     cam_position: vec3<f32>,
     width: u32,
@@ -76,9 +76,10 @@ struct Params {
     row_end: u32,
     // Probability that light sampling picks the sky (RenderScene::sky_pmf on the host).
     sky_pmf: f32,
+    // Texels per pixel of the accumulation buffer: radiance, then one per film channel.
+    film_texels: u32,
     _pad0: u32,
     _pad1: u32,
-    _pad2: u32,
 }
 
 struct Ray {

@@ -4,11 +4,13 @@
 
 use crate::bvh::{BuildParams, Bvh, traverse_any, traverse_closest};
 use crate::geometry::{T_INF, geometric_normal};
-use crate::gpu::{GpuContext, GpuError, kernels::Kernel, shader};
 use crate::math::{Aabb, Ray, onb_from_normal};
+use crate::render::camera::{CameraRays, generate_camera_ray};
+use crate::render::gpu::{GpuContext, GpuError, GpuRenderer, kernels::Kernel, shader};
+use crate::render::integrator::offset_ray_origin;
 use crate::render::rng::Rng;
 use crate::render::sampling::{sample_cosine_hemisphere, sample_uniform_triangle};
-use crate::render::{RenderJob, RenderScene, SKY_EMITTER, cpu, cpu::offset_ray_origin};
+use crate::render::{RenderJob, RenderScene, SKY_EMITTER, cpu};
 use crate::scene::{Camera, Material, Mesh, NO_NORMAL, RenderSettings, Scene, Sky, Triangle};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -62,15 +64,11 @@ pub type BenchRay = (Ray, f32);
 
 impl RaySets {
     pub fn new(scene: &RenderScene, width: u32, height: u32) -> Self {
+        let cam = CameraRays::new(&scene.camera, width, height);
         let primary: Vec<BenchRay> = (0..width * height)
             .map(|i| {
                 let rng = Rng::new(i, 0, 0x0bec);
-                (
-                    scene
-                        .camera
-                        .generate_camera_ray(i % width, i / width, width, height, &rng),
-                    T_INF,
-                )
+                (generate_camera_ray(&cam, i % width, i / width, &rng), T_INF)
             })
             .collect();
         let bounds = scene.bvh.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds());
@@ -234,15 +232,17 @@ pub fn bench_scene(
         let mut path_rays = 0u64;
         let rates = timed(opts.repeats, samples / 1e6, || {
             let start = Instant::now();
-            path_rays = cpu::render(&rs, &job, &|_| {}).1;
+            path_rays = cpu::render(&rs, &job, &|_| {}).rays();
             Ok(start.elapsed().as_secs_f64())
         })?;
         push_path(&mut out, name, "cpu", rates, path_rays as f64 / samples);
     }
     if let Some(ctx) = gpu {
+        let mut renderer = GpuRenderer::new(ctx, &rs)?;
+        let source = shader::bench_source();
         for (measure, set, any) in sets {
             let entry = if any { "bench_any" } else { "bench_closest" };
-            let kernel = Kernel::new(ctx, &rs, &settings, shader::bench_source, entry)?;
+            let kernel = Kernel::new(&renderer, &settings, &source, entry)?;
             let words = ray_words(set);
             let n = set.len() as f64 / 1e6;
             let rates = timed(opts.repeats, n, || {
@@ -253,7 +253,7 @@ pub fn bench_scene(
         let mut path_rays = 0u64;
         let rates = timed(opts.repeats, samples / 1e6, || {
             let start = Instant::now();
-            path_rays = crate::gpu::render(ctx, &rs, &job, &|_| {})?.1;
+            path_rays = renderer.render(&job, &|_| {})?.rays();
             Ok(start.elapsed().as_secs_f64())
         })?;
         push_path(&mut out, name, "gpu", rates, path_rays as f64 / samples);

@@ -6,8 +6,9 @@ use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use meshtrace::bvh::BuildParams;
 use meshtrace::film::Film;
-use meshtrace::gpu::{self, GpuContext, GpuError};
-use meshtrace::render::{RenderJob, RenderScene, cpu};
+use meshtrace::render::backend::{Backend, DeviceChoice};
+use meshtrace::render::gpu::{self, GpuError};
+use meshtrace::render::{RenderJob, RenderScene};
 use meshtrace::scene::{self, Scene, builtin, load::validate_settings};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -53,8 +54,11 @@ pub struct BenchArgs {
     /// Scene files, .obj meshes, builtin:NAME or generated:terrain; by default the built-in
     /// Cornell box, the Stanford bunny (from ../shared/meshes) and a 2M-triangle terrain.
     pub scenes: Vec<PathBuf>,
-    #[arg(long, value_enum, default_value_t = BenchDevice::All)]
-    pub device: BenchDevice,
+    /// Devices to measure; by default the CPU, and the GPU where the render rule picks
+    /// it (a hardware adapter, or one named by --adapter). `gpu` and `all` use a software
+    /// adapter too.
+    #[arg(long, value_enum)]
+    pub device: Option<BenchDevice>,
     /// GPU adapter: an index or a name substring from `meshtrace adapters`.
     #[arg(long)]
     pub adapter: Option<String>,
@@ -203,36 +207,19 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     let total = settings.width as u64 * settings.height as u64 * settings.spp as u64;
     let bar = progress_bar(total, args.quiet);
     let start = Instant::now();
-    let gpu = match args.device {
-        Some(Device::Cpu) => None,
-        Some(Device::Gpu) => Some(GpuContext::new(args.adapter.as_deref())?),
-        None => match gpu::choose_adapter(args.adapter.as_deref()) {
-            // Software adapters are ranked last, so this one is all there is. Unless asked
-            // for by name, it loses to the CPU renderer on the very cores it would run on
-            // (BENCHMARKS.md), and both make the same image; no device is opened for it.
-            Ok((adapter, false)) if adapter.software => {
-                if !args.quiet {
-                    eprintln!(
-                        "notice: the Vulkan adapter, {}, is a software driver; rendering with the faster CPU renderer (--device gpu uses the adapter anyway)",
-                        adapter.name
-                    );
-                }
-                None
-            }
-            Ok(_) => Some(GpuContext::new(args.adapter.as_deref())?),
-            Err(GpuError::NoAdapter) => {
-                eprintln!(
-                    "notice: no Vulkan adapter found; rendering on the CPU (install mesa-vulkan-drivers for lavapipe)"
-                );
-                None
-            }
-            Err(e) => return Err(e.into()),
-        },
+    let choice = match args.device {
+        None => DeviceChoice::Auto,
+        Some(Device::Cpu) => DeviceChoice::Cpu,
+        Some(Device::Gpu) => DeviceChoice::Gpu,
     };
-    let (film, rays) = match &gpu {
-        Some(ctx) => gpu::render(ctx, &rs, &job, &|n| bar.inc(n))?,
-        None => cpu::render(&rs, &job, &|n| bar.inc(n)),
-    };
+    let (backend, notice) = Backend::choose(choice, args.adapter.as_deref())?;
+    if let Some(notice) = notice {
+        if !args.quiet {
+            eprintln!("notice: {notice}");
+        }
+    }
+    let film = backend.render(&rs, &job, &|n| bar.inc(n))?;
+    let rays = film.rays();
     let seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
     if film.samples < settings.spp {
@@ -261,8 +248,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             settings.width,
             settings.height,
             settings.spp,
-            gpu.as_ref()
-                .map_or("the CPU".to_string(), |g| g.adapter.name.clone()),
+            backend.name(),
             seconds,
             rays as f64 / seconds / 1e6,
             args.output.display()
@@ -362,9 +348,18 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
         }
         scenes.push(PathBuf::from("generated:terrain"));
     }
-    let gpu = match args.device {
-        BenchDevice::Cpu => None,
-        BenchDevice::Gpu | BenchDevice::All => Some(GpuContext::new(args.adapter.as_deref())?),
+    let choice = match args.device {
+        None => DeviceChoice::Auto,
+        Some(BenchDevice::Cpu) => DeviceChoice::Cpu,
+        Some(BenchDevice::Gpu | BenchDevice::All) => DeviceChoice::Gpu,
+    };
+    let (backend, notice) = Backend::choose(choice, args.adapter.as_deref())?;
+    if let Some(notice) = notice {
+        eprintln!("notice: {notice}; measuring the CPU only");
+    }
+    let gpu = match backend {
+        Backend::Gpu(ctx) => Some(*ctx),
+        Backend::Cpu => None,
     };
     let opts = meshtrace::bench::BenchOptions {
         repeats: args.repeats,
@@ -403,7 +398,7 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
             &name,
             &scene,
             gpu.as_ref(),
-            args.device != BenchDevice::Gpu,
+            args.device != Some(BenchDevice::Gpu),
             &opts,
         )?;
         if !args.json {

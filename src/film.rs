@@ -1,4 +1,5 @@
-//! The film: per-pixel sums of radiance samples, and the image files made from them.
+//! The film: per-pixel sums of radiance samples and of named channels, and the image files
+//! made from them.
 //!
 //! The output format follows the file's extension: `.exr` (linear float RGB) and `.hdr`
 //! (Radiance RGBE) keep the radiance; `.png`, `.jpg`/`.jpeg` and `.bmp` are sRGB-encoded
@@ -8,14 +9,41 @@
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 
-/// Accumulated radiance: `sum[y * width + x]` is the sum of that pixel's `samples` samples.
+/// How a channel combines the samples of a pixel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Accumulation {
+    /// The mean over all the pixel's samples: a sample that contributes nothing counts as 0.
+    AllSamples,
+    /// The mean over the samples that hit a surface; the texel's `w` counts them.
+    HitSamples,
+    /// The value of the one ray through the pixel centre, traced by the render that holds
+    /// sample 0; the texel's `w` is 1 where it was traced.
+    PixelCentre,
+}
+
+/// One named per-pixel channel beyond radiance. A pixel's entry is one texel, as in the
+/// GPU's accumulation buffer: up to three components in `xyz`, and in `w` what the
+/// accumulation rule needs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Channel {
+    pub name: String,
+    /// Components used, 1 to 3.
+    pub components: usize,
+    pub accumulation: Accumulation,
+    pub data: Vec<[f32; 4]>,
+}
+
+/// Accumulated samples: per-pixel sums of radiance, plus the named channels, each with
+/// its accumulation rule. The first channel is always [`Film::RAYS`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Film {
     pub width: u32,
     pub height: u32,
+    /// `sum[y * width + x]` is the sum of that pixel's radiance samples.
     pub sum: Vec<Vec3>,
-    /// Samples per pixel in `sum`.
+    /// Samples per pixel in `sum` and in the channels.
     pub samples: u32,
+    pub channels: Vec<Channel>,
 }
 
 /// The image formats meshtrace writes.
@@ -61,13 +89,51 @@ pub enum FilmError {
 }
 
 impl Film {
+    /// The channel that counts the rays each pixel's paths traced (camera, bounce and shadow
+    /// rays), summed over its samples: the renderers' cost per pixel.
+    pub const RAYS: &str = "rays";
+
+    /// An empty film with the [`Film::RAYS`] channel.
     pub fn new(width: u32, height: u32) -> Self {
-        Self {
+        let mut film = Self {
             width,
             height,
             sum: vec![Vec3::ZERO; width as usize * height as usize],
             samples: 0,
-        }
+            channels: Vec::new(),
+        };
+        film.add_channel(Self::RAYS, 1, Accumulation::AllSamples);
+        film
+    }
+
+    /// Adds an empty channel of `components` (1 to 3) values per pixel.
+    pub fn add_channel(&mut self, name: &str, components: usize, accumulation: Accumulation) {
+        assert!(
+            (1..=3).contains(&components),
+            "{name}: {components} components"
+        );
+        self.channels.push(Channel {
+            name: name.to_string(),
+            components,
+            accumulation,
+            data: vec![[0.0; 4]; self.sum.len()],
+        });
+    }
+
+    /// The channel named `name`.
+    pub fn channel(&self, name: &str) -> Option<&Channel> {
+        self.channels.iter().find(|c| c.name == name)
+    }
+
+    /// Texels per pixel in the GPU's accumulation buffer: radiance, then one per channel.
+    pub fn texels_per_pixel(&self) -> usize {
+        1 + self.channels.len()
+    }
+
+    /// The rays traced for all the film's samples.
+    pub fn rays(&self) -> u64 {
+        self.channel(Self::RAYS)
+            .map_or(0, |c| c.data.iter().map(|t| t[0] as u64).sum())
     }
 
     /// The per-pixel mean radiance.
@@ -80,11 +146,51 @@ impl Film {
         self.sum.iter().map(|&s| s * inv).collect()
     }
 
-    /// Adds another film of the same size rendered over a disjoint sample range.
+    /// A channel's per-pixel values by its rule: the mean over all samples, the mean over
+    /// the samples that hit, or the centre ray's value. `None` for a pixel that has none
+    /// (no sample hit, or its centre ray is not in this film).
+    pub fn channel_values(&self, channel: &Channel) -> Vec<Option<[f32; 3]>> {
+        let inv = if self.samples == 0 {
+            0.0
+        } else {
+            1.0 / self.samples as f32
+        };
+        let scaled = |t: &[f32; 4], k: f32| [t[0] * k, t[1] * k, t[2] * k];
+        channel
+            .data
+            .iter()
+            .map(|t| match channel.accumulation {
+                Accumulation::AllSamples => (self.samples > 0).then(|| scaled(t, inv)),
+                Accumulation::HitSamples => (t[3] > 0.0).then(|| scaled(t, 1.0 / t[3])),
+                Accumulation::PixelCentre => (t[3] > 0.0).then(|| scaled(t, 1.0)),
+            })
+            .collect()
+    }
+
+    /// Adds another film of the same size and channels rendered over a disjoint sample
+    /// range. Pixel-centre values come from whichever film traced them.
     pub fn merge(&mut self, other: &Film) {
         assert_eq!((self.width, self.height), (other.width, other.height));
         for (a, b) in self.sum.iter_mut().zip(&other.sum) {
             *a += *b;
+        }
+        assert_eq!(self.channels.len(), other.channels.len(), "channel lists");
+        for (a, b) in self.channels.iter_mut().zip(&other.channels) {
+            assert_eq!(
+                (&a.name, a.components, a.accumulation),
+                (&b.name, b.components, b.accumulation)
+            );
+            for (x, y) in a.data.iter_mut().zip(&b.data) {
+                match a.accumulation {
+                    Accumulation::AllSamples | Accumulation::HitSamples => {
+                        for k in 0..4 {
+                            x[k] += y[k];
+                        }
+                    }
+                    Accumulation::PixelCentre if y[3] > 0.0 => *x = *y,
+                    Accumulation::PixelCentre => {}
+                }
+            }
         }
         self.samples += other.samples;
     }

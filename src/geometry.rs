@@ -1,5 +1,5 @@
 //! Triangles as the traversal kernels read them, and the ray–triangle and ray–box tests.
-//! Both tests have WGSL twins of the same name in `shaders/intersect.wgsl`.
+//! Both tests have WGSL twins of the same name in `shaders/geometry.wgsl`.
 
 use crate::math::Ray;
 use bytemuck::{Pod, Zeroable};
@@ -43,7 +43,7 @@ pub struct TriHit {
 /// A ray prepared for the watertight triangle test (Woop, Benthin and Wald 2013,
 /// "Watertight Ray/Triangle Intersection"): the axes turned so that the direction's
 /// largest component is z, and the shear that maps the direction onto +z. Made once per
-/// ray and used for every triangle it meets. mirror: shaders/intersect.wgsl `ShearedRay`
+/// ray and used for every triangle it meets. mirror: shaders/geometry.wgsl `ShearedRay`
 #[derive(Clone, Copy, Debug)]
 pub struct ShearedRay {
     pub origin: Vec3,
@@ -54,7 +54,7 @@ pub struct ShearedRay {
 }
 
 impl ShearedRay {
-    /// mirror: shaders/intersect.wgsl `sheared_ray`
+    /// mirror: shaders/geometry.wgsl `sheared_ray`
     pub fn new(ray: &Ray) -> Self {
         let dir = safe_direction(ray.dir);
         let a = dir.abs();
@@ -75,7 +75,7 @@ impl ShearedRay {
 }
 
 /// `v` with its axes turned cyclically so that axis `kz` comes last.
-/// mirror: shaders/intersect.wgsl `permute`
+/// mirror: shaders/geometry.wgsl `permute`
 #[inline]
 pub fn permute(v: Vec3, kz: u32) -> Vec3 {
     match kz {
@@ -91,7 +91,7 @@ pub fn permute(v: Vec3, kz: u32) -> Vec3 {
 /// the hit is decided by the signs of the three 2D edge functions. A shared edge gives
 /// its two triangles edge functions of exactly opposite sign, so no ray slips between
 /// them, and a hit is never reported outside the triangle, however thin it is.
-/// mirror: shaders/intersect.wgsl `intersect_triangle`
+/// mirror: shaders/geometry.wgsl `intersect_triangle`
 #[inline]
 pub fn intersect_triangle(ray: &ShearedRay, tri: &TriVerts, t_max: f32) -> Option<TriHit> {
     let s = ray.shear;
@@ -137,15 +137,15 @@ const fn gamma(n: f32) -> f32 {
     n * u / (1.0 - n * u)
 }
 
-/// `γ(2)`. mirror: shaders/intersect.wgsl `GAMMA_2`
+/// `γ(2)`. mirror: shaders/geometry.wgsl `GAMMA_2`
 pub const GAMMA_2: f32 = gamma(2.0);
-/// `γ(3)`. mirror: shaders/intersect.wgsl `GAMMA_3`
+/// `γ(3)`. mirror: shaders/geometry.wgsl `GAMMA_3`
 pub const GAMMA_3: f32 = gamma(3.0);
 
 /// A bound on the rounding of the sum of [`intersect_triangle`]'s edge functions: that of
 /// the sheared corners (`γ(3)` of their unsheared terms) carried through the products,
 /// plus that of the products themselves. Only called for hits, so its cost is rarely paid.
-/// mirror: shaders/intersect.wgsl `edge_rounding`
+/// mirror: shaders/geometry.wgsl `edge_rounding`
 fn edge_rounding(ray: &ShearedRay, tri: &TriVerts, p: [Vec3; 3]) -> f32 {
     let s = ray.shear;
     let err = |v: [f32; 4]| {
@@ -165,14 +165,14 @@ fn edge_rounding(ray: &ShearedRay, tri: &TriVerts, p: [Vec3; 3]) -> f32 {
 }
 
 /// Relative slack of the slab test: `2 γ(3)` (PBR 4th ed., 6.8.2) bounds the rounding of
-/// each slab distance. mirror: shaders/intersect.wgsl `SLAB_SLACK`
+/// each slab distance. mirror: shaders/geometry.wgsl `SLAB_SLACK`
 pub const SLAB_SLACK: f32 = 1.0 + 2.0 * GAMMA_3;
 
 /// Conservative slab test: the distance at which the ray enters the box, or [`T_INF`]
 /// if it misses it before `t_max`. The exit distance is widened by the rounding bound,
 /// so a box is never missed by a ray that hits a triangle inside it.
 /// `inv_dir` is [`safe_inverse`] of the ray direction.
-/// mirror: shaders/intersect.wgsl `intersect_aabb`
+/// mirror: shaders/geometry.wgsl `intersect_aabb`
 #[inline]
 pub fn intersect_aabb(origin: Vec3, inv_dir: Vec3, min: Vec3, max: Vec3, t_max: f32) -> f32 {
     let t0 = (min - origin) * inv_dir;
@@ -185,7 +185,7 @@ pub fn intersect_aabb(origin: Vec3, inv_dir: Vec3, min: Vec3, max: Vec3, t_max: 
 /// `d` with each zero component replaced by a tiny value of the same sign (`+` for
 /// `-0.0`), so that the slab test never meets `0 * inf`. The triangle test shears by the
 /// same direction, so a ray that runs exactly along a box face is on the same side of it
-/// in both tests. mirror: shaders/intersect.wgsl `safe_direction`
+/// in both tests. mirror: shaders/geometry.wgsl `safe_direction`
 #[inline]
 pub fn safe_direction(d: Vec3) -> Vec3 {
     const TINY: f32 = 1e-30;
@@ -199,19 +199,22 @@ pub fn safe_direction(d: Vec3) -> Vec3 {
     Vec3::new(fix(d.x), fix(d.y), fix(d.z))
 }
 
-/// `1 / d` per component of [`safe_direction`]. mirror: shaders/intersect.wgsl `safe_inverse`
+/// `1 / d` per component of [`safe_direction`]. mirror: shaders/geometry.wgsl `safe_inverse`
 #[inline]
 pub fn safe_inverse(d: Vec3) -> Vec3 {
     safe_direction(d).recip()
 }
 
 /// The geometric normal, (v1 − v0) × (v2 − v0) normalised: it points out of the front face.
+/// mirror: shaders/geometry.wgsl `geometric_normal`
 pub fn geometric_normal(tri: &TriVerts) -> Vec3 {
     let [a, b, c] = tri.corners();
     (b - a).cross(c - a).normalize()
 }
 
-pub fn area(tri: &TriVerts) -> f32 {
+/// The triangle's area, for the pdf of a uniform point on it.
+/// mirror: shaders/geometry.wgsl `triangle_area`
+pub fn triangle_area(tri: &TriVerts) -> f32 {
     let [a, b, c] = tri.corners();
     0.5 * (b - a).cross(c - a).length()
 }

@@ -2,14 +2,14 @@
 //!
 //! The data flows one way: a scene file is loaded into a [`scene::Scene`], whose triangles
 //! a SAH [`bvh::Bvh`] orders and indexes; [`render::RenderScene`] packs both into the flat
-//! tables that the CPU reference integrator ([`render::cpu`]) and the GPU compute renderer
-//! read alike; the samples land in a [`film::Film`], which writes the image file.
+//! tables that the CPU renderer ([`render::cpu`]) and the GPU compute renderer
+//! ([`render::gpu`]) read alike; the samples land in a [`film::Film`], which writes the
+//! image file.
 
 pub mod bench;
 pub mod bvh;
 pub mod film;
 pub mod geometry;
-pub mod gpu;
 pub mod math;
 pub mod render;
 pub mod scene;

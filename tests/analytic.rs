@@ -13,18 +13,15 @@ use common::{add_box, mean_and_stderr, scene};
 use glam::Vec3;
 use meshtrace::bvh::BuildParams;
 use meshtrace::film::Film;
-use meshtrace::render::{RenderJob, RenderScene, cpu};
+use meshtrace::render::{RenderJob, RenderScene};
 use meshtrace::scene::{Camera, Material, Mesh, RenderSettings, Scene, Sky};
 
 fn render_both(name: &str, scene: &Scene) -> Vec<(&'static str, Film)> {
     let rs = RenderScene::new(scene, &BuildParams::default()).unwrap();
     let job = RenderJob::new(scene.settings);
-    let mut out = vec![("cpu", cpu::render(&rs, &job, &|_| {}).0)];
+    let mut out = vec![("cpu", common::cpu_render(&rs, &job))];
     if let Some(ctx) = common::gpu(name) {
-        out.push((
-            "gpu",
-            meshtrace::gpu::render(&ctx, &rs, &job, &|_| {}).unwrap().0,
-        ));
+        out.push(("gpu", common::gpu_render(&ctx, &rs, &job)));
     }
     out
 }

@@ -30,11 +30,11 @@ mod common;
 
 use glam::{DVec3, Vec2, Vec3};
 use meshtrace::bvh::BuildParams;
-use meshtrace::gpu::kernels::run_test_kernel;
 use meshtrace::render::RenderScene;
 use meshtrace::render::bsdf::{
     bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample, fresnel_dielectric, ggx_alpha,
 };
+use meshtrace::render::gpu::kernels::run_test_kernel;
 use meshtrace::render::rng::Rng;
 use meshtrace::render::sampling::sample_uniform_sphere;
 use meshtrace::scene::{
@@ -1136,7 +1136,7 @@ struct GpuSample {
 
 /// Runs `test_bsdf_sample` over (material index, wo, u) cases.
 fn gpu_sample(
-    ctx: &meshtrace::gpu::GpuContext,
+    ctx: &meshtrace::render::gpu::GpuContext,
     rs: &RenderScene,
     settings: &RenderSettings,
     cases: &[(u32, Vec3, [f32; 3])],
@@ -1174,7 +1174,7 @@ fn gpu_sample(
 
 /// Runs `test_bsdf_eval` over (material index, wo, wi) cases: (f |cos|, pdf) each.
 fn gpu_eval(
-    ctx: &meshtrace::gpu::GpuContext,
+    ctx: &meshtrace::render::gpu::GpuContext,
     rs: &RenderScene,
     settings: &RenderSettings,
     cases: &[(u32, Vec3, Vec3)],

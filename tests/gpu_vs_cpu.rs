@@ -2,10 +2,11 @@
 
 mod common;
 
+use common::{cpu_render, gpu_render};
 use meshtrace::bvh::BuildParams;
 use meshtrace::film::Film;
-use meshtrace::gpu::TableStorage;
-use meshtrace::render::{RenderJob, RenderScene, cpu};
+use meshtrace::render::gpu::GpuRenderer;
+use meshtrace::render::{RenderJob, RenderScene};
 use meshtrace::scene::{RenderSettings, builtin};
 
 fn cornell(width: u32, spp: u32, seed: u32) -> (RenderScene, RenderSettings) {
@@ -59,27 +60,15 @@ fn gpu_and_cpu_agree_within_noise() {
         return;
     };
     let (rs, s) = cornell(64, 32, 1);
-    let gpu = channels(
-        &meshtrace::gpu::render(&ctx, &rs, &RenderJob::new(s), &|_| {})
-            .unwrap()
-            .0,
-    );
-    let cpu_a = channels(
-        &cpu::render(
-            &rs,
-            &RenderJob::new(RenderSettings { seed: 2, ..s }),
-            &|_| {},
-        )
-        .0,
-    );
-    let cpu_b = channels(
-        &cpu::render(
-            &rs,
-            &RenderJob::new(RenderSettings { seed: 3, ..s }),
-            &|_| {},
-        )
-        .0,
-    );
+    let gpu = channels(&gpu_render(&ctx, &rs, &RenderJob::new(s)));
+    let cpu_a = channels(&cpu_render(
+        &rs,
+        &RenderJob::new(RenderSettings { seed: 2, ..s }),
+    ));
+    let cpu_b = channels(&cpu_render(
+        &rs,
+        &RenderJob::new(RenderSettings { seed: 3, ..s }),
+    ));
     let n = gpu.len() as f64;
     let stats = |x: &[f64]| {
         let m = x.iter().sum::<f64>() / n;
@@ -118,8 +107,8 @@ fn gpu_replays_the_cpu_paths() {
     };
     let (rs, s) = cornell(64, 8, 5);
     let job = RenderJob::new(s);
-    let gpu = channels(&meshtrace::gpu::render(&ctx, &rs, &job, &|_| {}).unwrap().0);
-    let cpu = channels(&cpu::render(&rs, &job, &|_| {}).0);
+    let gpu = channels(&gpu_render(&ctx, &rs, &job));
+    let cpu = channels(&cpu_render(&rs, &job));
     let frac = fraction_close(&gpu, &cpu);
     eprintln!("{:.4}% of pixel channels agree to 1e-3", 100.0 * frac);
     assert!(frac >= 0.99, "only {frac} of pixel channels agree");
@@ -133,43 +122,56 @@ fn gpu_renders_are_deterministic() {
     };
     let (rs, s) = cornell(48, 8, 9);
     let job = RenderJob::new(s);
-    let a = meshtrace::gpu::render(&ctx, &rs, &job, &|_| {}).unwrap();
-    let b = meshtrace::gpu::render(&ctx, &rs, &job, &|_| {}).unwrap();
-    assert_eq!(bits(&a.0), bits(&b.0));
-    assert_eq!(a.1, b.1, "ray counts");
+    let a = gpu_render(&ctx, &rs, &job);
+    let b = gpu_render(&ctx, &rs, &job);
+    assert_eq!(bits(&a), bits(&b));
+    assert_eq!(a.channels, b.channels, "ray counts");
 }
 
-/// Tables packed into one uniform array and tables as textures are read through the same
-/// `load_*` functions: the images are the same bits, so a wrong offset in the packing
-/// shows as a different image.
+/// One renderer session renders job after job without uploading or compiling again: a
+/// job rendered after another of a different size and seed gives the bits it gives in a
+/// fresh session, and sample ranges dispatched one after another give the bits of one
+/// render of them all.
 #[test]
-fn table_storages_render_the_same_bits() {
-    let Some(ctx) = common::gpu("table_storages_render_the_same_bits") else {
+fn a_renderer_session_renders_many_jobs() {
+    let Some(ctx) = common::gpu("a_renderer_session_renders_many_jobs") else {
         return;
     };
     let (rs, s) = cornell(48, 8, 4);
     let job = RenderJob::new(s);
-    let render = |storage| meshtrace::gpu::render_with(&ctx, &rs, &job, storage, &|_| {}).unwrap();
-    let (textures, uniform) = (
-        render(TableStorage::Textures),
-        render(TableStorage::Uniform),
-    );
+    let fresh = gpu_render(&ctx, &rs, &job);
     assert!(
-        bits(&textures.0).iter().any(|&b| b != 0),
+        bits(&fresh).iter().any(|&b| b != 0),
         "a black image proves nothing"
     );
+    let mut session = GpuRenderer::new(&ctx, &rs).unwrap();
+    let other = RenderJob::new(RenderSettings {
+        width: 20,
+        height: 12,
+        seed: 1,
+        ..s
+    });
+    session.render(&other, &|_| {}).unwrap();
+    let again = session.render(&job, &|_| {}).unwrap();
     assert!(
-        bits(&textures.0) == bits(&uniform.0),
-        "the two table storages render differently"
+        bits(&again) == bits(&fresh),
+        "a reused session renders differently"
     );
-    assert_eq!(textures.1, uniform.1, "ray counts");
-    // And both replay the CPU's paths, as in gpu_replays_the_cpu_paths.
-    let (gpu, cpu) = (
-        channels(&uniform.0),
-        channels(&cpu::render(&rs, &job, &|_| {}).0),
-    );
+    assert_eq!(again.channels, fresh.channels, "ray counts");
+    session.begin(&s, 0).unwrap();
+    session.dispatch(0..3, 0..s.height).unwrap();
+    session.dispatch(3..8, 0..s.height).unwrap();
+    let parts = session.read_film().unwrap();
+    assert_eq!(parts.samples, 8);
     assert!(
-        fraction_close(&gpu, &cpu) >= 0.99,
+        bits(&parts) == bits(&fresh),
+        "dispatched ranges differ from one render"
+    );
+    assert_eq!(parts.channels, fresh.channels, "ray counts");
+    // And the GPU replays the CPU's paths, as in gpu_replays_the_cpu_paths.
+    let cpu = cpu_render(&rs, &job);
+    assert!(
+        fraction_close(&channels(&fresh), &channels(&cpu)) >= 0.99,
         "the GPU and CPU paths differ"
     );
 }
@@ -178,9 +180,9 @@ fn table_storages_render_the_same_bits() {
 #[test]
 fn sample_ranges_merge_into_the_full_render() {
     let (rs, s) = cornell(32, 8, 4);
-    let full = cpu::render(&rs, &RenderJob::new(s), &|_| {}).0;
-    let mut first = cpu::render(&rs, &RenderJob::new(s).with_samples(0..3), &|_| {}).0;
-    let second = cpu::render(&rs, &RenderJob::new(s).with_samples(3..8), &|_| {}).0;
+    let full = cpu_render(&rs, &RenderJob::new(s));
+    let mut first = cpu_render(&rs, &RenderJob::new(s).with_samples(0..3));
+    let second = cpu_render(&rs, &RenderJob::new(s).with_samples(3..8));
     first.merge(&second);
     assert_eq!(first.samples, full.samples);
     for (a, b) in first.sum.iter().zip(&full.sum) {

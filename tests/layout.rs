@@ -5,9 +5,9 @@
 
 use meshtrace::bvh::BvhNode;
 use meshtrace::geometry::TriVerts;
-use meshtrace::gpu::layout::{GpuMaterial, GpuParams};
-use meshtrace::gpu::{TableStorage, shader};
 use meshtrace::render::TriShading;
+use meshtrace::render::gpu::params::{GpuMaterial, GpuParams};
+use meshtrace::render::gpu::shader;
 use meshtrace::render::rng;
 use meshtrace::scene::MaterialKind;
 use naga::valid::{Capabilities, ValidationFlags, Validator};
@@ -23,10 +23,9 @@ fn parse_and_validate(what: &str, source: &str) -> naga::Module {
     module
 }
 
-/// Every module the host compiles: each entry-point file with each way of binding tables.
-/// The test modules come first, one per [`TableStorage`].
-fn modules() -> Vec<(String, naga::Module, TableStorage)> {
-    type Source = fn(TableStorage) -> String;
+/// Every module the host compiles, one per entry-point file; the test module first.
+fn modules() -> Vec<(String, naga::Module)> {
+    type Source = fn() -> String;
     let sources: [(&str, Source); 3] = [
         ("test_source", shader::test_source),
         ("render_source", shader::render_source),
@@ -34,19 +33,13 @@ fn modules() -> Vec<(String, naga::Module, TableStorage)> {
     ];
     sources
         .iter()
-        .flat_map(|&(name, source)| {
-            [TableStorage::Textures, TableStorage::Uniform].map(|storage| {
-                let what = format!("{name}({storage:?})");
-                let module = parse_and_validate(&what, &source(storage));
-                (what, module, storage)
-            })
-        })
+        .map(|&(name, source)| (name.to_string(), parse_and_validate(name, &source())))
         .collect()
 }
 
 #[test]
 fn every_module_parses_and_validates() {
-    for (what, m, _) in modules() {
+    for (what, m) in modules() {
         assert!(
             !m.entry_points.is_empty(),
             "{what}: no entry points after parsing"
@@ -159,7 +152,7 @@ fn assert_same_layout(wgsl_name: &str, wgsl: (usize, Vec<Member>), rust: (usize,
 
 #[test]
 fn structs_match_their_rust_twins() {
-    for (what, module, _) in modules() {
+    for (what, module) in modules() {
         eprintln!("checking {what}");
         assert_same_layout(
             "BvhNode",
@@ -225,6 +218,7 @@ fn structs_match_their_rust_twins() {
                 row_start,
                 row_end,
                 sky_pmf,
+                film_texels,
                 _pad,
             }),
         );
@@ -234,7 +228,7 @@ fn structs_match_their_rust_twins() {
 #[test]
 fn layout_check_can_fail() {
     // A twin with a member moved must be caught: the check is not vacuous.
-    let module = &modules()[1].1;
+    let module = &modules()[0].1;
     let mut rust = rust_layout!(BvhNode {
         min,
         left_or_first,
@@ -295,7 +289,7 @@ fn constants_match_rust() {
         ("DIM_ROULETTE", rng::DIM_ROULETTE),
         ("DIMS_PER_BOUNCE", rng::DIMS_PER_BOUNCE),
         ("STACK_SIZE", meshtrace::bvh::STACK_SIZE as u32),
-        ("RR_DEPTH", meshtrace::render::cpu::RR_DEPTH),
+        ("RR_DEPTH", meshtrace::render::integrator::RR_DEPTH),
         ("TRI_SMOOTH", meshtrace::render::TRI_SMOOTH),
         ("MAT_DIFFUSE", MaterialKind::Diffuse as u32),
         ("MAT_CONDUCTOR", MaterialKind::Conductor as u32),
@@ -303,7 +297,7 @@ fn constants_match_rust() {
         ("MAT_DIELECTRIC", MaterialKind::Dielectric as u32),
         ("NO_HIT", u32::MAX),
     ];
-    for (what, module, storage) in modules() {
+    for (what, module) in modules() {
         for &(name, value) in expected {
             assert_eq!(
                 wgsl_u32_const(&module, name),
@@ -347,14 +341,10 @@ fn constants_match_rust() {
                 "{what}: WGSL `{name}` differs from Rust"
             );
         }
-        // Each way of binding the tables has its size constant.
-        let (name, value) = match storage {
-            TableStorage::Uniform => (
-                "UNIFORM_TABLE_TEXELS",
-                meshtrace::gpu::UNIFORM_TABLE_TEXELS as u32,
-            ),
-            TableStorage::Textures => ("TABLE_WIDTH_LOG2", meshtrace::gpu::TABLE_WIDTH.ilog2()),
-        };
+        let (name, value) = (
+            "TABLE_WIDTH_LOG2",
+            meshtrace::render::gpu::TABLE_WIDTH.ilog2(),
+        );
         assert_eq!(
             wgsl_u32_const(&module, name),
             value,
@@ -531,7 +521,7 @@ fn rust_mirror_tags_name_existing_wgsl_items() {
 fn documented_struct_sizes_match_naga() {
     // Tags such as "mirror: src/bvh/mod.rs `BvhNode` (32 bytes)" state the size of the
     // WGSL struct declared next.
-    let module = &modules()[1].1;
+    let module = &modules()[0].1;
     let text = std::fs::read_to_string(root().join("shaders/types.wgsl")).unwrap();
     let lines: Vec<&str> = text.lines().collect();
     let mut checked = 0;

@@ -24,7 +24,7 @@ mod common;
 use glam::Vec3;
 use meshtrace::bvh::BuildParams;
 use meshtrace::film::{Film, read_linear};
-use meshtrace::render::{RenderJob, RenderScene, cpu};
+use meshtrace::render::{RenderJob, RenderScene};
 use meshtrace::scene::load_scene;
 use std::path::Path;
 
@@ -112,16 +112,14 @@ fn check(scene_name: &str, device: &str, render: &dyn Fn(&RenderScene, &RenderJo
 }
 
 fn check_cpu(scene: &str) {
-    check(scene, "cpu", &|rs, job| cpu::render(rs, job, &|_| {}).0);
+    check(scene, "cpu", &common::cpu_render);
 }
 
 fn check_gpu(scene: &str) {
     let Some(ctx) = common::gpu(&format!("{scene} on the gpu")) else {
         return;
     };
-    check(scene, "gpu", &|rs, job| {
-        meshtrace::gpu::render(&ctx, rs, job, &|_| {}).unwrap().0
-    });
+    check(scene, "gpu", &|rs, job| common::gpu_render(&ctx, rs, job));
 }
 
 #[test]

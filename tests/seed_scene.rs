@@ -193,7 +193,8 @@ fn tiny_render_is_finite_and_shows_sky_ground_and_mirror() {
     scene.settings.height = 18;
     scene.settings.spp = 4;
     let rs = RenderScene::new(&scene, &BuildParams::default()).expect("BVH");
-    let (film, rays) = render(&rs, &RenderJob::new(scene.settings), &|_| {});
+    let film = render(&rs, &RenderJob::new(scene.settings), &|_| {});
+    let rays = film.rays();
     let img = film.mean();
     let px = |x: usize, y: usize| img[y * 32 + x];
     assert!(rays > 32 * 18 * 4);

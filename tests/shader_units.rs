@@ -11,11 +11,12 @@ use meshtrace::bvh::{BuildParams, traverse_any, traverse_closest};
 use meshtrace::geometry::{
     ShearedRay, T_INF, TriVerts, intersect_aabb, intersect_triangle, safe_inverse,
 };
-use meshtrace::gpu::GpuContext;
-use meshtrace::gpu::kernels::run_test_kernel;
 use meshtrace::math::Ray;
 use meshtrace::render::bsdf::{bsdf_eval, bsdf_pdf, bsdf_sample, fresnel_dielectric, ggx_alpha};
-use meshtrace::render::cpu::trace_path;
+use meshtrace::render::camera::{CameraRays, generate_camera_ray};
+use meshtrace::render::gpu::GpuContext;
+use meshtrace::render::gpu::kernels::run_test_kernel;
+use meshtrace::render::integrator::trace_path;
 use meshtrace::render::rng::{DIMS_PER_BOUNCE, Rng, pcg4d, u32_to_unit};
 use meshtrace::render::sampling::{
     cosine_hemisphere_pdf, power_heuristic, sample_cdf, sample_concentric_disk,
@@ -1265,7 +1266,8 @@ fn camera_ray_matches() {
         for (c, o) in cases.iter().zip(&out) {
             let [x, y, sample, _] = c[0];
             let rng = Rng::new(y * settings.width + x, sample, settings.seed);
-            let ray = cam.generate_camera_ray(x, y, settings.width, settings.height, &rng);
+            let cam = CameraRays::new(&cam, settings.width, settings.height);
+            let ray = generate_camera_ray(&cam, x, y, &rng);
             let show = || {
                 format!(
                     "{name} ({x}, {y}) sample {sample}: CPU {ray:?}, GPU {:?} {:?}",
@@ -1312,9 +1314,8 @@ fn replay_paths(
     for (c, o) in cases.iter().zip(&out) {
         let [x, y, sample, _] = c[0];
         let rng = Rng::new(y * settings.width + x, sample, settings.seed);
-        let ray = rs
-            .camera
-            .generate_camera_ray(x, y, settings.width, settings.height, &rng);
+        let cam = CameraRays::new(&rs.camera, settings.width, settings.height);
+        let ray = generate_camera_ray(&cam, x, y, &rng);
         let (l, rays) = trace_path(rs, ray, &rng, settings.max_depth);
         let (gl, grays) = (v3(o[0]), f(o[0][3]));
         let close =

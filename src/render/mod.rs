@@ -1,9 +1,16 @@
-//! Rendering: the flat scene tables both devices read ([`RenderScene`]), the shared
-//! sampling code, the BSDFs, and the CPU reference integrator. The GPU renderer uploads
-//! exactly these tables, so a path can be replayed on either device.
+//! Rendering: the flat scene tables both devices read ([`RenderScene`]); the stages of the
+//! path tracer, each a Rust file with a WGSL twin of the same name in `shaders/` (`rng`,
+//! `sampling`, `bsdf`, `camera`, `lights`, `integrator`); and the two drivers that run
+//! them, [`cpu`] and [`gpu`], chosen by [`backend`]. The GPU renderer uploads exactly these
+//! tables, so a path can be replayed on either device.
 
+pub mod backend;
 pub mod bsdf;
+pub mod camera;
 pub mod cpu;
+pub mod gpu;
+pub mod integrator;
+pub mod lights;
 pub mod rng;
 pub mod sampling;
 
@@ -91,7 +98,7 @@ impl RenderScene {
         let mut total = 0.0f64;
         for (i, s) in shading.iter().enumerate() {
             let m = &scene.materials[s.material as usize];
-            let power = geometry::area(&tris[i]) as f64 * luminance(m.emission) as f64;
+            let power = geometry::triangle_area(&tris[i]) as f64 * luminance(m.emission) as f64;
             if power > 0.0 {
                 total += power;
                 emitters.push(i as u32);

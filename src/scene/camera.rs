@@ -1,9 +1,7 @@
-//! The camera: pinhole or thin lens, and the mapping from a pixel sample to a primary ray.
+//! The camera: where it stands, where it looks, and its lens. Ray generation from it is
+//! `render::camera`.
 
-use crate::math::Ray;
-use crate::render::rng::{self, Rng};
-use crate::render::sampling::sample_concentric_disk;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 /// A validated camera with its orthonormal frame precomputed.
 #[derive(Clone, Debug, PartialEq)]
@@ -62,36 +60,5 @@ impl Camera {
             return None;
         }
         Self::new(position, center, Vec3::Y, vfov, 0.0, None)
-    }
-
-    /// tan(vfov / 2): the image plane's half height at unit distance.
-    pub fn tan_half_vfov(&self) -> f32 {
-        (0.5 * self.vfov.to_radians()).tan()
-    }
-
-    /// The primary ray of one sample of pixel (`px`, `py`): a box filter (uniform jitter
-    /// over the pixel) and, for a thin lens, a uniform point on the aperture.
-    /// mirror: shaders/camera.wgsl `generate_camera_ray`
-    pub fn generate_camera_ray(&self, px: u32, py: u32, width: u32, height: u32, rng: &Rng) -> Ray {
-        let jx = rng.rng_1d(0, rng::DIM_PIXEL_X);
-        let jy = rng.rng_1d(0, rng::DIM_PIXEL_Y);
-        let tan_half = self.tan_half_vfov();
-        let aspect = width as f32 / height as f32;
-        let sx = (2.0 * (px as f32 + jx) / width as f32 - 1.0) * tan_half * aspect;
-        let sy = (1.0 - 2.0 * (py as f32 + jy) / height as f32) * tan_half;
-        let dir = self.forward + sx * self.right + sy * self.up;
-        if self.aperture <= 0.0 {
-            return Ray::new(self.position, dir.normalize());
-        }
-        let lens = 0.5
-            * self.aperture
-            * sample_concentric_disk(Vec2::new(
-                rng.rng_1d(0, rng::DIM_LENS_U),
-                rng.rng_1d(0, rng::DIM_LENS_V),
-            ));
-        // `dir` has unit length along `forward`, so this point lies on the focal plane.
-        let focus = self.position + self.focus_distance * dir;
-        let origin = self.position + lens.x * self.right + lens.y * self.up;
-        Ray::new(origin, (focus - origin).normalize())
     }
 }

@@ -45,7 +45,7 @@ impl Mesh {
     }
 }
 
-/// Radiance of rays that leave the scene.
+/// Radiance of rays that leave the scene (`render::lights::sky_radiance` evaluates it).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Sky {
     Constant(Vec3),
@@ -57,14 +57,6 @@ pub enum Sky {
 }
 
 impl Sky {
-    /// mirror: shaders/pathtrace.wgsl `sky_radiance`
-    pub fn radiance(&self, dir: Vec3) -> Vec3 {
-        match *self {
-            Sky::Constant(c) => c,
-            Sky::Gradient { zenith, horizon } => horizon.lerp(zenith, 0.5 * (dir.y + 1.0)),
-        }
-    }
-
     pub fn is_black(&self) -> bool {
         match *self {
             Sky::Constant(c) => c == Vec3::ZERO,

@@ -3,7 +3,9 @@
 #![allow(dead_code)]
 
 use glam::Vec3;
-use meshtrace::gpu::{GpuContext, GpuError};
+use meshtrace::film::Film;
+use meshtrace::render::gpu::{GpuContext, GpuError, GpuRenderer};
+use meshtrace::render::{RenderJob, RenderScene, cpu};
 use meshtrace::scene::{Camera, Material, Mesh, NO_NORMAL, RenderSettings, Scene, Sky, Triangle};
 
 /// The test's GPU, or `None` (after saying "skipped: no adapter") where there is none.
@@ -19,6 +21,18 @@ pub fn gpu(test: &str) -> Option<GpuContext> {
         }
         Err(e) => panic!("{test}: MESHTRACE_REQUIRE_GPU=1 but the GPU is unusable: {e}"),
     }
+}
+
+/// The job rendered by the CPU renderer.
+pub fn cpu_render(scene: &RenderScene, job: &RenderJob) -> Film {
+    cpu::render(scene, job, &|_| {})
+}
+
+/// The job rendered by a fresh GPU renderer session on `ctx`.
+pub fn gpu_render(ctx: &GpuContext, scene: &RenderScene, job: &RenderJob) -> Film {
+    GpuRenderer::new(ctx, scene)
+        .and_then(|mut r| r.render(job, &|_| {}))
+        .unwrap_or_else(|e| panic!("GPU render: {e}"))
 }
 
 /// The `../shared/meshes` folder beside the checkout, if present.

@@ -54,7 +54,9 @@ pub fn list_adapters() -> Vec<AdapterSummary> {
         .collect()
 }
 
-/// An open device with its queue, and what went wrong on it asynchronously.
+/// An open device with its queue, and what went wrong on it asynchronously. Cloning is
+/// cheap and shares the device.
+#[derive(Clone)]
 pub struct GpuContext {
     pub adapter: AdapterSummary,
     pub device: wgpu::Device,
@@ -118,6 +120,34 @@ impl GpuContext {
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| GpuError::Fault(e.to_string()))?;
         self.check()
+    }
+
+    /// Copies a buffer back to the host.
+    pub fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+        let size = buffer.size();
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+        self.queue.submit([enc.finish()]);
+        let (tx, rx) = std::sync::mpsc::channel();
+        staging.map_async(wgpu::MapMode::Read, .., move |r| {
+            let _ = tx.send(r);
+        });
+        self.wait()?;
+        rx.recv()
+            .map_err(|e| GpuError::Fault(e.to_string()))?
+            .map_err(|e| GpuError::Fault(e.to_string()))?;
+        let data = staging
+            .get_mapped_range(..)
+            .map_err(|e| GpuError::Fault(e.to_string()))?
+            .to_vec();
+        staging.unmap();
+        Ok(data)
     }
 }
 

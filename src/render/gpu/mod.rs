@@ -2,21 +2,23 @@
 //! wgpu on Vulkan (a real GPU, or lavapipe on the CPU). Only this module imports wgpu.
 //!
 //! The host uploads the tables of [`RenderScene`](crate::render::RenderScene) unchanged,
-//! so the GPU traces exactly the paths the CPU reference traces for the same
-//! (pixel, sample, seed). `context` opens devices, `layout` holds the uniform structs,
-//! `shader` joins the WGSL files, `renderer` runs the dispatch loop, and `kernels` runs
-//! the shader unit-test entry points.
+//! so the GPU traces exactly the paths the CPU renderer traces for the same
+//! (pixel, sample, seed). `context` opens devices, `params` holds the uniform block,
+//! `shader` joins the WGSL files, `tables` uploads the scene, `pipelines` compiles entry
+//! points, `session` is the renderer ([`GpuRenderer`]) and `kernels` runs the shader
+//! unit-test and ray-throughput entry points against it.
 
 mod context;
 pub mod kernels;
-pub mod layout;
-mod renderer;
+pub mod params;
+mod pipelines;
+mod session;
 pub mod shader;
+mod tables;
 
 pub use context::{AdapterSummary, GpuContext, choose_adapter, list_adapters};
-pub use renderer::{
-    GpuScene, TABLE_WIDTH, TableStorage, UNIFORM_TABLE_TEXELS, render, render_with,
-};
+pub use session::{GpuRenderer, PATHS_PER_DISPATCH};
+pub use tables::TABLE_WIDTH;
 
 /// What can go wrong on the GPU path; each message says what to do about it.
 #[derive(Debug, thiserror::Error)]

@@ -1,9 +1,10 @@
-//! Host-side twins of the WGSL uniform and material structs (`shaders/types.wgsl`). The
-//! scene tables' structs (`BvhNode`, `TriVerts`, `TriShading`) live beside the code that
-//! builds them; `tests/layout.rs` checks all of them against naga's layout.
+//! The uniform block of every dispatch, twin of `Params` in `shaders/types.wgsl` (the scene
+//! tables' structs live beside the code that builds them); `tests/layout.rs` checks them
+//! all against naga's layout.
 
 use crate::render::RenderScene;
-use crate::scene::{Material, RenderSettings, Sky};
+use crate::render::camera::CameraRays;
+use crate::scene::{Camera, Material, RenderSettings, Sky};
 use bytemuck::{Pod, Zeroable};
 
 /// One dispatch's parameters (144 bytes). mirror: shaders/types.wgsl `Params`
@@ -31,18 +32,39 @@ pub struct GpuParams {
     pub row_start: u32,
     pub row_end: u32,
     pub sky_pmf: f32,
-    pub _pad: [u32; 3],
+    /// Texels per pixel of the accumulation buffer
+    /// ([`Film::texels_per_pixel`](crate::film::Film::texels_per_pixel)); set with the film.
+    pub film_texels: u32,
+    pub _pad: [u32; 2],
 }
 
 impl GpuParams {
     /// The parameters of a render of `scene` with `settings`, covering every row and no
-    /// samples yet (`sample_*` and `row_*` are set per dispatch).
+    /// samples yet (`sample_*`, `row_*` and `film_texels` are set per dispatch).
     pub fn new(scene: &RenderScene, settings: &RenderSettings) -> Self {
-        let c = &scene.camera;
+        Self::for_scene(scene).with_settings(&scene.camera, settings)
+    }
+
+    /// The scene's own part: its sky and lights.
+    pub fn for_scene(scene: &RenderScene) -> Self {
         let (zenith, horizon, gradient) = match scene.sky {
             Sky::Constant(c) => (c, c, 0),
             Sky::Gradient { zenith, horizon } => (zenith, horizon, 1),
         };
+        Self {
+            sky_zenith: zenith.into(),
+            sky_gradient: gradient,
+            sky_horizon: horizon.into(),
+            num_emitters: scene.emitters.len() as u32,
+            sky_pmf: scene.sky_pmf,
+            ..Self::default()
+        }
+    }
+
+    /// These parameters with the camera and image of a render of `settings`, covering
+    /// every row and no samples yet.
+    pub fn with_settings(self, camera: &Camera, settings: &RenderSettings) -> Self {
+        let c = CameraRays::new(camera, settings.width, settings.height);
         Self {
             cam_position: c.position.into(),
             width: settings.width,
@@ -52,20 +74,15 @@ impl GpuParams {
             max_depth: settings.max_depth,
             cam_up: c.up.into(),
             seed: settings.seed,
-            sky_zenith: zenith.into(),
-            sky_gradient: gradient,
-            sky_horizon: horizon.into(),
-            num_emitters: scene.emitters.len() as u32,
-            tan_half_vfov: c.tan_half_vfov(),
-            aspect: settings.width as f32 / settings.height as f32,
+            tan_half_vfov: c.tan_half_vfov,
+            aspect: c.aspect,
             aperture: c.aperture,
             focus_distance: c.focus_distance,
             sample_start: 0,
             sample_end: 0,
             row_start: 0,
             row_end: settings.height,
-            sky_pmf: scene.sky_pmf,
-            _pad: [0; 3],
+            ..self
         }
     }
 }

@@ -1,8 +1,10 @@
-// The path tracer. mirror: src/render/cpu.rs — every stage has a Rust twin of the same name.
+// The path tracer, one bounce at a time. mirror: src/render/integrator.rs — every
+// function has a Rust twin of the same name.
 
-// mirror: src/render/cpu.rs `RR_DEPTH`
+// mirror: src/render/integrator.rs `RR_DEPTH`
 const RR_DEPTH: u32 = 5u;
 
+// mirror: src/render/integrator.rs `SurfaceHit`
 struct SurfaceHit {
     p: vec3<f32>,
     ng: vec3<f32>,
@@ -12,30 +14,7 @@ struct SurfaceHit {
     tri: u32,
 }
 
-// mirror: src/scene/mod.rs `Sky::radiance`
-fn sky_radiance(dir: vec3<f32>) -> vec3<f32> {
-    if params.sky_gradient == 0u {
-        return params.sky_zenith;
-    }
-    return mix(params.sky_horizon, params.sky_zenith, 0.5 * (dir.y + 1.0));
-}
-
-// mirror: src/geometry.rs `geometric_normal`
-fn geometric_normal(tri: TriVerts) -> vec3<f32> {
-    return normalize(cross(tri.v1.xyz - tri.v0.xyz, tri.v2.xyz - tri.v0.xyz));
-}
-
-// mirror: src/geometry.rs `area`
-fn triangle_area(tri: TriVerts) -> f32 {
-    return 0.5 * length(cross(tri.v1.xyz - tri.v0.xyz, tri.v2.xyz - tri.v0.xyz));
-}
-
-// mirror: src/scene/material.rs `Material::is_emissive`
-fn is_emissive(m: Material) -> bool {
-    return max(max(m.emission.x, m.emission.y), m.emission.z) > 0.0;
-}
-
-// mirror: src/render/cpu.rs `surface_at`
+// mirror: src/render/integrator.rs `surface_at`
 fn surface_at(ray: Ray, hit: Hit) -> SurfaceHit {
     let tri = load_tri(hit.tri);
     let sh = load_shading(hit.tri);
@@ -56,60 +35,18 @@ fn surface_at(ray: Ray, hit: Hit) -> SurfaceHit {
     return SurfaceHit(ray.origin + hit.t * ray.dir, ng, ns, sh.material, dot(ray.dir, ng) < 0.0, hit.tri);
 }
 
-// mirror: src/render/cpu.rs `offset_ray_origin`
+// mirror: src/render/integrator.rs `offset_ray_origin`
 fn offset_ray_origin(p: vec3<f32>, ng: vec3<f32>, w: vec3<f32>) -> vec3<f32> {
     let ap = abs(p);
     let eps = 1e-5 * (1.0 + max(max(ap.x, ap.y), ap.z));
     return select(p - eps * ng, p + eps * ng, dot(w, ng) >= 0.0);
 }
 
-// mirror: src/render/cpu.rs `light_pdf`
-fn light_pdf(tri: u32, dist: f32, cos_l: f32) -> f32 {
-    let pmf = load_shading(tri).emitter_pmf;
-    let area = triangle_area(load_tri(tri));
-    return pmf * dist * dist / (cos_l * area);
-}
-
-// mirror: src/render/cpu.rs `LightSample` (valid stands for the Option around it)
-struct LightSample {
-    origin: vec3<f32>,
-    wi: vec3<f32>,
-    t_max: f32,
-    le: vec3<f32>,
-    pdf: f32,
-    valid: bool,
-}
-
-// mirror: src/render/cpu.rs `sample_light`
-fn sample_light(p: vec3<f32>, ng: vec3<f32>, rng: Rng, depth: u32) -> LightSample {
-    var none = LightSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, false);
-    let k = sample_cdf(rng_1d(rng, depth, DIM_LIGHT_PICK));
-    let light = load_emitter(k);
-    let u = vec2<f32>(rng_1d(rng, depth, DIM_LIGHT_U), rng_1d(rng, depth, DIM_LIGHT_V));
-    if light == SKY_EMITTER {
-        let wi = sample_uniform_sphere(u);
-        return LightSample(offset_ray_origin(p, ng, wi), wi, T_INF, sky_radiance(wi), params.sky_pmf * UNIFORM_SPHERE_PDF, true);
-    }
-    let tri = load_tri(light);
-    let bary = sample_uniform_triangle(u);
-    let q = (1.0 - bary.x - bary.y) * tri.v0.xyz + bary.x * tri.v1.xyz + bary.y * tri.v2.xyz;
-    let origin = offset_ray_origin(p, ng, q - p);
-    let to_light = q - origin;
-    let dist = length(to_light);
-    let wi = to_light / dist;
-    let cos_l = -dot(wi, geometric_normal(tri));
-    if !(cos_l > 0.0 && dist > 0.0) {
-        return none;
-    }
-    let le = load_material(load_shading(light).material).emission;
-    return LightSample(origin, wi, dist * (1.0 - 1e-4), le, light_pdf(light, dist, cos_l), true);
-}
-
 fn max3(v: vec3<f32>) -> f32 {
     return max(max(v.x, v.y), v.z);
 }
 
-// The state of one path between bounces: the locals of the CPU's `trace_path` loop.
+// One path between bounces. mirror: src/render/integrator.rs `PathState`
 struct PathState {
     ray: Ray,
     radiance: vec3<f32>,
@@ -121,20 +58,19 @@ struct PathState {
     depth: u32,
 }
 
-// A path about to trace its camera ray.
+// A path about to trace its camera ray. mirror: src/render/integrator.rs `path_start`
 fn path_start(ray: Ray) -> PathState {
     return PathState(ray, vec3<f32>(0.0), vec3<f32>(1.0), 0u, 0.0, true, 1.0, 0u);
 }
 
-// One bounce: an iteration of the loop of `trace_path`; true when the path has ended.
-// mirror: src/render/cpu.rs `trace_path`
+// One bounce; true when the path has ended. mirror: src/render/integrator.rs `path_step`
 fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
     (*st).rays += 1u;
     let hit = traverse_closest((*st).ray, T_INF);
     if hit.tri == NO_HIT {
         var w = 1.0;
         if !(*st).prev_delta && params.sky_pmf != 0.0 {
-            w = power_heuristic((*st).prev_pdf, params.sky_pmf * UNIFORM_SPHERE_PDF);
+            w = power_heuristic((*st).prev_pdf, sky_pdf());
         }
         (*st).radiance += (*st).beta * w * sky_radiance((*st).ray.dir);
         return true;
@@ -209,7 +145,7 @@ fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
 }
 
 // One path's radiance (xyz) and the number of rays it traced (w).
-// mirror: src/render/cpu.rs `trace_path`
+// mirror: src/render/integrator.rs `trace_path`
 fn trace_path(ray: Ray, rng: Rng) -> vec4<f32> {
     var st = path_start(ray);
     loop {

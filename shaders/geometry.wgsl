@@ -126,3 +126,13 @@ fn safe_direction(d: vec3<f32>) -> vec3<f32> {
 fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
     return 1.0 / safe_direction(d);
 }
+
+// mirror: src/geometry.rs `geometric_normal`
+fn geometric_normal(tri: TriVerts) -> vec3<f32> {
+    return normalize(cross(tri.v1.xyz - tri.v0.xyz, tri.v2.xyz - tri.v0.xyz));
+}
+
+// mirror: src/geometry.rs `triangle_area`
+fn triangle_area(tri: TriVerts) -> f32 {
+    return 0.5 * length(cross(tri.v1.xyz - tri.v0.xyz, tri.v2.xyz - tri.v0.xyz));
+}

@@ -1,49 +1,45 @@
-//! Runs auxiliary compute entry points over a scene's buffers: the shader unit-test kernels
-//! of `shaders/tests.wgsl` (two `vec4<u32>` in and two out per case), and the ray-throughput
-//! kernels of `shaders/bench.wgsl` (one ray in, one hit out).
+//! Runs auxiliary compute entry points over a [`GpuRenderer`]'s scene: the shader unit-test
+//! kernels of `shaders/tests.wgsl` (two `vec4<u32>` in and two out per case), and the
+//! ray-throughput kernels of `shaders/bench.wgsl` (one ray in, one hit out).
 
-use super::layout::GpuParams;
-use super::renderer::{GpuScene, TableStorage, params_buffer, pipeline, read_back};
-use super::{GpuContext, GpuError, shader};
+use super::pipelines::Pipeline;
+use super::tables::params_buffer;
+use super::{GpuContext, GpuError, GpuRenderer, shader};
 use crate::render::RenderScene;
 use crate::scene::RenderSettings;
 use std::time::Instant;
 use wgpu::util::DeviceExt;
 
-/// A compiled entry point bound to an uploaded scene, ready to run on many inputs.
+/// A compiled entry point bound to a renderer's scene, ready to run on many inputs.
 pub struct Kernel<'a> {
-    ctx: &'a GpuContext,
-    pipeline: wgpu::ComputePipeline,
-    io_layout: wgpu::BindGroupLayout,
+    renderer: &'a GpuRenderer,
+    pipeline: Pipeline,
     scene_group: wgpu::BindGroup,
     _params: wgpu::Buffer,
-    _scene: GpuScene,
 }
 
 impl<'a> Kernel<'a> {
-    /// Uploads `scene` as the renderer would and compiles `entry` of the module that
-    /// `source` joins (a function of [`shader`]) for that upload.
+    /// Compiles `entry` of the module `source` (a function of [`shader`]) over the
+    /// renderer's scene, with the parameters of a render of `settings` (all its samples).
     pub fn new(
-        ctx: &'a GpuContext,
-        scene: &RenderScene,
+        renderer: &'a GpuRenderer,
         settings: &RenderSettings,
-        source: fn(TableStorage) -> String,
+        source: &str,
         entry: &str,
     ) -> Result<Self, GpuError> {
-        let gpu_scene = GpuScene::new(ctx, scene, TableStorage::choose(ctx, scene))?;
-        let source = source(gpu_scene.storage());
-        let mut p = GpuParams::new(scene, settings);
+        let ctx = renderer.context();
+        let tables = renderer.tables();
+        let mut p = renderer.params_for(settings);
         p.sample_end = settings.spp;
-        let params = params_buffer(ctx, &[p]);
-        let scene_group = gpu_scene.bind_group(ctx, &params);
-        let (pipeline, io_layout) = pipeline(ctx, &gpu_scene, &source, entry, 1, 1)?;
+        let params = params_buffer(ctx);
+        ctx.queue.write_buffer(&params, 0, bytemuck::bytes_of(&p));
+        let scene_group = tables.bind_group(ctx, &params);
+        let pipeline = Pipeline::new(ctx, &tables.layout, source, entry, 1, 1)?;
         Ok(Self {
-            ctx,
+            renderer,
             pipeline,
-            io_layout,
             scene_group,
             _params: params,
-            _scene: gpu_scene,
         })
     }
 
@@ -55,7 +51,7 @@ impl<'a> Kernel<'a> {
         cases: usize,
         output_len: usize,
     ) -> Result<(Vec<[u32; 4]>, f64), GpuError> {
-        let ctx = self.ctx;
+        let ctx = self.renderer.context();
         let input_buf = ctx
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -69,28 +65,15 @@ impl<'a> Kernel<'a> {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        let io_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("kernel io"),
-            layout: &self.io_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: input_buf.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: output.as_entire_binding(),
-                },
-            ],
-        });
+        let io_group = self.pipeline.io_group(ctx, &[&input_buf, &output]);
         // Finish the uploads first so that the timing covers the dispatch alone.
         ctx.wait()?;
         let start = Instant::now();
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         {
             let mut pass = enc.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &self.scene_group, &[0]);
+            pass.set_pipeline(&self.pipeline.pipeline);
+            pass.set_bind_group(0, &self.scene_group, &[]);
             pass.set_bind_group(1, &io_group, &[]);
             // 64 invocations per workgroup, at most 65535 workgroups along x.
             let groups = (cases as u32).div_ceil(64);
@@ -99,13 +82,13 @@ impl<'a> Kernel<'a> {
         ctx.queue.submit([enc.finish()]);
         ctx.wait()?;
         let seconds = start.elapsed().as_secs_f64();
-        let data = read_back(ctx, &output)?;
+        let data = ctx.read_buffer(&output)?;
         Ok((bytemuck::cast_slice(&data).to_vec(), seconds))
     }
 }
 
-/// Runs test entry point `entry` over `input` (two words per case) and returns its two
-/// output words per case.
+/// Uploads `scene` and runs test entry point `entry` over `input` (two words per case);
+/// returns its two output words per case.
 pub fn run_test_kernel(
     ctx: &GpuContext,
     scene: &RenderScene,
@@ -114,6 +97,7 @@ pub fn run_test_kernel(
     input: &[[u32; 4]],
 ) -> Result<Vec<[u32; 4]>, GpuError> {
     assert!(input.len() % 2 == 0, "two input words per case");
-    let kernel = Kernel::new(ctx, scene, settings, shader::test_source, entry)?;
+    let renderer = GpuRenderer::new(ctx, scene)?;
+    let kernel = Kernel::new(&renderer, settings, &shader::test_source(), entry)?;
     Ok(kernel.run(input, input.len() / 2, input.len())?.0)
 }

@@ -1,0 +1,57 @@
+// The lights next event estimation samples: emissive triangles and the sky.
+// mirror: src/render/lights.rs — every function has a Rust twin of the same name.
+
+// mirror: src/render/lights.rs `sky_radiance`
+fn sky_radiance(dir: vec3<f32>) -> vec3<f32> {
+    if params.sky_gradient == 0u {
+        return params.sky_zenith;
+    }
+    return mix(params.sky_horizon, params.sky_zenith, 0.5 * (dir.y + 1.0));
+}
+
+// mirror: src/render/lights.rs `sky_pdf`
+fn sky_pdf() -> f32 {
+    return params.sky_pmf * UNIFORM_SPHERE_PDF;
+}
+
+// mirror: src/render/lights.rs `light_pdf`
+fn light_pdf(tri: u32, dist: f32, cos_l: f32) -> f32 {
+    let pmf = load_shading(tri).emitter_pmf;
+    let area = triangle_area(load_tri(tri));
+    return pmf * dist * dist / (cos_l * area);
+}
+
+// mirror: src/render/lights.rs `LightSample` (valid stands for the Option around it)
+struct LightSample {
+    origin: vec3<f32>,
+    wi: vec3<f32>,
+    t_max: f32,
+    le: vec3<f32>,
+    pdf: f32,
+    valid: bool,
+}
+
+// mirror: src/render/lights.rs `sample_light`
+fn sample_light(p: vec3<f32>, ng: vec3<f32>, rng: Rng, depth: u32) -> LightSample {
+    var none = LightSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, false);
+    let k = sample_cdf(rng_1d(rng, depth, DIM_LIGHT_PICK));
+    let light = load_emitter(k);
+    let u = vec2<f32>(rng_1d(rng, depth, DIM_LIGHT_U), rng_1d(rng, depth, DIM_LIGHT_V));
+    if light == SKY_EMITTER {
+        let wi = sample_uniform_sphere(u);
+        return LightSample(offset_ray_origin(p, ng, wi), wi, T_INF, sky_radiance(wi), sky_pdf(), true);
+    }
+    let tri = load_tri(light);
+    let bary = sample_uniform_triangle(u);
+    let q = (1.0 - bary.x - bary.y) * tri.v0.xyz + bary.x * tri.v1.xyz + bary.y * tri.v2.xyz;
+    let origin = offset_ray_origin(p, ng, q - p);
+    let to_light = q - origin;
+    let dist = length(to_light);
+    let wi = to_light / dist;
+    let cos_l = -dot(wi, geometric_normal(tri));
+    if !(cos_l > 0.0 && dist > 0.0) {
+        return none;
+    }
+    let le = load_material(load_shading(light).material).emission;
+    return LightSample(origin, wi, dist * (1.0 - 1e-4), le, light_pdf(light, dist, cos_l), true);
+}

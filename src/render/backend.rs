@@ -1,0 +1,82 @@
+//! Which renderer runs a render: the one rule that `render`, `bench` and the tests share.
+//! A hardware GPU renders by default; a software Vulkan adapter (lavapipe) gives way to
+//! the CPU renderer, which is faster on the same cores and makes the same image, unless the
+//! GPU is asked for (`--device gpu`, or an adapter named by `--adapter` or
+//! `WGPU_ADAPTER_NAME`); with no adapter at all the CPU renders.
+
+use super::gpu::{self, GpuContext, GpuError, GpuRenderer};
+use super::{RenderJob, RenderScene, cpu};
+use crate::film::Film;
+
+/// What the user asked for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DeviceChoice {
+    /// The GPU on a hardware adapter, else the CPU.
+    Auto,
+    Cpu,
+    /// A Vulkan adapter, even a software one.
+    Gpu,
+}
+
+/// The renderer chosen.
+pub enum Backend {
+    Cpu,
+    Gpu(Box<GpuContext>),
+}
+
+impl Backend {
+    /// Applies the rule to `choice` and `adapter` (an index or a name substring). Returns
+    /// the backend and, when the CPU was chosen for want of a usable GPU, a notice saying
+    /// why.
+    pub fn choose(
+        choice: DeviceChoice,
+        adapter: Option<&str>,
+    ) -> Result<(Self, Option<String>), GpuError> {
+        match choice {
+            DeviceChoice::Cpu => Ok((Self::Cpu, None)),
+            DeviceChoice::Gpu => Ok((Self::Gpu(Box::new(GpuContext::new(adapter)?)), None)),
+            DeviceChoice::Auto => match gpu::choose_adapter(adapter) {
+                // Software adapters are ranked last, so this one is all there is; no device
+                // is opened for it.
+                Ok((summary, false)) if summary.software => Ok((
+                    Self::Cpu,
+                    Some(format!(
+                        "the Vulkan adapter, {}, is a software driver; rendering with the faster CPU renderer (--device gpu uses the adapter anyway)",
+                        summary.name
+                    )),
+                )),
+                Ok(_) => Ok((Self::Gpu(Box::new(GpuContext::new(adapter)?)), None)),
+                Err(GpuError::NoAdapter) => Ok((
+                    Self::Cpu,
+                    Some(
+                        "no Vulkan adapter found; rendering on the CPU (install mesa-vulkan-drivers for lavapipe)"
+                            .into(),
+                    ),
+                )),
+                Err(e) => Err(e),
+            },
+        }
+    }
+
+    /// The device's name for messages: the adapter's, or "the CPU".
+    pub fn name(&self) -> String {
+        match self {
+            Self::Cpu => "the CPU".into(),
+            Self::Gpu(ctx) => ctx.adapter.name.clone(),
+        }
+    }
+
+    /// Renders the job on this backend. `progress` is told the samples finished as they
+    /// finish.
+    pub fn render(
+        &self,
+        scene: &RenderScene,
+        job: &RenderJob,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<Film, GpuError> {
+        match self {
+            Self::Cpu => Ok(cpu::render(scene, job, progress)),
+            Self::Gpu(ctx) => GpuRenderer::new(ctx, scene)?.render(job, progress),
+        }
+    }
+}

@@ -1,0 +1,68 @@
+//! Primary rays: the mapping from a pixel sample to a camera ray, through a pinhole or a
+//! thin lens. Every function has a WGSL twin of the same name in `shaders/camera.wgsl`.
+
+use super::rng::{self, Rng};
+use super::sampling::sample_concentric_disk;
+use crate::math::Ray;
+use crate::scene::Camera;
+use glam::{Vec2, Vec3};
+
+/// What ray generation reads of the camera and the image, computed once per render rather
+/// than once per ray (tan(vfov / 2) and the aspect ratio). The GPU receives the same values
+/// in its parameter block.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraRays {
+    pub position: Vec3,
+    pub forward: Vec3,
+    pub right: Vec3,
+    pub up: Vec3,
+    /// tan(vfov / 2): the image plane's half height at unit distance.
+    pub tan_half_vfov: f32,
+    /// Width over height.
+    pub aspect: f32,
+    pub aperture: f32,
+    pub focus_distance: f32,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl CameraRays {
+    pub fn new(camera: &Camera, width: u32, height: u32) -> Self {
+        Self {
+            position: camera.position,
+            forward: camera.forward,
+            right: camera.right,
+            up: camera.up,
+            tan_half_vfov: (0.5 * camera.vfov.to_radians()).tan(),
+            aspect: width as f32 / height as f32,
+            aperture: camera.aperture,
+            focus_distance: camera.focus_distance,
+            width,
+            height,
+        }
+    }
+}
+
+/// The primary ray of one sample of pixel (`px`, `py`): a box filter (uniform jitter over
+/// the pixel) and, for a thin lens, a uniform point on the aperture.
+/// mirror: shaders/camera.wgsl `generate_camera_ray`
+pub fn generate_camera_ray(cam: &CameraRays, px: u32, py: u32, rng: &Rng) -> Ray {
+    let jx = rng.rng_1d(0, rng::DIM_PIXEL_X);
+    let jy = rng.rng_1d(0, rng::DIM_PIXEL_Y);
+    let sx = (2.0 * (px as f32 + jx) / cam.width as f32 - 1.0) * cam.tan_half_vfov * cam.aspect;
+    let sy = (1.0 - 2.0 * (py as f32 + jy) / cam.height as f32) * cam.tan_half_vfov;
+    let dir = cam.forward + sx * cam.right + sy * cam.up;
+    if cam.aperture <= 0.0 {
+        return Ray::new(cam.position, dir.normalize());
+    }
+    let lens = 0.5
+        * cam.aperture
+        * sample_concentric_disk(Vec2::new(
+            rng.rng_1d(0, rng::DIM_LENS_U),
+            rng.rng_1d(0, rng::DIM_LENS_V),
+        ));
+    // `dir` has unit length along `forward`, so this point lies on the focal plane.
+    let focus = cam.position + cam.focus_distance * dir;
+    let origin = cam.position + lens.x * cam.right + lens.y * cam.up;
+    Ray::new(origin, (focus - origin).normalize())
+}

@@ -1,0 +1,221 @@
+//! The path tracer, one bounce at a time: a unidirectional path tracer with next event
+//! estimation on the lights combined with BSDF sampling by the power heuristic, and Russian
+//! roulette from depth 5, as Mitsuba 3's `path` integrator.
+//!
+//! [`path_step`] advances a [`PathState`] by one bounce; [`trace_path`] is the loop over it.
+//! The GPU runs the same steps (`shaders/integrator.wgsl`, every function a twin of the same
+//! name), drawing every random number from the same counter-based [`Rng`], so a path traced
+//! on either device is the same path.
+
+use super::RenderScene;
+use super::TRI_SMOOTH;
+use super::bsdf::{bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample};
+use super::lights::{light_pdf, sample_light, sky_pdf, sky_radiance};
+use super::rng::{self, Rng};
+use super::sampling::power_heuristic;
+use crate::bvh::{Hit, traverse_any, traverse_closest};
+use crate::geometry::{self, T_INF};
+use crate::math::{Ray, onb_from_normal};
+use crate::scene::MaterialKind;
+use glam::{Vec2, Vec3};
+
+/// Path depth (in bounces) from which Russian roulette may end a path.
+/// mirror: shaders/integrator.wgsl `RR_DEPTH`
+pub const RR_DEPTH: u32 = 5;
+
+/// A ray's hit point with the frames its shading needs.
+/// mirror: shaders/integrator.wgsl `SurfaceHit`
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceHit {
+    pub p: Vec3,
+    /// Geometric normal of the front face ((v1 − v0) × (v2 − v0)).
+    pub ng: Vec3,
+    /// Interpolated shading normal, on the same side as `ng`.
+    pub ns: Vec3,
+    pub material: u32,
+    pub front_face: bool,
+    pub tri: u32,
+}
+
+/// mirror: shaders/integrator.wgsl `surface_at`
+pub fn surface_at(scene: &RenderScene, ray: &Ray, hit: &Hit) -> SurfaceHit {
+    let tri = &scene.tris[hit.tri as usize];
+    let sh = &scene.shading[hit.tri as usize];
+    let ng = geometry::geometric_normal(tri);
+    let mut ns = ng;
+    if sh.flags & TRI_SMOOTH != 0 {
+        let w = 1.0 - hit.u - hit.v;
+        let n = w * Vec3::from(sh.n0) + hit.u * Vec3::from(sh.n1) + hit.v * Vec3::from(sh.n2);
+        ns = n.normalize_or_zero();
+        if ns.dot(ng) < 0.0 {
+            ns = -ns;
+        }
+        if ns == Vec3::ZERO {
+            ns = ng;
+        }
+    }
+    SurfaceHit {
+        p: ray.at(hit.t),
+        ng,
+        ns,
+        material: sh.material,
+        front_face: ray.dir.dot(ng) < 0.0,
+        tri: hit.tri,
+    }
+}
+
+/// Moves a ray origin off the surface, to the side of `ng` that `w` points to, by a margin
+/// that grows with the coordinates' magnitude (float error grows with it).
+/// mirror: shaders/integrator.wgsl `offset_ray_origin`
+pub fn offset_ray_origin(p: Vec3, ng: Vec3, w: Vec3) -> Vec3 {
+    let eps = 1e-5 * (1.0 + p.abs().max_element());
+    if w.dot(ng) >= 0.0 {
+        p + eps * ng
+    } else {
+        p - eps * ng
+    }
+}
+
+/// One path between bounces: the ray it traces next and what it has gathered so far.
+/// mirror: shaders/integrator.wgsl `PathState`
+#[derive(Clone, Copy, Debug)]
+pub struct PathState {
+    pub ray: Ray,
+    pub radiance: Vec3,
+    /// Throughput: the product of the BSDF-sampling weights so far.
+    pub beta: Vec3,
+    /// Rays traced: one per segment plus one per shadow ray.
+    pub rays: u32,
+    /// The previous vertex's BSDF-sampling pdf, for weighting emission found by BSDF
+    /// sampling, and whether that sample was a delta lobe (no MIS then).
+    pub prev_pdf: f32,
+    pub prev_delta: bool,
+    /// Product of the relative indices of refraction crossed, for Russian roulette.
+    pub eta_scale: f32,
+    /// Vertices already on the path; the camera ray finds vertex 0.
+    pub depth: u32,
+}
+
+/// A path about to trace its camera ray. mirror: shaders/integrator.wgsl `path_start`
+pub fn path_start(ray: Ray) -> PathState {
+    PathState {
+        ray,
+        radiance: Vec3::ZERO,
+        beta: Vec3::ONE,
+        rays: 0,
+        prev_pdf: 0.0,
+        prev_delta: true,
+        eta_scale: 1.0,
+        depth: 0,
+    }
+}
+
+/// One bounce: traces `st.ray`, adds the emission it finds and next event estimation at
+/// the hit, then samples the BSDF for the next ray. Returns true when the path has ended.
+/// mirror: shaders/integrator.wgsl `path_step`
+#[inline]
+pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: u32) -> bool {
+    let (nodes, tris) = (&scene.bvh.nodes, &scene.tris);
+    st.rays += 1;
+    let Some(hit) = traverse_closest(nodes, tris, &st.ray, T_INF) else {
+        let w = if st.prev_delta || scene.sky_pmf == 0.0 {
+            1.0
+        } else {
+            power_heuristic(st.prev_pdf, sky_pdf(scene))
+        };
+        st.radiance += st.beta * w * sky_radiance(scene, st.ray.dir);
+        return true;
+    };
+    let si = surface_at(scene, &st.ray, &hit);
+    let mat = &scene.materials[si.material as usize];
+    if si.front_face && mat.is_emissive() {
+        let w = if st.prev_delta {
+            1.0
+        } else {
+            let cos_l = -st.ray.dir.dot(si.ng);
+            power_heuristic(st.prev_pdf, light_pdf(scene, si.tri, hit.t, cos_l))
+        };
+        st.radiance += st.beta * w * mat.emission;
+    }
+    // Segments so far: depth + 1. Both light sampling and continuing add one more.
+    if st.depth + 1 >= max_depth {
+        return true;
+    }
+    let wo_world = -st.ray.dir;
+    // Two-sided kinds turn the frame towards the viewer; the dielectric keeps the front
+    // face's frame so that it knows whether it is entered or left.
+    let flip = mat.kind != MaterialKind::Dielectric && wo_world.dot(si.ng) < 0.0;
+    let (ng, mut ns) = if flip {
+        (-si.ng, -si.ns)
+    } else {
+        (si.ng, si.ns)
+    };
+    if mat.kind != MaterialKind::Dielectric && ns.dot(wo_world) <= 0.0 {
+        ns = ng;
+    }
+    let (t, b) = onb_from_normal(ns);
+    let to_local = |w: Vec3| Vec3::new(w.dot(t), w.dot(b), w.dot(ns));
+    let wo = to_local(wo_world);
+
+    // Next event estimation.
+    if !bsdf_is_delta(mat) && !scene.emitters.is_empty() {
+        if let Some(ls) = sample_light(scene, si.p, ng, rng, st.depth) {
+            if ls.wi.dot(ng) > 0.0 {
+                let wi = to_local(ls.wi);
+                let f = bsdf_eval(mat, wo, wi);
+                if f != Vec3::ZERO {
+                    st.rays += 1;
+                    if !traverse_any(nodes, tris, &Ray::new(ls.origin, ls.wi), ls.t_max) {
+                        let w = power_heuristic(ls.pdf, bsdf_pdf(mat, wo, wi));
+                        st.radiance += st.beta * f * ls.le * (w / ls.pdf);
+                    }
+                }
+            }
+        }
+    }
+
+    // BSDF sampling.
+    let Some(bs) = bsdf_sample(
+        mat,
+        wo,
+        rng.rng_1d(st.depth, rng::DIM_BSDF_LOBE),
+        Vec2::new(
+            rng.rng_1d(st.depth, rng::DIM_BSDF_U),
+            rng.rng_1d(st.depth, rng::DIM_BSDF_V),
+        ),
+    ) else {
+        return true;
+    };
+    let wi_world = bs.wi.x * t + bs.wi.y * b + bs.wi.z * ns;
+    // Reject directions that the shading normal allows but the geometry does not:
+    // reflection must stay on wo's side of the surface, transmission must cross it.
+    let reflect = bs.wi.z * wo.z > 0.0;
+    if (wi_world.dot(si.ng) * wo_world.dot(si.ng) > 0.0) != reflect {
+        return true;
+    }
+    st.beta *= bs.weight;
+    st.prev_pdf = bs.pdf;
+    st.prev_delta = bs.delta;
+    st.eta_scale *= bs.eta;
+    st.depth += 1;
+    if st.depth >= RR_DEPTH {
+        let q = (st.beta.max_element() * st.eta_scale * st.eta_scale).min(0.95);
+        if rng.rng_1d(st.depth, rng::DIM_ROULETTE) >= q {
+            return true;
+        }
+        st.beta /= q;
+    }
+    if st.beta == Vec3::ZERO {
+        return true;
+    }
+    st.ray = Ray::new(offset_ray_origin(si.p, si.ng, wi_world), wi_world);
+    false
+}
+
+/// One path's radiance estimate and the number of rays it traced: [`path_step`] until the
+/// path ends. mirror: shaders/integrator.wgsl `trace_path`
+pub fn trace_path(scene: &RenderScene, ray: Ray, rng: &Rng, max_depth: u32) -> (Vec3, u32) {
+    let mut st = path_start(ray);
+    while !path_step(scene, &mut st, rng, max_depth) {}
+    (st.radiance, st.rays)
+}

@@ -1,0 +1,97 @@
+//! The lights next event estimation samples: emissive triangles, chosen by power, and the
+//! sky. Every function has a WGSL twin of the same name in `shaders/lights.wgsl`.
+
+use super::integrator::offset_ray_origin;
+use super::rng::{self, Rng};
+use super::sampling::{
+    UNIFORM_SPHERE_PDF, sample_cdf, sample_uniform_sphere, sample_uniform_triangle,
+};
+use super::{RenderScene, SKY_EMITTER};
+use crate::geometry::{self, T_INF};
+use crate::scene::Sky;
+use glam::{Vec2, Vec3};
+
+/// Radiance arriving along `dir` from outside the scene.
+/// mirror: shaders/lights.wgsl `sky_radiance`
+pub fn sky_radiance(scene: &RenderScene, dir: Vec3) -> Vec3 {
+    match scene.sky {
+        Sky::Constant(c) => c,
+        Sky::Gradient { zenith, horizon } => horizon.lerp(zenith, 0.5 * (dir.y + 1.0)),
+    }
+}
+
+/// Solid-angle probability density of light sampling choosing a direction towards the
+/// sky, its pick included: uniform over the sphere. mirror: shaders/lights.wgsl `sky_pdf`
+pub fn sky_pdf(scene: &RenderScene) -> f32 {
+    scene.sky_pmf * UNIFORM_SPHERE_PDF
+}
+
+/// Probability density, in solid angle at the shading point, of light sampling choosing the
+/// point at distance `dist` on triangle `tri` whose cosine towards the shading point is `cos_l`.
+/// mirror: shaders/lights.wgsl `light_pdf`
+pub fn light_pdf(scene: &RenderScene, tri: u32, dist: f32, cos_l: f32) -> f32 {
+    let pmf = scene.shading[tri as usize].emitter_pmf;
+    let area = geometry::triangle_area(&scene.tris[tri as usize]);
+    pmf * dist * dist / (cos_l * area)
+}
+
+/// A point on a light chosen for next event estimation, seen from a shading point.
+/// mirror: shaders/lights.wgsl `LightSample` (whose field valid stands for the Option)
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample {
+    /// The shadow ray: from `origin` along unit `wi` up to `t_max`.
+    pub origin: Vec3,
+    pub wi: Vec3,
+    pub t_max: f32,
+    /// Radiance arriving along the shadow ray if nothing blocks it.
+    pub le: Vec3,
+    /// Solid-angle pdf of having drawn `wi`, the light's pick included.
+    pub pdf: f32,
+}
+
+/// Picks a light by the emitter CDF and a point (triangle) or direction (sky) on it, as
+/// seen from surface point `p` with geometric normal `ng` facing the viewer. `None` when
+/// the point faces away. mirror: shaders/lights.wgsl `sample_light`
+pub fn sample_light(
+    scene: &RenderScene,
+    p: Vec3,
+    ng: Vec3,
+    rng: &Rng,
+    depth: u32,
+) -> Option<LightSample> {
+    let k = sample_cdf(&scene.emitter_cdf, rng.rng_1d(depth, rng::DIM_LIGHT_PICK));
+    let light = scene.emitters[k];
+    let u = Vec2::new(
+        rng.rng_1d(depth, rng::DIM_LIGHT_U),
+        rng.rng_1d(depth, rng::DIM_LIGHT_V),
+    );
+    if light == SKY_EMITTER {
+        let wi = sample_uniform_sphere(u);
+        return Some(LightSample {
+            origin: offset_ray_origin(p, ng, wi),
+            wi,
+            t_max: T_INF,
+            le: sky_radiance(scene, wi),
+            pdf: sky_pdf(scene),
+        });
+    }
+    let tri = &scene.tris[light as usize];
+    let [a, b, c] = tri.corners();
+    let bary = sample_uniform_triangle(u);
+    let q = (1.0 - bary.x - bary.y) * a + bary.x * b + bary.y * c;
+    let origin = offset_ray_origin(p, ng, q - p);
+    let to_light = q - origin;
+    let dist = to_light.length();
+    let wi = to_light / dist;
+    let cos_l = -wi.dot(geometry::geometric_normal(tri));
+    if !(cos_l > 0.0 && dist > 0.0) {
+        return None;
+    }
+    Some(LightSample {
+        origin,
+        wi,
+        t_max: dist * (1.0 - 1e-4),
+        le: scene.materials[scene.shading[light as usize].material as usize].emission,
+        pdf: light_pdf(scene, light, dist, cos_l),
+    })
+}
