@@ -94,15 +94,17 @@ fn bsdf_sample(m: Material, wo: vec3<f32>, u_lobe: f32, u: vec2<f32>) -> BsdfSam
         let pdf = ggx_g1(wo, alpha) * ggx_d(h, alpha) / (4.0 * wo.z);
         return BsdfSample(wi, m.albedo * ggx_g1(wi, alpha), pdf, false, 1.0, true);
     }
-    // Dielectric.
-    let fr = fresnel_dielectric(wo.z, m.ior);
-    let f = fr.x;
-    if u_lobe < f {
-        return BsdfSample(vec3<f32>(-wo.x, -wo.y, wo.z), vec3<f32>(1.0), f, true, 1.0, true);
+    if m.kind == MAT_DIELECTRIC {
+        let fr = fresnel_dielectric(wo.z, m.ior);
+        let f = fr.x;
+        if u_lobe < f {
+            return BsdfSample(vec3<f32>(-wo.x, -wo.y, wo.z), vec3<f32>(1.0), f, true, 1.0, true);
+        }
+        let eta_ti = fr.w;
+        let wi = vec3<f32>(-eta_ti * wo.x, -eta_ti * wo.y, fr.y);
+        return BsdfSample(wi, vec3<f32>(eta_ti * eta_ti), 1.0 - f, true, fr.z, true);
     }
-    let eta_ti = fr.w;
-    let wi = vec3<f32>(-eta_ti * wo.x, -eta_ti * wo.y, fr.y);
-    return BsdfSample(wi, vec3<f32>(eta_ti * eta_ti), 1.0 - f, true, fr.z, true);
+    return no_sample();
 }
 
 // mirror: src/render/bsdf.rs `ggx_alpha`

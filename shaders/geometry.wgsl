@@ -41,11 +41,6 @@ fn to_ray_frame(ray: ShearedRay, v: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(p.x + ray.shear.x * p.z, p.y + ray.shear.y * p.z, p.z);
 }
 
-// gamma(n) = n u / (1 - n u), u = 2^-24: the rounding bound of n operations (pbrt-v4).
-// mirror: src/geometry.rs `GAMMA_2` `GAMMA_3`
-const GAMMA_2: f32 = 1.1920930376163597e-7;
-const GAMMA_3: f32 = 1.788139627478813e-7;
-
 // The rounding bound of the sum of the edge functions. mirror: src/geometry.rs `edge_rounding`
 fn edge_rounding(ray: ShearedRay, tri: TriVerts, p0: vec3<f32>, p1: vec3<f32>, p2: vec3<f32>) -> f32 {
     let d0 = corner_rounding(ray, tri.v0.xyz);
@@ -97,10 +92,6 @@ fn intersect_triangle(ray: ShearedRay, tri: TriVerts, t_max: f32) -> TriHit {
     }
     return miss;
 }
-
-// 1 + 2 gamma(3): the rounding bound of a slab distance (pbrt-v4, 6.8.2).
-// mirror: src/geometry.rs `SLAB_SLACK`
-const SLAB_SLACK: f32 = 1.0000003576278687;
 
 // Conservative entry distance into the box, or T_INF. mirror: src/geometry.rs `intersect_aabb`
 fn intersect_aabb(origin: vec3<f32>, inv_dir: vec3<f32>, bmin: vec3<f32>, bmax: vec3<f32>, t_max: f32) -> f32 {

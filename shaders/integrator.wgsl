@@ -1,9 +1,6 @@
 // The path tracer, one bounce at a time. mirror: src/render/integrator.rs — every
 // function has a Rust twin of the same name.
 
-// mirror: src/render/integrator.rs `RR_DEPTH`
-const RR_DEPTH: u32 = 5u;
-
 // mirror: src/render/integrator.rs `SurfaceHit`
 struct SurfaceHit {
     p: vec3<f32>,

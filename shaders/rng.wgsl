@@ -1,17 +1,5 @@
-// Counter-based random numbers. mirror: src/render/rng.rs
-
-const DIM_PIXEL_X: u32 = 0u;
-const DIM_PIXEL_Y: u32 = 1u;
-const DIM_LENS_U: u32 = 2u;
-const DIM_LENS_V: u32 = 3u;
-const DIM_LIGHT_PICK: u32 = 4u;
-const DIM_LIGHT_U: u32 = 5u;
-const DIM_LIGHT_V: u32 = 6u;
-const DIM_BSDF_LOBE: u32 = 7u;
-const DIM_BSDF_U: u32 = 8u;
-const DIM_BSDF_V: u32 = 9u;
-const DIM_ROULETTE: u32 = 10u;
-const DIMS_PER_BOUNCE: u32 = 16u;
+// Counter-based random numbers (the DIM_* constants are generated from the Rust ones).
+// mirror: src/render/rng.rs
 
 // mirror: src/render/rng.rs `pcg4d`
 fn pcg4d(v_in: vec4<u32>) -> vec4<u32> {

@@ -1,10 +1,5 @@
 // Warps from the unit square. mirror: src/render/sampling.rs, src/math.rs
 
-const PI: f32 = 3.14159265358979;
-const FRAC_1_PI: f32 = 0.318309886183791;
-const FRAC_PI_2: f32 = 1.57079632679490;
-const FRAC_PI_4: f32 = 0.785398163397448;
-
 // mirror: src/math.rs `onb_from_normal`
 fn onb_from_normal(n: vec3<f32>) -> mat3x3<f32> {
     let sgn = select(-1.0, 1.0, n.z >= 0.0);
@@ -52,9 +47,6 @@ fn sample_uniform_sphere(u: vec2<f32>) -> vec3<f32> {
     let phi = 2.0 * PI * u.y;
     return vec3<f32>(r * cos(phi), r * sin(phi), z);
 }
-
-// mirror: src/render/sampling.rs `UNIFORM_SPHERE_PDF`
-const UNIFORM_SPHERE_PDF: f32 = 0.25 * FRAC_1_PI;
 
 // mirror: src/render/sampling.rs `sample_uniform_triangle`
 fn sample_uniform_triangle(u: vec2<f32>) -> vec2<f32> {

@@ -1,8 +1,5 @@
 // BVH traversal with a fixed stack, nearer child first. mirror: src/bvh/traverse.rs
 
-// mirror: src/bvh/mod.rs `STACK_SIZE`
-const STACK_SIZE: u32 = 64u;
-
 // One stack for both traversals (they never nest). At module scope it is zero-initialised
 // once per invocation; WGSL zeroes a function-local array on every call, which costs
 // lavapipe more than the traversal of a small scene.

@@ -1,5 +1,7 @@
 // Structs shared with the host. Each mirrors a #[repr(C)] Pod struct in Rust;
-// tests/layout.rs checks sizes and offsets against naga's layout of this file.
+// tests/layout.rs checks sizes and offsets against naga's layout of this file. The
+// constants shared with Rust (DIM_*, MAT_*, T_INF, …) are generated before this file
+// (src/render/gpu/shader.rs `shared_constants`).
 
 // mirror: src/bvh/mod.rs `BvhNode` (32 bytes). Interior (count == 0): children at
 // index + 1 and left_or_first. Leaf: triangles left_or_first .. left_or_first + count.
@@ -27,30 +29,20 @@ struct TriShading {
     flags: u32,
 }
 
-const TRI_SMOOTH: u32 = 1u;
-
-// The `emitters` entry that stands for the sky. mirror: src/render/mod.rs `SKY_EMITTER`
-const SKY_EMITTER: u32 = 0xffffffffu;
-
-// mirror: src/render/gpu/params.rs `GpuMaterial` (48 bytes)
+// mirror: src/scene/material.rs `Material` (48 bytes). Its kind is a MAT_* code; each
+// texture slot holds a texture's index, or NO_TEXTURE.
 struct Material {
     albedo: vec3<f32>,
     kind: u32,
     emission: vec3<f32>,
     roughness: f32,
     ior: f32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
+    albedo_texture: u32,
+    emission_texture: u32,
+    roughness_texture: u32,
 }
 
-// mirror: src/scene/material.rs `MaterialKind`
-const MAT_DIFFUSE: u32 = 0u;
-const MAT_CONDUCTOR: u32 = 1u;
-const MAT_ROUGH_CONDUCTOR: u32 = 2u;
-const MAT_DIELECTRIC: u32 = 3u;
-
-// mirror: src/render/gpu/params.rs `GpuParams` (144 bytes): one dispatch's camera, sky and range.
+// mirror: src/render/gpu/params.rs `Params` (144 bytes): one dispatch's camera, sky and range.
 struct Params {
     cam_position: vec3<f32>,
     width: u32,
@@ -87,6 +79,6 @@ struct Ray {
     dir: vec3<f32>,
 }
 
-// The largest finite float: "no hit" and "unbounded ray" (WGSL has no infinity literal).
-const T_INF: f32 = 3.40282347e38;
+// A leaf-order triangle index that stands for "no hit" (T_INF, the largest finite float,
+// stands for "no hit" and "unbounded ray": WGSL has no infinity literal).
 const NO_HIT: u32 = 0xffffffffu;

@@ -316,7 +316,8 @@ pub fn terrain(n: u32) -> Scene {
         camera: Camera::framing(&bounds).expect("the terrain is small and centred"),
         sky: Sky::Constant(Vec3::ONE),
         settings: RenderSettings::default(),
-        materials: vec![Material::diffuse("ground", Vec3::splat(0.7))],
+        materials: vec![Material::diffuse(Vec3::splat(0.7))],
+        material_names: vec!["ground".into()],
         mesh,
         warnings: Vec::new(),
     }

@@ -137,9 +137,9 @@ const fn gamma(n: f32) -> f32 {
     n * u / (1.0 - n * u)
 }
 
-/// `γ(2)`. mirror: shaders/geometry.wgsl `GAMMA_2`
+/// `γ(2)`; the shaders get it from `render::gpu::shader::shared_constants`.
 pub const GAMMA_2: f32 = gamma(2.0);
-/// `γ(3)`. mirror: shaders/geometry.wgsl `GAMMA_3`
+/// `γ(3)`; the shaders get it from `render::gpu::shader::shared_constants`.
 pub const GAMMA_3: f32 = gamma(3.0);
 
 /// A bound on the rounding of the sum of [`intersect_triangle`]'s edge functions: that of
@@ -165,7 +165,7 @@ fn edge_rounding(ray: &ShearedRay, tri: &TriVerts, p: [Vec3; 3]) -> f32 {
 }
 
 /// Relative slack of the slab test: `2 γ(3)` (PBR 4th ed., 6.8.2) bounds the rounding of
-/// each slab distance. mirror: shaders/geometry.wgsl `SLAB_SLACK`
+/// each slab distance. The shaders get it from `render::gpu::shader::shared_constants`.
 pub const SLAB_SLACK: f32 = 1.0 + 2.0 * GAMMA_3;
 
 /// Conservative slab test: the distance at which the ray enters the box, or [`T_INF`]

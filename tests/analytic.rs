@@ -84,7 +84,7 @@ fn white_furnace_returns_the_sky_radiance() {
     .unwrap();
     let s = scene(
         mesh,
-        vec![Material::diffuse("white", Vec3::ONE)],
+        vec![Material::diffuse(Vec3::ONE)],
         camera,
         Sky::Constant(sky),
         settings(48, 64, 1000),
@@ -108,7 +108,7 @@ fn emissive_enclosure_returns_le_over_one_minus_albedo() {
         0,
         false,
     );
-    let mut wall = Material::diffuse("wall", Vec3::new(0.5, 0.25, 0.75));
+    let mut wall = Material::diffuse(Vec3::new(0.5, 0.25, 0.75));
     wall.emission = Vec3::new(0.5, 0.75, 0.25);
     let expect = wall.emission / (Vec3::ONE - wall.albedo);
     let camera = Camera::new(
@@ -145,7 +145,7 @@ fn emitter_seen_directly_returns_its_radiance() {
         0,
         false,
     );
-    let mut light = Material::diffuse("light", Vec3::ZERO);
+    let mut light = Material::diffuse(Vec3::ZERO);
     light.emission = le;
     for (max_depth, from_behind) in [(1, false), (8, false), (8, true)] {
         let (pos, look) = if from_behind {
@@ -176,7 +176,7 @@ fn emitter_seen_directly_returns_its_radiance() {
         let camera = Camera::new(pos, look, Vec3::Y, 30.0, 0.0, None).unwrap();
         let s = scene(
             m,
-            vec![light.clone()],
+            vec![light],
             camera,
             Sky::Constant(Vec3::ZERO),
             settings(16, 4, max_depth),

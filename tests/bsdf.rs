@@ -51,32 +51,33 @@ const IORS: [f32; 2] = [1.5, 1.33];
 const SEED: u32 = 0x0b5d_f00d;
 
 fn diffuse() -> Material {
-    Material::diffuse("diffuse", Vec3::ONE)
+    Material::diffuse(Vec3::ONE)
 }
 
 fn conductor() -> Material {
-    Material {
-        name: "conductor".into(),
-        kind: MaterialKind::Conductor,
-        ..diffuse()
-    }
+    Material::new(MaterialKind::CONDUCTOR)
 }
 
 fn rough(roughness: f32) -> Material {
     Material {
-        name: format!("rough_conductor r={roughness}"),
-        kind: MaterialKind::RoughConductor,
         roughness,
-        ..diffuse()
+        ..Material::new(MaterialKind::ROUGH_CONDUCTOR)
     }
 }
 
 fn dielectric(ior: f32) -> Material {
     Material {
-        name: format!("dielectric ior={ior}"),
-        kind: MaterialKind::Dielectric,
         ior,
-        ..diffuse()
+        ..Material::new(MaterialKind::DIELECTRIC)
+    }
+}
+
+/// A material's name in messages, and the label of its random streams.
+fn material_name(m: &Material) -> String {
+    match m.kind {
+        MaterialKind::ROUGH_CONDUCTOR => format!("rough_conductor r={}", m.roughness),
+        MaterialKind::DIELECTRIC => format!("dielectric ior={}", m.ior),
+        kind => kind.name().to_string(),
     }
 }
 
@@ -123,7 +124,7 @@ fn random_wo(m: &Material, s: u32, i: u32) -> Vec3 {
         w.z *= 0.01;
         w = w.normalize();
     }
-    if m.kind != MaterialKind::Dielectric {
+    if m.kind != MaterialKind::DIELECTRIC {
         w.z = w.z.abs();
     }
     w
@@ -169,7 +170,7 @@ fn non_negative_finite(v: Vec3) -> bool {
 /// rounding errors of h.z amplified by |d ln D / d ln h.z| = 4 h.z^2 (1 - a^2) /
 /// (h.z^2 (a^2 - 1) + 1), which is ~4 / a^2 at the peak (4e4 at roughness 0.1).
 fn ggx_tolerance(m: &Material, wo: Vec3, wi: Vec3, base: f64) -> f64 {
-    if m.kind != MaterialKind::RoughConductor {
+    if m.kind != MaterialKind::ROUGH_CONDUCTOR {
         return base;
     }
     let h = (wo.as_dvec3() + wi.as_dvec3()).normalize();
@@ -241,7 +242,7 @@ fn eval_and_pdf_are_non_negative() {
             };
             let f = bsdf_eval(m, wo, wi);
             let pdf = bsdf_pdf(m, wo, wi);
-            let show = || format!("{}: wo {wo} wi {wi}: eval {f}, pdf {pdf}", m.name);
+            let show = || format!("{}: wo {wo} wi {wi}: eval {f}, pdf {pdf}", material_name(m));
             assert!(non_negative_finite(f), "{}", show());
             assert!(pdf.is_finite() && pdf >= 0.0, "{}", show());
             if bsdf_is_delta(m) {
@@ -257,9 +258,9 @@ fn eval_and_pdf_are_non_negative() {
         }
         eprintln!(
             "non-negative: {}: {n} pairs, {nonzero} with f > 0, {unsampleable} of them with pdf 0",
-            m.name
+            material_name(m)
         );
-        assert_eq!(unsampleable, 0, "{}: f > 0 where pdf = 0", m.name);
+        assert_eq!(unsampleable, 0, "{}: f > 0 where pdf = 0", material_name(m));
     }
 }
 
@@ -270,7 +271,7 @@ fn non_delta_bsdfs_are_reciprocal() {
         let s = stream("reciprocity", k as u32);
         let mut worst = Worst::new(format!(
             "reciprocity: {}: |f(wo,wi) - f(wi,wo)| / f",
-            m.name
+            material_name(m)
         ));
         let mut tested = 0;
         for i in 0..n {
@@ -291,7 +292,11 @@ fn non_delta_bsdfs_are_reciprocal() {
             }
             worst.add(rel3(a, b, 1e-30), || format!("wo {wo} wi {wi}: {a} vs {b}"));
         }
-        assert!(tested > n / 2, "{}: only {tested} nonzero pairs", m.name);
+        assert!(
+            tested > n / 2,
+            "{}: only {tested} nonzero pairs",
+            material_name(m)
+        );
         worst.check(1e-5);
     }
 }
@@ -303,11 +308,11 @@ fn sampled_pdf_and_weight_match_eval() {
         let s = stream("pdf consistency", k as u32);
         let mut pdf_err = Worst::new(format!(
             "sampled pdf vs bsdf_pdf: {}: relative error / tolerance",
-            m.name
+            material_name(m)
         ));
         let mut weight_err = Worst::new(format!(
             "sampled weight vs eval / pdf: {}: relative error / tolerance",
-            m.name
+            material_name(m)
         ));
         let mut raw_pdf = 0.0f64;
         let mut valid = 0;
@@ -318,16 +323,16 @@ fn sampled_pdf_and_weight_match_eval() {
                 continue;
             };
             valid += 1;
-            let show = || format!("{}: wo {wo} u {u:?}: {x:?}", m.name);
+            let show = || format!("{}: wo {wo} u {u:?}: {x:?}", material_name(m));
             assert!((x.wi.length() - 1.0).abs() < 1e-5, "{}", show());
             assert!(non_negative_finite(x.weight), "{}", show());
             assert!(x.pdf.is_finite() && x.pdf > 0.0, "{}", show());
             assert_eq!(x.delta, bsdf_is_delta(m), "{}", show());
             match m.kind {
-                MaterialKind::Conductor => {
+                MaterialKind::CONDUCTOR => {
                     assert!(x.wi == mirror(wo) && x.weight == m.albedo && x.pdf == 1.0);
                 }
-                MaterialKind::Dielectric => {
+                MaterialKind::DIELECTRIC => {
                     let (f, ..) = fresnel_dielectric(wo.z, m.ior);
                     let reflected = x.wi.z * wo.z > 0.0;
                     let p = if reflected { f } else { 1.0 - f };
@@ -354,9 +359,9 @@ fn sampled_pdf_and_weight_match_eval() {
         }
         eprintln!(
             "pdf consistency: {}: {valid} of {n} samples valid; max raw relative pdf error {raw_pdf:.2e}",
-            m.name
+            material_name(m)
         );
-        assert!(valid > n / 2, "{}: {valid} valid samples", m.name);
+        assert!(valid > n / 2, "{}: {valid} valid samples", material_name(m));
         if !bsdf_is_delta(m) {
             pdf_err.check(1.0);
             weight_err.check(1.0);
@@ -369,18 +374,21 @@ fn dielectric_refraction_is_reversible() {
     for ior in IORS {
         let m = dielectric(ior);
         let s = stream("reversible", ior.to_bits());
-        let mut dir_err = Worst::new(format!("reversibility: {}: |wo' - wo|", m.name));
-        let mut fresnel_err = Worst::new(format!("reversibility: {}: 1 - F both ways", m.name));
+        let mut dir_err = Worst::new(format!("reversibility: {}: |wo' - wo|", material_name(&m)));
+        let mut fresnel_err = Worst::new(format!(
+            "reversibility: {}: 1 - F both ways",
+            material_name(&m)
+        ));
         let mut product_err = Worst::new(format!(
             "reversibility: {}: |weight(wo->wi) weight(wi->wo) - 1|",
-            m.name
+            material_name(&m)
         ));
         let mut refracted = 0;
         for i in 0..50_000 {
             let wo = random_wo(&m, s, i);
             // u_lobe just below 1 picks refraction whenever there is any.
             let Some(a) = sample(&m, wo, [0.999_999, 0.5, 0.5]) else {
-                panic!("{}: no sample for wo {wo}", m.name);
+                panic!("{}: no sample for wo {wo}", material_name(&m));
             };
             if a.wi.z * wo.z > 0.0 {
                 continue; // total internal reflection
@@ -772,7 +780,7 @@ fn chi2_wos() -> [(&'static str, Vec3); 3] {
 /// The binnings a material is tested in: local, and for rough conductors about the lobe.
 fn binnings(m: &Material, wo: Vec3) -> Vec<Binning> {
     let mut b = vec![Binning::local()];
-    if m.kind == MaterialKind::RoughConductor {
+    if m.kind == MaterialKind::ROUGH_CONDUCTOR {
         b.push(Binning::lobe(wo, ggx_alpha(m.roughness)));
     }
     b
@@ -815,13 +823,13 @@ fn cpu_samples(m: &Material, wo: Vec3, s: u32) -> Vec<Option<Vec3>> {
 fn chi2_material(m: &Material) {
     let mut failures = Vec::new();
     for (k, (name, wo)) in chi2_wos().into_iter().enumerate() {
-        let wis = cpu_samples(m, wo, stream(&m.name, k as u32));
+        let wis = cpu_samples(m, wo, stream(&material_name(m), k as u32));
         let refused = wis.iter().filter(|w| w.is_none()).count();
         for bin in binnings(m, wo) {
             let (r, integration) = chi2_of(&wis, &bin, &|wi| bsdf_pdf(m, wo, wi) as f64);
             let line = format!(
                 "chi2: {}, wo {name}, {}: {} ({refused} refused; integration error <= {integration:.2} sd)",
-                m.name,
+                material_name(m),
                 bin.what,
                 show_chi2(&r)
             );
@@ -877,7 +885,9 @@ fn chi2_detects_a_wrong_pdf() {
         let (r, _) = chi2_of(&wis, bin, &|wi| scale * bsdf_pdf(&assumed, wo, wi) as f64);
         eprintln!(
             "chi2 power: samples of {}, pdf of {} x {scale}, wo {wo}, {}: {r:?}",
-            sampled.name, assumed.name, bin.what
+            material_name(&sampled),
+            material_name(&assumed),
+            bin.what
         );
         if let Ok(c) = r {
             assert!(c.p < 1e-6, "a wrong pdf passed: {c:?}");
@@ -936,7 +946,7 @@ fn albedo_quadrature(m: &Material, wo: Vec3) -> f64 {
 /// The wo of the furnace for `m`.
 fn furnace_wos(m: &Material) -> Vec<(f64, Vec3)> {
     let mut thetas = FURNACE_THETAS.to_vec();
-    if m.kind == MaterialKind::Dielectric {
+    if m.kind == MaterialKind::DIELECTRIC {
         thetas.extend(FURNACE_INSIDE);
     }
     thetas
@@ -997,10 +1007,10 @@ fn check_furnace(
 ) -> String {
     let line = format!(
         "furnace: {} theta {theta:>5.1}: albedo {:.5} +- {:.5}{}{}",
-        m.name,
+        material_name(m),
         f.albedo,
         f.se,
-        if m.kind == MaterialKind::Dielectric {
+        if m.kind == MaterialKind::DIELECTRIC {
             format!(
                 ", without radiance scaling {:.5} +- {:.1e}, reflected {:.4} (Fresnel {:.4})",
                 f.unscaled,
@@ -1015,16 +1025,16 @@ fn check_furnace(
     );
     let noise = 4.0 * f.se;
     match m.kind {
-        MaterialKind::Diffuse | MaterialKind::Conductor => {
+        MaterialKind::DIFFUSE | MaterialKind::CONDUCTOR => {
             assert!((f.albedo - 1.0).abs() <= 0.01, "{line}");
         }
-        MaterialKind::RoughConductor => {
+        MaterialKind::ROUGH_CONDUCTOR => {
             // Single-scattering microfacets lose energy; they must never gain it.
             assert!(f.albedo <= 1.0 + noise, "{line}");
             let q = quadrature.unwrap();
             assert!((f.albedo - q).abs() <= noise + 2e-3, "{line}");
         }
-        MaterialKind::Dielectric => {
+        MaterialKind::DIELECTRIC => {
             // Radiance weights: F + (1 - F) (eta_wo_side / eta_wi_side)^2, below 1 from
             // outside and above 1 from inside (radiance is compressed into the smaller
             // solid angle of the optically denser side); the unscaled BSDF conserves energy
@@ -1043,6 +1053,7 @@ fn check_furnace(
             let binomial = (fr * (1.0 - fr) / FURNACE_SAMPLES as f64).sqrt();
             assert!((f.reflected - fr).abs() <= 4.0 * binomial + 1e-5, "{line}");
         }
+        kind => panic!("no furnace rule for {kind:?}"),
     }
     line
 }
@@ -1070,7 +1081,11 @@ fn white_furnace() {
                 .map(|i| sample(m, wo, u3(s, i)).map(|x| (x.wi, x.weight, x.eta)))
                 .collect();
             for x in samples.iter().flatten() {
-                assert!(x.1.x == x.1.y && x.1.y == x.1.z, "{}: grey weights", m.name);
+                assert!(
+                    x.1.x == x.1.y && x.1.y == x.1.z,
+                    "{}: grey weights",
+                    material_name(m)
+                );
             }
             let f = furnace_of(wo, &samples);
             let q = (!bsdf_is_delta(m)).then(|| albedo_quadrature(m, wo));
@@ -1255,11 +1270,11 @@ fn gpu_pdf_consistency_and_furnace() {
             [
                 Worst::new(format!(
                     "gpu: {}: sampled pdf vs bsdf_pdf (relative / tolerance)",
-                    m.name
+                    material_name(m)
                 )),
                 Worst::new(format!(
                     "gpu: {}: weight vs eval / pdf (relative / tolerance)",
-                    m.name
+                    material_name(m)
                 )),
             ]
         })
@@ -1271,7 +1286,12 @@ fn gpu_pdf_consistency_and_furnace() {
         }
         let (f, pdf) = *e.next().unwrap();
         let mat = &mats[m as usize];
-        let show = || format!("{}: wo {wo} u {u:?}: {g:?}; eval {f} pdf {pdf}", mat.name);
+        let show = || {
+            format!(
+                "{}: wo {wo} u {u:?}: {g:?}; eval {f} pdf {pdf}",
+                material_name(mat)
+            )
+        };
         assert!(
             non_negative_finite(g.weight) && non_negative_finite(f),
             "{}",
@@ -1317,11 +1337,11 @@ fn gpu_pdf_consistency_and_furnace() {
         let cpu = furnace_of(wo, &cpu);
         let line = format!(
             "gpu furnace: {} theta {theta:>5.1}: albedo {:.5} +- {:.5} (CPU, same numbers: {:.5}){}",
-            m.name,
+            material_name(m),
             gpu.albedo,
             gpu.se,
             cpu.albedo,
-            if m.kind == MaterialKind::Dielectric {
+            if m.kind == MaterialKind::DIELECTRIC {
                 format!(", without radiance scaling {:.5}", gpu.unscaled)
             } else {
                 String::new()
@@ -1333,16 +1353,17 @@ fn gpu_pdf_consistency_and_furnace() {
         assert!((gpu.albedo - cpu.albedo).abs() <= 2e-3, "{line}");
         let noise = 4.0 * gpu.se;
         match m.kind {
-            MaterialKind::Diffuse | MaterialKind::Conductor => {
+            MaterialKind::DIFFUSE | MaterialKind::CONDUCTOR => {
                 assert!((gpu.albedo - 1.0).abs() <= 0.01, "{line}")
             }
-            MaterialKind::RoughConductor => assert!(gpu.albedo <= 1.0 + noise, "{line}"),
-            MaterialKind::Dielectric => {
+            MaterialKind::ROUGH_CONDUCTOR => assert!(gpu.albedo <= 1.0 + noise, "{line}"),
+            MaterialKind::DIELECTRIC => {
                 assert!((gpu.unscaled - 1.0).abs() <= 1e-5, "{line}");
                 if wo.z > 0.0 {
                     assert!(gpu.albedo <= 1.0 + noise, "{line}");
                 }
             }
+            kind => panic!("no furnace rule for {kind:?}"),
         }
     }
 }
@@ -1390,7 +1411,7 @@ fn gpu_chi2() {
             let (c, _) = chi2_of(&cpu, &bin, &pdf);
             let line = format!(
                 "gpu chi2: {}, wo oblique 45 deg, {}: {} (CPU, same numbers: {})",
-                m.name,
+                material_name(m),
                 bin.what,
                 show_chi2(&r),
                 show_chi2(&c)

@@ -3,11 +3,8 @@
 //! as its `#[repr(C)]` Rust twin; the shared constants agree; and every `mirror:` tag
 //! names something that exists on the other side.
 
-use meshtrace::bvh::BvhNode;
-use meshtrace::geometry::TriVerts;
-use meshtrace::render::TriShading;
-use meshtrace::render::gpu::params::{GpuMaterial, GpuParams};
-use meshtrace::render::gpu::shader;
+use meshtrace::render::gpu::shader::{self, Value};
+use meshtrace::render::gpu::tables;
 use meshtrace::render::rng;
 use meshtrace::scene::MaterialKind;
 use naga::valid::{Capabilities, ValidationFlags, Validator};
@@ -55,27 +52,22 @@ struct Member {
     size: usize,
 }
 
-fn field_size<T, F>(_: impl Fn(&T) -> &F) -> usize {
-    size_of::<F>()
-}
-
-/// The Rust struct's size and fields. The destructuring pattern makes the field list
-/// exhaustive: a field added to the Rust struct and not here fails to compile.
-macro_rules! rust_layout {
-    ($t:ident { $($f:ident),* $(,)? }) => {{
-        #[allow(dead_code)]
-        fn exhaustive(x: $t) {
-            let $t { $($f: _),* } = x;
-        }
-        (
-            size_of::<$t>(),
-            vec![$(Member {
-                name: stringify!($f).to_string(),
-                offset: std::mem::offset_of!($t, $f),
-                size: field_size(|x: &$t| &x.$f),
-            }),*],
-        )
-    }};
+/// A Rust struct's size and members as the shader generator describes it.
+fn rust_layout(name: &str) -> (usize, Vec<Member>) {
+    let layout = shader::host_structs()
+        .into_iter()
+        .find(|s| s.name == name)
+        .unwrap_or_else(|| panic!("no host-shared struct `{name}`"));
+    let members = layout
+        .members
+        .iter()
+        .map(|m| Member {
+            name: m.name.to_string(),
+            offset: m.offset,
+            size: m.size,
+        })
+        .collect();
+    (layout.size, members)
 }
 
 /// The WGSL struct `name`'s size and members, by naga's layout.
@@ -150,78 +142,22 @@ fn assert_same_layout(wgsl_name: &str, wgsl: (usize, Vec<Member>), rust: (usize,
     }
 }
 
+/// Every host-shared struct (the tables' elements and the parameter block), as the shader
+/// generator describes it from the Rust definition, has the size and member offsets of its
+/// WGSL twin in every module. The generated table loaders read each member from the
+/// texel and component of its Rust offset, so this also checks them.
 #[test]
 fn structs_match_their_rust_twins() {
+    let names: Vec<&str> = shader::host_structs().iter().map(|s| s.name).collect();
+    assert_eq!(
+        names,
+        ["BvhNode", "TriVerts", "TriShading", "Material", "Params"]
+    );
     for (what, module) in modules() {
         eprintln!("checking {what}");
-        assert_same_layout(
-            "BvhNode",
-            wgsl_layout(&module, "BvhNode"),
-            rust_layout!(BvhNode {
-                min,
-                left_or_first,
-                max,
-                count
-            }),
-        );
-        assert_same_layout(
-            "TriVerts",
-            wgsl_layout(&module, "TriVerts"),
-            rust_layout!(TriVerts { v0, v1, v2 }),
-        );
-        assert_same_layout(
-            "TriShading",
-            wgsl_layout(&module, "TriShading"),
-            rust_layout!(TriShading {
-                n0,
-                material,
-                n1,
-                emitter_pmf,
-                n2,
-                flags
-            }),
-        );
-        assert_same_layout(
-            "Material",
-            wgsl_layout(&module, "Material"),
-            rust_layout!(GpuMaterial {
-                albedo,
-                kind,
-                emission,
-                roughness,
-                ior,
-                _pad
-            }),
-        );
-        assert_same_layout(
-            "Params",
-            wgsl_layout(&module, "Params"),
-            rust_layout!(GpuParams {
-                cam_position,
-                width,
-                cam_forward,
-                height,
-                cam_right,
-                max_depth,
-                cam_up,
-                seed,
-                sky_zenith,
-                sky_gradient,
-                sky_horizon,
-                num_emitters,
-                tan_half_vfov,
-                aspect,
-                aperture,
-                focus_distance,
-                sample_start,
-                sample_end,
-                row_start,
-                row_end,
-                sky_pmf,
-                film_texels,
-                _pad,
-            }),
-        );
+        for name in &names {
+            assert_same_layout(name, wgsl_layout(&module, name), rust_layout(name));
+        }
     }
 }
 
@@ -229,12 +165,7 @@ fn structs_match_their_rust_twins() {
 fn layout_check_can_fail() {
     // A twin with a member moved must be caught: the check is not vacuous.
     let module = &modules()[0].1;
-    let mut rust = rust_layout!(BvhNode {
-        min,
-        left_or_first,
-        max,
-        count
-    });
+    let mut rust = rust_layout("BvhNode");
     rust.1[1].offset = 16; // left_or_first
     let r = std::panic::catch_unwind(|| {
         assert_same_layout("BvhNode", wgsl_layout(module, "BvhNode"), rust)
@@ -244,10 +175,42 @@ fn layout_check_can_fail() {
         assert_same_layout(
             "TriVerts",
             wgsl_layout(module, "TriVerts"),
-            (32, rust_layout!(TriVerts { v0, v1, v2 }).1),
+            (32, rust_layout("TriVerts").1),
         )
     });
     assert!(r.is_err(), "a wrong size passed the layout check");
+}
+
+/// The generated loaders: one per table, in every module, each building its struct from
+/// the texels that hold it. `TriShading`'s is spelled out as an example of the scheme.
+#[test]
+fn table_loaders_are_generated_from_the_rust_layouts() {
+    let generated = tables::wgsl_tables();
+    assert!(generated.contains(
+        "fn load_shading(i: u32) -> TriShading {
+    let t0 = table_texel(shading_tex, 3u * i + 0u);
+    let t1 = table_texel(shading_tex, 3u * i + 1u);
+    let t2 = table_texel(shading_tex, 3u * i + 2u);
+    return TriShading(bitcast<vec3<f32>>(t0.xyz), t0.w, bitcast<vec3<f32>>(t1.xyz), bitcast<f32>(t1.w), bitcast<vec3<f32>>(t2.xyz), t2.w);
+}"
+    ), "{generated}");
+    for (what, module) in modules() {
+        for (i, t) in tables::TABLES.iter().enumerate() {
+            let (_, f) = module
+                .functions
+                .iter()
+                .find(|(_, f)| f.name.as_deref() == Some(t.loader))
+                .unwrap_or_else(|| panic!("{what}: no loader `{}`", t.loader));
+            assert_eq!(f.arguments.len(), 1, "{what}: {}", t.loader);
+            let binding = module
+                .global_variables
+                .iter()
+                .find(|(_, g)| g.name.as_deref() == Some(t.texture))
+                .and_then(|(_, g)| g.binding)
+                .unwrap_or_else(|| panic!("{what}: no binding for `{}`", t.texture));
+            assert_eq!((binding.group, binding.binding), (0, i as u32 + 1));
+        }
+    }
 }
 
 /// The literal initialising the WGSL constant `name`.
@@ -273,84 +236,54 @@ fn wgsl_u32_const(module: &naga::Module, name: &str) -> u32 {
     }
 }
 
+/// The shared constants are generated from one Rust list: each reaches every module with
+/// the Rust value's exact bits, and no WGSL file declares one of its own.
 #[test]
 fn constants_match_rust() {
-    let expected: &[(&str, u32)] = &[
-        ("DIM_PIXEL_X", rng::DIM_PIXEL_X),
-        ("DIM_PIXEL_Y", rng::DIM_PIXEL_Y),
-        ("DIM_LENS_U", rng::DIM_LENS_U),
-        ("DIM_LENS_V", rng::DIM_LENS_V),
-        ("DIM_LIGHT_PICK", rng::DIM_LIGHT_PICK),
-        ("DIM_LIGHT_U", rng::DIM_LIGHT_U),
-        ("DIM_LIGHT_V", rng::DIM_LIGHT_V),
-        ("DIM_BSDF_LOBE", rng::DIM_BSDF_LOBE),
-        ("DIM_BSDF_U", rng::DIM_BSDF_U),
-        ("DIM_BSDF_V", rng::DIM_BSDF_V),
-        ("DIM_ROULETTE", rng::DIM_ROULETTE),
-        ("DIMS_PER_BOUNCE", rng::DIMS_PER_BOUNCE),
-        ("STACK_SIZE", meshtrace::bvh::STACK_SIZE as u32),
-        ("RR_DEPTH", meshtrace::render::integrator::RR_DEPTH),
-        ("TRI_SMOOTH", meshtrace::render::TRI_SMOOTH),
-        ("MAT_DIFFUSE", MaterialKind::Diffuse as u32),
-        ("MAT_CONDUCTOR", MaterialKind::Conductor as u32),
-        ("MAT_ROUGH_CONDUCTOR", MaterialKind::RoughConductor as u32),
-        ("MAT_DIELECTRIC", MaterialKind::Dielectric as u32),
-        ("NO_HIT", u32::MAX),
-    ];
+    let list = shader::shared_constants();
+    assert!(list.len() >= 30, "{} constants", list.len());
     for (what, module) in modules() {
-        for &(name, value) in expected {
-            assert_eq!(
-                wgsl_u32_const(&module, name),
-                value,
-                "{what}: WGSL `{name}` differs from Rust"
-            );
-        }
-        // Every DIM_* in the WGSL is one of the above (a new dimension needs a Rust twin).
-        for (_, c) in module.constants.iter() {
-            let name = c.name.as_deref().unwrap_or("");
-            if name.starts_with("DIM") || name.starts_with("MAT_") {
-                assert!(
-                    expected.iter().any(|&(n, _)| n == name),
-                    "{what}: WGSL constant `{name}` has no Rust twin in this test"
-                );
+        for (name, value) in &list {
+            match *value {
+                Value::U32(v) => assert_eq!(wgsl_u32_const(&module, name), v, "{what}: {name}"),
+                Value::F32(v) => assert_eq!(
+                    wgsl_f32_const(&module, name).to_bits(),
+                    v.to_bits(),
+                    "{what}: {name}"
+                ),
             }
         }
-        // DIMs fit in one bounce and are distinct.
-        let mut dims: Vec<u32> = expected
-            .iter()
-            .filter(|(n, _)| n.starts_with("DIM_"))
-            .map(|&(_, v)| v)
-            .collect();
-        assert!(dims.iter().all(|&d| d < rng::DIMS_PER_BOUNCE));
-        dims.sort();
-        dims.dedup();
-        assert_eq!(dims.len(), 11, "DIM_* values collide");
-        // Floats: T_INF is the largest finite float on both sides; the rounding bounds of
-        // the intersection tests are the same bits.
-        use meshtrace::geometry::{GAMMA_2, GAMMA_3, SLAB_SLACK, T_INF};
-        let floats = [
-            ("T_INF", T_INF),
-            ("GAMMA_2", GAMMA_2),
-            ("GAMMA_3", GAMMA_3),
-            ("SLAB_SLACK", SLAB_SLACK),
-        ];
-        for (name, value) in floats {
-            assert_eq!(
-                wgsl_f32_const(&module, name).to_bits(),
-                value.to_bits(),
-                "{what}: WGSL `{name}` differs from Rust"
+    }
+    for file in files_in("shaders", "wgsl") {
+        let text = std::fs::read_to_string(&file).unwrap();
+        for (name, _) in &list {
+            assert!(
+                !defines_after(&text, &format!("const {name}")),
+                "{}: declares `{name}`, which is generated from Rust",
+                file.display()
             );
         }
-        let (name, value) = (
-            "TABLE_WIDTH_LOG2",
-            meshtrace::render::gpu::TABLE_WIDTH.ilog2(),
-        );
-        assert_eq!(
-            wgsl_u32_const(&module, name),
-            value,
-            "{what}: WGSL `{name}` differs from Rust"
-        );
     }
+    // The Rust values themselves: the DIM_* fit in one bounce and are distinct, and the
+    // kinds are the material codes.
+    let mut dims: Vec<u32> = list
+        .iter()
+        .filter(|(n, _)| n.starts_with("DIM_"))
+        .map(|(_, v)| match v {
+            Value::U32(v) => *v,
+            Value::F32(_) => panic!("a float DIM"),
+        })
+        .collect();
+    assert_eq!(dims.len(), 11);
+    assert!(dims.iter().all(|&d| d < rng::DIMS_PER_BOUNCE));
+    dims.sort();
+    dims.dedup();
+    assert_eq!(dims.len(), 11, "DIM_* values collide");
+    assert!(list.contains(&(
+        "MAT_DIELECTRIC".into(),
+        Value::U32(MaterialKind::DIELECTRIC.0)
+    )));
+    assert!(list.contains(&("T_INF".into(), Value::F32(f32::MAX))));
 }
 
 fn wgsl_f32_const(module: &naga::Module, name: &str) -> f32 {

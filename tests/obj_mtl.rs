@@ -88,13 +88,20 @@ fn face_without_normals_among_faces_with_normals_is_flat() {
 
 /// The material of each triangle of materials.obj, by its MTL name (`None` for the
 /// first triangle, which names none).
-fn materials() -> (ObjMesh, Vec<Option<Material>>) {
+fn materials() -> (ObjMesh, Vec<Option<(String, Material)>>) {
     let m = obj("materials.obj");
     assert!(m.warnings.is_empty(), "{:?}", m.warnings);
     let mats = m
         .triangles
         .iter()
-        .map(|(_, _, mat)| mat.map(|i| m.materials[i as usize].clone()))
+        .map(|(_, _, mat)| {
+            mat.map(|i| {
+                (
+                    m.material_names[i as usize].clone(),
+                    m.materials[i as usize],
+                )
+            })
+        })
         .collect();
     (m, mats)
 }
@@ -103,8 +110,9 @@ fn mtl(name: &str) -> Material {
     let (_, mats) = materials();
     mats.into_iter()
         .flatten()
-        .find(|m| m.name == name)
+        .find(|(n, _)| n == name)
         .unwrap_or_else(|| panic!("no triangle uses {name}"))
+        .1
 }
 
 #[test]
@@ -114,7 +122,7 @@ fn every_face_gets_its_material() {
     assert_eq!(m.materials.len(), 8);
     let names: Vec<Option<String>> = mats
         .iter()
-        .map(|m| m.as_ref().map(|m| m.name.clone()))
+        .map(|m| m.as_ref().map(|(n, _)| n.clone()))
         .collect();
     let expected = [
         None,
@@ -133,7 +141,7 @@ fn every_face_gets_its_material() {
 #[test]
 fn kd_is_diffuse_albedo() {
     let m = mtl("kd");
-    assert_eq!(m.kind, MaterialKind::Diffuse);
+    assert_eq!(m.kind, MaterialKind::DIFFUSE);
     assert_eq!(m.albedo, Vec3::new(0.1, 0.2, 0.3));
     assert_eq!(m.emission, Vec3::ZERO);
 }
@@ -141,7 +149,7 @@ fn kd_is_diffuse_albedo() {
 #[test]
 fn ke_is_emission() {
     let m = mtl("emit");
-    assert_eq!(m.kind, MaterialKind::Diffuse);
+    assert_eq!(m.kind, MaterialKind::DIFFUSE);
     assert_eq!(m.albedo, Vec3::splat(0.5));
     assert_eq!(m.emission, Vec3::new(4.0, 5.0, 6.0));
     assert!(m.is_emissive());
@@ -150,28 +158,28 @@ fn ke_is_emission() {
 #[test]
 fn illum3_is_conductor_with_ks() {
     let m = mtl("metal_ks");
-    assert_eq!(m.kind, MaterialKind::Conductor);
+    assert_eq!(m.kind, MaterialKind::CONDUCTOR);
     assert_eq!(m.albedo, Vec3::new(0.9, 0.8, 0.7));
 }
 
 #[test]
 fn illum3_without_ks_uses_kd() {
     let m = mtl("metal_kd");
-    assert_eq!(m.kind, MaterialKind::Conductor);
+    assert_eq!(m.kind, MaterialKind::CONDUCTOR);
     assert_eq!(m.albedo, Vec3::new(0.6, 0.5, 0.4));
 }
 
 #[test]
 fn pm_is_conductor() {
     let m = mtl("pm");
-    assert_eq!(m.kind, MaterialKind::Conductor);
+    assert_eq!(m.kind, MaterialKind::CONDUCTOR);
     assert_eq!(m.albedo, Vec3::new(0.3, 0.4, 0.5));
 }
 
 #[test]
 fn pm_with_pr_is_rough_conductor() {
     let m = mtl("pm_pr");
-    assert_eq!(m.kind, MaterialKind::RoughConductor);
+    assert_eq!(m.kind, MaterialKind::ROUGH_CONDUCTOR);
     assert_eq!(m.roughness, 0.3);
     assert_eq!(m.albedo, Vec3::new(0.3, 0.4, 0.5));
 }
@@ -179,14 +187,14 @@ fn pm_with_pr_is_rough_conductor() {
 #[test]
 fn illum7_is_dielectric_with_ni() {
     let m = mtl("glass7");
-    assert_eq!(m.kind, MaterialKind::Dielectric);
+    assert_eq!(m.kind, MaterialKind::DIELECTRIC);
     assert_eq!(m.ior, 1.7);
 }
 
 #[test]
 fn dissolve_with_ni_is_dielectric() {
     let m = mtl("glass_d");
-    assert_eq!(m.kind, MaterialKind::Dielectric);
+    assert_eq!(m.kind, MaterialKind::DIELECTRIC);
     assert_eq!(m.ior, 1.33);
 }
 
@@ -200,13 +208,13 @@ fn face_without_material_is_default_diffuse() {
     let first = s.mesh.triangles[0];
     let mat = &s.materials[first.material as usize];
     assert_eq!(*mat, Material::default_diffuse());
-    assert_eq!(mat.kind, MaterialKind::Diffuse);
+    assert_eq!(mat.kind, MaterialKind::DIFFUSE);
     assert_eq!(mat.albedo, Vec3::splat(0.8));
     assert_eq!(mat.emission, Vec3::ZERO);
     // the other faces keep their MTL materials
     let names: Vec<&str> = s.mesh.triangles[1..]
         .iter()
-        .map(|t| s.materials[t.material as usize].name.as_str())
+        .map(|t| s.material_names[t.material as usize].as_str())
         .collect();
     assert_eq!(
         names,
@@ -222,8 +230,8 @@ fn scene_material_overrides_every_face() {
     assert_eq!(s.mesh.triangles.len(), 9);
     for t in &s.mesh.triangles {
         let m = &s.materials[t.material as usize];
-        assert_eq!(m.name, "paint");
-        assert_eq!(m.kind, MaterialKind::Conductor);
+        assert_eq!(s.material_names[t.material as usize], "paint");
+        assert_eq!(m.kind, MaterialKind::CONDUCTOR);
         assert_eq!(m.albedo, Vec3::new(0.25, 0.5, 0.75));
     }
 }

@@ -146,46 +146,48 @@ fn full_scene_camera_settings_sky() {
 fn full_scene_materials() {
     let s = full_scene();
     let mat = |name: &str| -> &Material {
-        s.materials
+        let i = s
+            .material_names
             .iter()
-            .find(|m| m.name == name)
-            .unwrap_or_else(|| panic!("no material {name} in {:?}", s.materials))
+            .position(|n| n == name)
+            .unwrap_or_else(|| panic!("no material {name} in {:?}", s.material_names));
+        &s.materials[i]
     };
     let matte = mat("matte");
-    assert_eq!(matte.kind, MaterialKind::Diffuse);
+    assert_eq!(matte.kind, MaterialKind::DIFFUSE);
     assert_eq!(matte.albedo, Vec3::new(0.1, 0.2, 0.3));
     assert_eq!(matte.emission, Vec3::ZERO);
     assert!(!matte.is_emissive());
 
     let lamp = mat("lamp");
-    assert_eq!(lamp.kind, MaterialKind::Diffuse);
+    assert_eq!(lamp.kind, MaterialKind::DIFFUSE);
     assert_eq!(lamp.albedo, Vec3::splat(0.4));
     assert_eq!(lamp.emission, Vec3::new(10.0, 20.0, 30.0));
     assert!(lamp.is_emissive());
 
     let mirror = mat("mirror");
-    assert_eq!(mirror.kind, MaterialKind::Conductor);
+    assert_eq!(mirror.kind, MaterialKind::CONDUCTOR);
     assert_eq!(mirror.albedo, Vec3::new(0.9, 0.8, 0.7));
 
     let brushed = mat("brushed");
-    assert_eq!(brushed.kind, MaterialKind::RoughConductor);
+    assert_eq!(brushed.kind, MaterialKind::ROUGH_CONDUCTOR);
     assert_eq!(brushed.albedo, Vec3::new(0.6, 0.5, 0.4));
     assert_eq!(brushed.roughness, 0.35);
 
     let glass = mat("glass");
-    assert_eq!(glass.kind, MaterialKind::Dielectric);
+    assert_eq!(glass.kind, MaterialKind::DIELECTRIC);
     assert_eq!(glass.ior, 1.33);
     assert_eq!(glass.emission, Vec3::ZERO);
 
     let crown = mat("crown");
-    assert_eq!(crown.kind, MaterialKind::Dielectric);
+    assert_eq!(crown.kind, MaterialKind::DIELECTRIC);
     assert_eq!(crown.ior, 1.5, "the spec's default ior");
 
     // Six named materials, plus the default for the object that names none.
     assert_eq!(s.materials.len(), 7);
     let default = mat("default");
     assert_eq!(*default, Material::default_diffuse());
-    assert_eq!(default.kind, MaterialKind::Diffuse);
+    assert_eq!(default.kind, MaterialKind::DIFFUSE);
     assert_eq!(default.albedo, Vec3::splat(0.8));
 }
 
@@ -226,7 +228,7 @@ fn full_scene_transforms() {
     // unit triangle, matrix triangle, 80-triangle level-1 sphere, uniformly scaled triangle
     assert_eq!(m.triangles.len(), 1 + 1 + 80 + 1);
     assert_eq!(m.positions.len(), 3 + 3 + 42 + 3);
-    let index = |name: &str| s.materials.iter().position(|m| m.name == name).unwrap() as u32;
+    let index = |name: &str| s.material_names.iter().position(|n| n == name).unwrap() as u32;
 
     // Object 0: scale [2,3,4], rotate [90,90,90], translate [10,20,30], by hand:
     // (1,0,0) -> (10,20,28); (0,1,0) -> (10,23,30); (0,0,1) -> (14,20,30).

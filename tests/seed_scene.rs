@@ -65,36 +65,36 @@ fn has_the_seed_triangles_materials_and_transforms() {
     let expected = [
         (
             "ground",
-            MaterialKind::Diffuse,
+            MaterialKind::DIFFUSE,
             Vec3::new(0.0, 1.0, 0.0),
             sphere,
         ),
         (
             "red",
-            MaterialKind::Diffuse,
+            MaterialKind::DIFFUSE,
             Vec3::new(1.0, 0.0, 0.0),
             SPIDER_TRIANGLES + HOUSE_TRIANGLES,
         ),
         (
             "blue",
-            MaterialKind::Diffuse,
+            MaterialKind::DIFFUSE,
             Vec3::new(0.0, 0.0, 1.0),
             2 * HOUSE_TRIANGLES,
         ),
         (
             "metal",
-            MaterialKind::Conductor,
+            MaterialKind::CONDUCTOR,
             Vec3::new(0.4, 1.0, 0.4),
             PLANE_TRIANGLES,
         ),
     ];
     for (name, kind, albedo, count) in expected {
-        let (index, m) = scene
-            .materials
+        let index = scene
+            .material_names
             .iter()
-            .enumerate()
-            .find(|(_, m)| m.name == name)
-            .unwrap_or_else(|| panic!("material {name} missing: {:?}", scene.materials));
+            .position(|n| n == name)
+            .unwrap_or_else(|| panic!("material {name} missing: {:?}", scene.material_names));
+        let m = &scene.materials[index];
         assert_eq!(
             (m.kind, m.albedo, m.emission),
             (kind, albedo, Vec3::ZERO),
@@ -111,9 +111,9 @@ fn has_the_seed_triangles_materials_and_transforms() {
     // The bounds of each material's vertices place the objects.
     let bounds = |material: &str| {
         let index = scene
-            .materials
+            .material_names
             .iter()
-            .position(|m| m.name == material)
+            .position(|n| n == material)
             .unwrap() as u32;
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);

@@ -297,39 +297,30 @@ const M_DIELECTRIC: u32 = M_ROUGH + ROUGHNESS.len() as u32;
 const M_EMITTERS: u32 = M_DIELECTRIC + 1;
 const EMISSIONS: [[f32; 3]; 3] = [[10.0, 10.0, 10.0], [1.0, 0.5, 0.2], [50.0, 40.0, 30.0]];
 
-fn material(name: &str, kind: MaterialKind, albedo: Vec3, roughness: f32) -> Material {
+fn material(kind: MaterialKind, albedo: Vec3, roughness: f32) -> Material {
     Material {
-        name: name.to_string(),
-        kind,
         albedo,
-        emission: Vec3::ZERO,
         roughness,
-        ior: 1.5,
+        ..Material::new(kind)
     }
 }
 
 fn mesh_materials() -> Vec<Material> {
     let mut m = vec![
-        material("white", MaterialKind::Diffuse, Vec3::splat(0.8), 0.0),
-        material("blue", MaterialKind::Diffuse, Vec3::new(0.2, 0.5, 0.9), 0.0),
-        material(
-            "gold",
-            MaterialKind::Conductor,
-            Vec3::new(0.9, 0.7, 0.3),
-            0.0,
-        ),
+        material(MaterialKind::DIFFUSE, Vec3::splat(0.8), 0.0),
+        material(MaterialKind::DIFFUSE, Vec3::new(0.2, 0.5, 0.9), 0.0),
+        material(MaterialKind::CONDUCTOR, Vec3::new(0.9, 0.7, 0.3), 0.0),
     ];
     for r in ROUGHNESS {
         m.push(material(
-            "rough",
-            MaterialKind::RoughConductor,
+            MaterialKind::ROUGH_CONDUCTOR,
             Vec3::new(0.95, 0.6, 0.5),
             r,
         ));
     }
-    m.push(material("glass", MaterialKind::Dielectric, Vec3::ONE, 0.0));
+    m.push(material(MaterialKind::DIELECTRIC, Vec3::ONE, 0.0));
     for e in EMISSIONS {
-        let mut l = material("light", MaterialKind::Diffuse, Vec3::splat(0.5), 0.0);
+        let mut l = material(MaterialKind::DIFFUSE, Vec3::splat(0.5), 0.0);
         l.emission = Vec3::from(e);
         m.push(l);
     }
@@ -992,7 +983,7 @@ fn random_wo(r: &mut SplitMix, kind: MaterialKind) -> Vec3 {
         wo.z *= 0.01;
         wo = wo.normalize();
     }
-    let below = if kind == MaterialKind::Dielectric {
+    let below = if kind == MaterialKind::DIELECTRIC {
         r.chance(0.5)
     } else {
         r.chance(0.15)
@@ -1005,7 +996,7 @@ fn random_wo(r: &mut SplitMix, kind: MaterialKind) -> Vec3 {
 /// (wo, wi): |d ln D / d ln h.z| = 4 h.z^2 (1 - a^2) / (h.z^2 (a^2 - 1) + 1). It is ~4 / a^2
 /// at the peak: 4e6 at the smallest alpha (1e-3), where float32 D is only good to ~10%.
 fn ggx_condition(m: &Material, wo: Vec3, wi: Vec3) -> f64 {
-    if m.kind != MaterialKind::RoughConductor {
+    if m.kind != MaterialKind::ROUGH_CONDUCTOR {
         return 0.0;
     }
     let h = (wo.as_dvec3() + wi.as_dvec3()).normalize();
@@ -1022,8 +1013,8 @@ fn ggx_tolerance(m: &Material, wo: Vec3, wi: Vec3) -> f64 {
 
 fn material_label(m: &Material) -> String {
     match m.kind {
-        MaterialKind::RoughConductor => format!("RoughConductor r={}", m.roughness),
-        MaterialKind::Dielectric => format!("Dielectric ior={}", m.ior),
+        MaterialKind::ROUGH_CONDUCTOR => format!("RoughConductor r={}", m.roughness),
+        MaterialKind::DIELECTRIC => format!("Dielectric ior={}", m.ior),
         k => format!("{k:?}"),
     }
 }
@@ -1073,10 +1064,10 @@ fn bsdf_sample_matches() {
         let u = c[1].map(f);
         let cpu = bsdf_sample(m, wo, u[0], Vec2::new(u[1], u[2]));
         match (m.kind, cpu) {
-            (MaterialKind::Dielectric, Some(s)) if s.pdf == 1.0 && wo.z < 0.0 => tir += 1,
-            (MaterialKind::Dielectric, Some(s)) if s.wi.z * wo.z > 0.0 => reflected += 1,
-            (MaterialKind::Dielectric, Some(_)) if wo.z > 0.0 => refracted_in += 1,
-            (MaterialKind::Dielectric, Some(_)) => refracted_out += 1,
+            (MaterialKind::DIELECTRIC, Some(s)) if s.pdf == 1.0 && wo.z < 0.0 => tir += 1,
+            (MaterialKind::DIELECTRIC, Some(s)) if s.wi.z * wo.z > 0.0 => reflected += 1,
+            (MaterialKind::DIELECTRIC, Some(_)) if wo.z > 0.0 => refracted_in += 1,
+            (MaterialKind::DIELECTRIC, Some(_)) => refracted_out += 1,
             (_, None) if wo.z <= 0.0 => refused += 1,
             _ => {}
         }
@@ -1091,7 +1082,7 @@ fn bsdf_sample_matches() {
         valid += cpu.is_some() as usize;
         let Some(s) = cpu else {
             if gvalid {
-                if m.kind == MaterialKind::RoughConductor && gwi.z.abs() < 1e-5 {
+                if m.kind == MaterialKind::ROUGH_CONDUCTOR && gwi.z.abs() < 1e-5 {
                     boundary.add(show);
                 } else {
                     fail.add(show);
@@ -1100,7 +1091,7 @@ fn bsdf_sample_matches() {
             continue;
         };
         if !gvalid {
-            if m.kind == MaterialKind::RoughConductor && s.wi.z.abs() < 1e-5 {
+            if m.kind == MaterialKind::ROUGH_CONDUCTOR && s.wi.z.abs() < 1e-5 {
                 boundary.add(show);
             } else {
                 fail.add(show);
@@ -1111,7 +1102,7 @@ fn bsdf_sample_matches() {
             fail.add(show);
             continue;
         }
-        if m.kind == MaterialKind::Dielectric && (gwi.z > 0.0) != (s.wi.z > 0.0) {
+        if m.kind == MaterialKind::DIELECTRIC && (gwi.z > 0.0) != (s.wi.z > 0.0) {
             // Reflection on one device, refraction on the other: u_lobe at the Fresnel term.
             let fr = fresnel_dielectric(wo.z, m.ior).0;
             if (u[0] - fr).abs() < 1e-5 {

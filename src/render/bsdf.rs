@@ -26,19 +26,19 @@ pub struct BsdfSample {
 /// Whether the material's BSDF is a Dirac delta (next event estimation cannot help).
 /// mirror: shaders/bsdf.wgsl `bsdf_is_delta`
 pub fn bsdf_is_delta(m: &Material) -> bool {
-    matches!(m.kind, MaterialKind::Conductor | MaterialKind::Dielectric)
+    matches!(m.kind, MaterialKind::CONDUCTOR | MaterialKind::DIELECTRIC)
 }
 
 /// f(wo, wi) |cos(wi)|. mirror: shaders/bsdf.wgsl `bsdf_eval`
 pub fn bsdf_eval(m: &Material, wo: Vec3, wi: Vec3) -> Vec3 {
     match m.kind {
-        MaterialKind::Diffuse => {
+        MaterialKind::DIFFUSE => {
             if wo.z <= 0.0 || wi.z <= 0.0 {
                 return Vec3::ZERO;
             }
             m.albedo * (FRAC_1_PI * wi.z)
         }
-        MaterialKind::RoughConductor => {
+        MaterialKind::ROUGH_CONDUCTOR => {
             if wo.z <= 0.0 || wi.z <= 0.0 {
                 return Vec3::ZERO;
             }
@@ -47,20 +47,21 @@ pub fn bsdf_eval(m: &Material, wo: Vec3, wi: Vec3) -> Vec3 {
             let g = ggx_g1(wo, alpha) * ggx_g1(wi, alpha);
             m.albedo * (ggx_d(h, alpha) * g / (4.0 * wo.z))
         }
-        MaterialKind::Conductor | MaterialKind::Dielectric => Vec3::ZERO,
+        // Delta lobes (and no other kind exists).
+        _ => Vec3::ZERO,
     }
 }
 
 /// The solid-angle pdf with which `bsdf_sample` draws `wi`. mirror: shaders/bsdf.wgsl `bsdf_pdf`
 pub fn bsdf_pdf(m: &Material, wo: Vec3, wi: Vec3) -> f32 {
     match m.kind {
-        MaterialKind::Diffuse => {
+        MaterialKind::DIFFUSE => {
             if wo.z <= 0.0 {
                 return 0.0;
             }
             cosine_hemisphere_pdf(wi.z)
         }
-        MaterialKind::RoughConductor => {
+        MaterialKind::ROUGH_CONDUCTOR => {
             if wo.z <= 0.0 || wi.z <= 0.0 {
                 return 0.0;
             }
@@ -70,7 +71,7 @@ pub fn bsdf_pdf(m: &Material, wo: Vec3, wi: Vec3) -> f32 {
             // reflection Jacobian 1 / (4 wo.h).
             ggx_g1(wo, alpha) * ggx_d(h, alpha) / (4.0 * wo.z)
         }
-        MaterialKind::Conductor | MaterialKind::Dielectric => 0.0,
+        _ => 0.0,
     }
 }
 
@@ -78,7 +79,7 @@ pub fn bsdf_pdf(m: &Material, wo: Vec3, wi: Vec3) -> f32 {
 /// mirror: shaders/bsdf.wgsl `bsdf_sample`
 pub fn bsdf_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
     match m.kind {
-        MaterialKind::Diffuse => {
+        MaterialKind::DIFFUSE => {
             if wo.z <= 0.0 {
                 return None;
             }
@@ -92,7 +93,7 @@ pub fn bsdf_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfS
                 eta: 1.0,
             })
         }
-        MaterialKind::Conductor => {
+        MaterialKind::CONDUCTOR => {
             if wo.z <= 0.0 {
                 return None;
             }
@@ -104,7 +105,7 @@ pub fn bsdf_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfS
                 eta: 1.0,
             })
         }
-        MaterialKind::RoughConductor => {
+        MaterialKind::ROUGH_CONDUCTOR => {
             if wo.z <= 0.0 {
                 return None;
             }
@@ -122,7 +123,7 @@ pub fn bsdf_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfS
                 eta: 1.0,
             })
         }
-        MaterialKind::Dielectric => {
+        MaterialKind::DIELECTRIC => {
             let (f, cos_t, eta_it, eta_ti) = fresnel_dielectric(wo.z, m.ior);
             if u_lobe < f {
                 Some(BsdfSample {
@@ -144,6 +145,7 @@ pub fn bsdf_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfS
                 })
             }
         }
+        _ => None,
     }
 }
 

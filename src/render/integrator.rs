@@ -20,7 +20,7 @@ use crate::scene::MaterialKind;
 use glam::{Vec2, Vec3};
 
 /// Path depth (in bounces) from which Russian roulette may end a path.
-/// mirror: shaders/integrator.wgsl `RR_DEPTH`
+/// The shaders get it from `render::gpu::shader::shared_constants`.
 pub const RR_DEPTH: u32 = 5;
 
 /// A ray's hit point with the frames its shading needs.
@@ -144,13 +144,13 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
     let wo_world = -st.ray.dir;
     // Two-sided kinds turn the frame towards the viewer; the dielectric keeps the front
     // face's frame so that it knows whether it is entered or left.
-    let flip = mat.kind != MaterialKind::Dielectric && wo_world.dot(si.ng) < 0.0;
+    let flip = mat.kind != MaterialKind::DIELECTRIC && wo_world.dot(si.ng) < 0.0;
     let (ng, mut ns) = if flip {
         (-si.ng, -si.ns)
     } else {
         (si.ng, si.ns)
     };
-    if mat.kind != MaterialKind::Dielectric && ns.dot(wo_world) <= 0.0 {
+    if mat.kind != MaterialKind::DIELECTRIC && ns.dot(wo_world) <= 0.0 {
         ns = ng;
     }
     let (t, b) = onb_from_normal(ns);

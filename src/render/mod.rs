@@ -44,7 +44,7 @@ pub struct TriShading {
 pub const TRI_SMOOTH: u32 = 1;
 
 /// The entry of [`RenderScene::emitters`] that stands for the sky.
-/// mirror: shaders/types.wgsl `SKY_EMITTER`
+/// The shaders get it from `render::gpu::shader::shared_constants`.
 pub const SKY_EMITTER: u32 = u32::MAX;
 
 /// Everything an integrator reads, as flat tables in BVH leaf order.

@@ -59,10 +59,8 @@ fn parse_scene_from(text: &str, path: &Path, files: &dyn FileSource) -> Result<S
     let mut builder = Builder::default();
     for (name, m) in &file.materials {
         let mat = ctx.material(name, m)?;
-        builder
-            .named
-            .insert(name.clone(), builder.materials.len() as u32);
-        builder.materials.push(mat);
+        let index = builder.add_material(name, mat);
+        builder.named.insert(name.clone(), index);
     }
     for (i, object) in file.objects.iter().enumerate() {
         ctx.object(&mut builder, i, object)?;
@@ -105,6 +103,7 @@ fn load_bare_obj(path: &Path, files: &dyn FileSource) -> Result<Scene, SceneErro
 struct Builder {
     mesh: Mesh,
     materials: Vec<Material>,
+    material_names: Vec<String>,
     named: HashMap<String, u32>,
     default_material: Option<u32>,
     degenerate: usize,
@@ -112,11 +111,22 @@ struct Builder {
 }
 
 impl Builder {
+    /// Appends a material to the table; returns its index.
+    fn add_material(&mut self, name: &str, material: Material) -> u32 {
+        self.materials.push(material);
+        self.material_names.push(name.to_string());
+        self.materials.len() as u32 - 1
+    }
+
     fn default_material(&mut self) -> u32 {
-        *self.default_material.get_or_insert_with(|| {
-            self.materials.push(Material::default_diffuse());
-            self.materials.len() as u32 - 1
-        })
+        match self.default_material {
+            Some(i) => i,
+            None => {
+                let i = self.add_material("default", Material::default_diffuse());
+                self.default_material = Some(i);
+                i
+            }
+        }
     }
 
     /// Appends a mesh transformed by `m`; `material` overrides the file's own materials.
@@ -136,10 +146,8 @@ impl Builder {
         let local: Vec<u32> = obj
             .materials
             .into_iter()
-            .map(|mat| {
-                self.materials.push(mat);
-                self.materials.len() as u32 - 1
-            })
+            .zip(&obj.material_names)
+            .map(|(mat, name)| self.add_material(name, mat))
             .collect();
         for (p, n, mat) in obj.triangles {
             let material = match (material, mat) {
@@ -192,6 +200,7 @@ impl Builder {
             sky,
             settings,
             materials: self.materials,
+            material_names: self.material_names,
             mesh: self.mesh,
             warnings: self.warnings,
         }
@@ -336,18 +345,17 @@ impl Ctx<'_> {
             )
         };
         let kind = match m.kind {
-            MaterialType::Diffuse => MaterialKind::Diffuse,
-            MaterialType::Conductor => MaterialKind::Conductor,
-            MaterialType::RoughConductor => MaterialKind::RoughConductor,
-            MaterialType::Dielectric => MaterialKind::Dielectric,
+            MaterialType::Diffuse => MaterialKind::DIFFUSE,
+            MaterialType::Conductor => MaterialKind::CONDUCTOR,
+            MaterialType::RoughConductor => MaterialKind::ROUGH_CONDUCTOR,
+            MaterialType::Dielectric => MaterialKind::DIELECTRIC,
         };
-        let mut mat = Material::diffuse(name, Vec3::splat(0.8));
-        mat.kind = kind;
-        if kind != MaterialKind::Diffuse {
-            mat.albedo = Vec3::ONE;
+        let mut mat = Material::new(kind);
+        if kind == MaterialKind::DIFFUSE {
+            mat.albedo = Vec3::splat(0.8);
         }
         if let Some(a) = m.albedo {
-            if kind == MaterialKind::Dielectric {
+            if kind == MaterialKind::DIELECTRIC {
                 return Err(not_for("albedo"));
             }
             mat.albedo = self.color(&field("albedo"), a)?;
@@ -356,7 +364,7 @@ impl Ctx<'_> {
             mat.emission = self.color(&field("emission"), e)?;
         }
         match (kind, m.roughness) {
-            (MaterialKind::RoughConductor, Some(r)) => {
+            (MaterialKind::ROUGH_CONDUCTOR, Some(r)) => {
                 mat.roughness = self.scalar(
                     &field("roughness"),
                     r,
@@ -364,17 +372,17 @@ impl Ctx<'_> {
                     "in [0, 1]",
                 )?;
             }
-            (MaterialKind::RoughConductor, None) => {
+            (MaterialKind::ROUGH_CONDUCTOR, None) => {
                 return Err(self.invalid(field("roughness"), "is required for rough_conductor"));
             }
             (_, Some(_)) => return Err(not_for("roughness")),
             (_, None) => {}
         }
         match (kind, m.ior) {
-            (MaterialKind::Dielectric, Some(ior)) => {
+            (MaterialKind::DIELECTRIC, Some(ior)) => {
                 mat.ior = self.scalar(&field("ior"), ior, |v| v > 0.0, "positive")?;
             }
-            (_, Some(_)) if kind != MaterialKind::Dielectric => return Err(not_for("ior")),
+            (_, Some(_)) if kind != MaterialKind::DIELECTRIC => return Err(not_for("ior")),
             _ => {}
         }
         Ok(mat)
@@ -417,6 +425,7 @@ impl Ctx<'_> {
                     normals: verts,
                     triangles: faces.into_iter().map(|f| (f, f, None)).collect(),
                     materials: Vec::new(),
+                    material_names: Vec::new(),
                     warnings: Vec::new(),
                 };
                 builder.append_obj(obj, transform, material);

@@ -14,7 +14,7 @@ pub mod sphere;
 
 pub use camera::Camera;
 pub use load::{load_scene, load_scene_from, parse_scene};
-pub use material::{Material, MaterialKind};
+pub use material::{Material, MaterialKind, NO_TEXTURE};
 
 use glam::Vec3;
 use std::path::PathBuf;
@@ -96,7 +96,10 @@ pub struct Scene {
     pub camera: Camera,
     pub sky: Sky,
     pub settings: RenderSettings,
+    /// The material table: triangles index it.
     pub materials: Vec<Material>,
+    /// `material_names[i]` names `materials[i]` in messages (its scene-file or MTL name).
+    pub material_names: Vec<String>,
     pub mesh: Mesh,
     /// Problems that did not stop loading (a missing MTL file, dropped degenerate triangles).
     pub warnings: Vec<String>,

@@ -27,6 +27,8 @@ pub struct ObjMesh {
     /// (or `None` for faces that name no material).
     pub triangles: Vec<([u32; 3], [u32; 3], Option<u32>)>,
     pub materials: Vec<Material>,
+    /// The MTL name of each of `materials`.
+    pub material_names: Vec<String>,
     pub warnings: Vec<String>,
 }
 
@@ -89,8 +91,9 @@ pub fn load_obj(path: &Path, files: &dyn FileSource) -> Result<ObjMesh, SceneErr
     }
     if let Ok(mtls) = materials {
         out.materials = mtls.iter().map(map_mtl).collect();
+        out.material_names = mtls.iter().map(|m| m.name.clone()).collect();
     }
-    let names: Vec<&str> = out.materials.iter().map(|m| m.name.as_str()).collect();
+    let names: Vec<&str> = out.material_names.iter().map(String::as_str).collect();
     if failed_mtl_count == 0 {
         for (line, name) in &scan.usemtl {
             if !names.contains(&name.as_str()) {
@@ -475,19 +478,19 @@ pub fn map_mtl(m: &tobj::Material) -> Material {
     let metallic = illum == Some(3) || scalar("Pm").is_some_and(|pm| pm >= 0.5);
     let ior = m.optical_density.unwrap_or(1.0);
     let glass = illum == Some(7) || (m.dissolve.is_some_and(|d| d < 1.0) && ior > 1.0);
-    let mut mat = Material::diffuse(&m.name, kd);
+    let mut mat = Material::diffuse(kd);
     if glass {
-        mat.kind = MaterialKind::Dielectric;
+        mat.kind = MaterialKind::DIELECTRIC;
         mat.albedo = Vec3::ONE;
         mat.ior = if ior > 0.0 { ior } else { 1.5 };
     } else if metallic {
         mat.albedo = ks.unwrap_or(kd);
         match scalar("Pr") {
             Some(r) if r > 0.0 => {
-                mat.kind = MaterialKind::RoughConductor;
+                mat.kind = MaterialKind::ROUGH_CONDUCTOR;
                 mat.roughness = r.min(1.0);
             }
-            _ => mat.kind = MaterialKind::Conductor,
+            _ => mat.kind = MaterialKind::CONDUCTOR,
         }
     }
     mat.emission = m

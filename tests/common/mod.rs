@@ -93,6 +93,7 @@ pub fn scene(
         camera,
         sky,
         settings,
+        material_names: (0..materials.len()).map(|i| format!("m{i}")).collect(),
         materials,
         mesh,
         warnings: Vec::new(),

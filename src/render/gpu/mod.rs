@@ -4,17 +4,18 @@
 //! The host uploads the tables of [`RenderScene`](crate::render::RenderScene) unchanged,
 //! so the GPU traces exactly the paths the CPU renderer traces for the same
 //! (pixel, sample, seed). `context` opens devices, `params` holds the uniform block,
-//! `shader` joins the WGSL files, `tables` uploads the scene, `pipelines` compiles entry
+//! `layout` describes the host-shared structs, `shader` generates and joins the WGSL, `tables` uploads the scene, `pipelines` compiles entry
 //! points, `session` is the renderer ([`GpuRenderer`]) and `kernels` runs the shader
 //! unit-test and ray-throughput entry points against it.
 
 mod context;
 pub mod kernels;
+pub mod layout;
 pub mod params;
 mod pipelines;
 mod session;
 pub mod shader;
-mod tables;
+pub mod tables;
 
 pub use context::{AdapterSummary, GpuContext, choose_adapter, list_adapters};
 pub use session::{GpuRenderer, PATHS_PER_DISPATCH};

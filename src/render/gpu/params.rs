@@ -2,15 +2,16 @@
 //! tables' structs live beside the code that builds them); `tests/layout.rs` checks them
 //! all against naga's layout.
 
+use super::layout::{StructLayout, struct_layout};
 use crate::render::RenderScene;
 use crate::render::camera::CameraRays;
-use crate::scene::{Camera, Material, RenderSettings, Sky};
+use crate::scene::{Camera, RenderSettings, Sky};
 use bytemuck::{Pod, Zeroable};
 
 /// One dispatch's parameters (144 bytes). mirror: shaders/types.wgsl `Params`
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuParams {
+pub struct Params {
     pub cam_position: [f32; 3],
     pub width: u32,
     pub cam_forward: [f32; 3],
@@ -38,7 +39,36 @@ pub struct GpuParams {
     pub _pad: [u32; 2],
 }
 
-impl GpuParams {
+impl Params {
+    /// The block's layout, for the shader generator's checks.
+    pub fn layout() -> StructLayout {
+        struct_layout!(Params {
+            cam_position,
+            width,
+            cam_forward,
+            height,
+            cam_right,
+            max_depth,
+            cam_up,
+            seed,
+            sky_zenith,
+            sky_gradient,
+            sky_horizon,
+            num_emitters,
+            tan_half_vfov,
+            aspect,
+            aperture,
+            focus_distance,
+            sample_start,
+            sample_end,
+            row_start,
+            row_end,
+            sky_pmf,
+            film_texels,
+            _pad,
+        })
+    }
+
     /// The parameters of a render of `scene` with `settings`, covering every row and no
     /// samples yet (`sample_*`, `row_*` and `film_texels` are set per dispatch).
     pub fn new(scene: &RenderScene, settings: &RenderSettings) -> Self {
@@ -83,31 +113,6 @@ impl GpuParams {
             row_start: 0,
             row_end: settings.height,
             ..self
-        }
-    }
-}
-
-/// A material as the shaders read it (48 bytes). mirror: shaders/types.wgsl `Material`
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuMaterial {
-    pub albedo: [f32; 3],
-    pub kind: u32,
-    pub emission: [f32; 3],
-    pub roughness: f32,
-    pub ior: f32,
-    pub _pad: [u32; 3],
-}
-
-impl From<&Material> for GpuMaterial {
-    fn from(m: &Material) -> Self {
-        Self {
-            albedo: m.albedo.into(),
-            kind: m.kind as u32,
-            emission: m.emission.into(),
-            roughness: m.roughness,
-            ior: m.ior,
-            _pad: [0; 3],
         }
     }
 }

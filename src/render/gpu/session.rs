@@ -1,7 +1,7 @@
 //! The GPU renderer session: a scene uploaded and its render pipeline compiled once, then
 //! any number of dispatches into a film that lives on the device until read back.
 
-use super::params::GpuParams;
+use super::params::Params;
 use super::pipelines::Pipeline;
 use super::tables::{SceneTables, params_buffer};
 use super::{GpuContext, GpuError, shader};
@@ -40,12 +40,12 @@ pub struct GpuRenderer {
     /// only serves [`Kernel`](super::kernels::Kernel)s never needs it).
     render: Option<Pipeline>,
     /// The parameters of the scene and of the film's settings; dispatches set the ranges.
-    base: GpuParams,
+    base: Params,
     params: wgpu::Buffer,
     scene_group: wgpu::BindGroup,
     film: Option<DeviceFilm>,
     /// The scene's part of the parameters and its camera, for the films of any settings.
-    scene_params: GpuParams,
+    scene_params: Params,
     camera: Camera,
 }
 
@@ -55,7 +55,7 @@ impl GpuRenderer {
         let tables = SceneTables::new(ctx, scene)?;
         let params = params_buffer(ctx);
         let scene_group = tables.bind_group(ctx, &params);
-        let scene_params = GpuParams::for_scene(scene);
+        let scene_params = Params::for_scene(scene);
         Ok(Self {
             ctx: ctx.clone(),
             tables,
@@ -81,7 +81,7 @@ impl GpuRenderer {
 
     /// The parameters of a render of `settings` on this scene, covering every row and no
     /// samples yet.
-    pub(super) fn params_for(&self, settings: &RenderSettings) -> GpuParams {
+    pub(super) fn params_for(&self, settings: &RenderSettings) -> Params {
         self.scene_params.with_settings(&self.camera, settings)
     }
 
@@ -98,7 +98,7 @@ impl GpuRenderer {
                 limit,
             });
         }
-        self.base = GpuParams {
+        self.base = Params {
             film_texels: texels,
             ..self.params_for(settings)
         };
@@ -138,7 +138,7 @@ impl GpuRenderer {
         let (Some(film), Some(render)) = (&mut self.film, &self.render) else {
             return Err(GpuError::Fault("dispatch before begin".into()));
         };
-        let p = GpuParams {
+        let p = Params {
             sample_start: samples.start,
             sample_end: samples.end,
             row_start: rows.start,

@@ -1,6 +1,94 @@
-//! The WGSL sources, joined in a fixed order (WGSL has no includes). The library files hold
-//! the path tracer's stages; `render.wgsl` adds the render kernel, `tests.wgsl` the
-//! shader unit-test kernels and `bench.wgsl` the ray-throughput kernels.
+//! The WGSL sources, joined in a fixed order (WGSL has no includes): first what is
+//! generated from the Rust side (the shared constants, the table bindings and loaders),
+//! then the library files of `shaders/`, then one entry-point file: `render.wgsl` (the
+//! render kernel), `tests.wgsl` (the shader unit-test kernels) or `bench.wgsl` (the
+//! ray-throughput kernels).
+
+use super::layout::StructLayout;
+use super::params::Params;
+use super::tables::{Element, TABLE_WIDTH, TABLES, wgsl_tables};
+use crate::bvh::STACK_SIZE;
+use crate::geometry::{GAMMA_2, GAMMA_3, SLAB_SLACK, T_INF};
+use crate::render::integrator::RR_DEPTH;
+use crate::render::rng;
+use crate::render::sampling::UNIFORM_SPHERE_PDF;
+use crate::render::{SKY_EMITTER, TRI_SMOOTH};
+use crate::scene::{MaterialKind, NO_TEXTURE};
+use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4, PI};
+
+/// The value of a shared constant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Value {
+    U32(u32),
+    F32(f32),
+}
+
+/// Every constant that Rust and WGSL share, with its Rust value: the one list. The WGSL
+/// files declare none of these; [`wgsl_constants`] generates them.
+pub fn shared_constants() -> Vec<(String, Value)> {
+    use Value::{F32, U32};
+    let mut list: Vec<(String, Value)> = [
+        ("DIM_PIXEL_X", U32(rng::DIM_PIXEL_X)),
+        ("DIM_PIXEL_Y", U32(rng::DIM_PIXEL_Y)),
+        ("DIM_LENS_U", U32(rng::DIM_LENS_U)),
+        ("DIM_LENS_V", U32(rng::DIM_LENS_V)),
+        ("DIM_LIGHT_PICK", U32(rng::DIM_LIGHT_PICK)),
+        ("DIM_LIGHT_U", U32(rng::DIM_LIGHT_U)),
+        ("DIM_LIGHT_V", U32(rng::DIM_LIGHT_V)),
+        ("DIM_BSDF_LOBE", U32(rng::DIM_BSDF_LOBE)),
+        ("DIM_BSDF_U", U32(rng::DIM_BSDF_U)),
+        ("DIM_BSDF_V", U32(rng::DIM_BSDF_V)),
+        ("DIM_ROULETTE", U32(rng::DIM_ROULETTE)),
+        ("DIMS_PER_BOUNCE", U32(rng::DIMS_PER_BOUNCE)),
+        ("STACK_SIZE", U32(STACK_SIZE as u32)),
+        ("RR_DEPTH", U32(RR_DEPTH)),
+        ("TRI_SMOOTH", U32(TRI_SMOOTH)),
+        ("SKY_EMITTER", U32(SKY_EMITTER)),
+        ("NO_TEXTURE", U32(NO_TEXTURE)),
+        ("TABLE_WIDTH_LOG2", U32(TABLE_WIDTH.ilog2())),
+        ("T_INF", F32(T_INF)),
+        ("GAMMA_2", F32(GAMMA_2)),
+        ("GAMMA_3", F32(GAMMA_3)),
+        ("SLAB_SLACK", F32(SLAB_SLACK)),
+        ("PI", F32(PI)),
+        ("FRAC_1_PI", F32(FRAC_1_PI)),
+        ("FRAC_PI_2", F32(FRAC_PI_2)),
+        ("FRAC_PI_4", F32(FRAC_PI_4)),
+        ("UNIFORM_SPHERE_PDF", F32(UNIFORM_SPHERE_PDF)),
+    ]
+    .map(|(n, v)| (n.to_string(), v))
+    .into();
+    for (kind, name) in MaterialKind::ALL {
+        list.push((format!("MAT_{}", name.to_uppercase()), U32(kind.0)));
+    }
+    list
+}
+
+/// The shared constants as WGSL declarations. Floats are written in the shortest decimal
+/// that reads back as the same f32 (Rust's `{:?}`); `tests/layout.rs` checks the bits.
+pub fn wgsl_constants() -> String {
+    shared_constants()
+        .iter()
+        .map(|(name, value)| match value {
+            Value::U32(v) => format!("const {name}: u32 = {v}u;\n"),
+            Value::F32(v) => format!("const {name}: f32 = {v:?};\n"),
+        })
+        .collect()
+}
+
+/// Every host-shared struct, described from its Rust definition: the tables' elements and
+/// the parameter block. `tests/layout.rs` checks each against its WGSL twin.
+pub fn host_structs() -> Vec<StructLayout> {
+    let mut out: Vec<StructLayout> = TABLES
+        .iter()
+        .filter_map(|t| match (t.element)() {
+            Element::Struct(s) => Some(s),
+            Element::U32 | Element::F32 => None,
+        })
+        .collect();
+    out.push(Params::layout());
+    out
+}
 
 /// A source file of `shaders/`: its name and text.
 type Source = (&'static str, &'static str);
@@ -30,9 +118,12 @@ const TESTS: Source = shader!("tests.wgsl");
 const BENCH: Source = shader!("bench.wgsl");
 
 fn join(entry_points: Source) -> String {
-    let mut src = String::new();
+    let mut src = String::from("// ---- generated: src/render/gpu/shader.rs `wgsl_constants`\n");
+    src += &wgsl_constants();
+    src += "\n// ---- generated: src/render/gpu/tables.rs `wgsl_tables`\n";
+    src += &wgsl_tables();
     for (name, text) in LIBRARY.iter().chain([&entry_points]) {
-        src.push_str(&format!("// ---- {name}\n{text}\n"));
+        src.push_str(&format!("\n// ---- {name}\n{text}"));
     }
     src
 }

@@ -4,34 +4,192 @@
 //! gather on every device, and a texture of 4096 × 16384 texels holds 1 GiB, far beyond
 //! some drivers' limits on a storage binding.
 
-use super::params::{GpuMaterial, GpuParams};
+use super::layout::{Member, StructLayout, struct_layout};
+use super::params::Params;
 use super::{GpuContext, GpuError};
-use crate::render::RenderScene;
+use crate::bvh::BvhNode;
+use crate::geometry::TriVerts;
+use crate::render::{RenderScene, TriShading};
+use crate::scene::Material;
 
-/// Texels per row of the table textures. mirror: shaders/bindings.wgsl `TABLE_WIDTH_LOG2`
+/// Texels per row of the table textures (the shaders get its log2 from `shader::shared_constants`).
 pub const TABLE_WIDTH: u32 = 1 << 12;
 
 /// Rows of a table texture written per upload step: wgpu stages each write in memory of
 /// its own, so bounded steps keep the upload from doubling the scene's footprint.
 const UPLOAD_ROWS: usize = 256;
 
-/// The scene's tables in binding order (bindings 1, 2, …; binding 0 is the parameter
-/// block), each with the name errors give it.
-fn scene_tables<'a>(
-    scene: &'a RenderScene,
-    materials: &'a [GpuMaterial],
-) -> Vec<(&'static str, &'a [u8])> {
-    vec![
-        ("BVH nodes", bytemuck::cast_slice(&scene.bvh.nodes)),
-        ("triangles", bytemuck::cast_slice(&scene.tris)),
-        (
-            "triangle shading data",
-            bytemuck::cast_slice(&scene.shading),
-        ),
-        ("materials", bytemuck::cast_slice(materials)),
-        ("emitters", bytemuck::cast_slice(&scene.emitters)),
-        ("emitter CDF", bytemuck::cast_slice(&scene.emitter_cdf)),
-    ]
+/// What a table holds per element.
+pub enum Element {
+    /// A host-shared struct of a whole number of texels (16 bytes each), none of whose
+    /// members straddles two texels.
+    Struct(StructLayout),
+    /// One 32-bit word, four to a texel.
+    U32,
+    F32,
+}
+
+/// One scene table: what errors call it, its texture and loader in the shaders, its
+/// element, and where its bytes lie in a [`RenderScene`]. Bindings follow [`TABLES`]'
+/// order, after the parameter block at binding 0.
+pub struct Table {
+    pub what: &'static str,
+    pub texture: &'static str,
+    pub loader: &'static str,
+    pub element: fn() -> Element,
+    pub bytes: for<'a> fn(&'a RenderScene) -> &'a [u8],
+}
+
+/// The scene's tables, in binding order. The WGSL bindings and loaders (`load_node`, …)
+/// are generated from this list by [`wgsl_tables`].
+pub const TABLES: &[Table] = &[
+    Table {
+        what: "BVH nodes",
+        texture: "nodes_tex",
+        loader: "load_node",
+        element: || {
+            Element::Struct(struct_layout!(BvhNode {
+                min,
+                left_or_first,
+                max,
+                count
+            }))
+        },
+        bytes: |s| bytemuck::cast_slice(&s.bvh.nodes),
+    },
+    Table {
+        what: "triangles",
+        texture: "tris_tex",
+        loader: "load_tri",
+        element: || Element::Struct(struct_layout!(TriVerts { v0, v1, v2 })),
+        bytes: |s| bytemuck::cast_slice(&s.tris),
+    },
+    Table {
+        what: "triangle shading data",
+        texture: "shading_tex",
+        loader: "load_shading",
+        element: || {
+            Element::Struct(struct_layout!(TriShading {
+                n0,
+                material,
+                n1,
+                emitter_pmf,
+                n2,
+                flags
+            }))
+        },
+        bytes: |s| bytemuck::cast_slice(&s.shading),
+    },
+    Table {
+        what: "materials",
+        texture: "materials_tex",
+        loader: "load_material",
+        element: || {
+            Element::Struct(struct_layout!(Material {
+                albedo,
+                kind,
+                emission,
+                roughness,
+                ior,
+                albedo_texture,
+                emission_texture,
+                roughness_texture,
+            }))
+        },
+        bytes: |s| bytemuck::cast_slice(&s.materials),
+    },
+    Table {
+        what: "emitters",
+        texture: "emitters_tex",
+        loader: "load_emitter",
+        element: || Element::U32,
+        bytes: |s| bytemuck::cast_slice(&s.emitters),
+    },
+    Table {
+        what: "emitter CDF",
+        texture: "emitter_cdf_tex",
+        loader: "load_emitter_cdf",
+        element: || Element::F32,
+        bytes: |s| bytemuck::cast_slice(&s.emitter_cdf),
+    },
+];
+
+/// The WGSL bindings of the tables and their loaders: `fn load_node(i: u32) -> BvhNode`
+/// reads element `i` of table `nodes_tex` through `table_texel` (`shaders/bindings.wgsl`),
+/// member by member from the texel and component its Rust offset names.
+pub fn wgsl_tables() -> String {
+    let mut out = String::new();
+    for (i, t) in TABLES.iter().enumerate() {
+        out += &format!(
+            "@group(0) @binding({}) var {}: texture_2d<u32>;\n",
+            i + 1,
+            t.texture
+        );
+    }
+    for t in TABLES {
+        out += &match (t.element)() {
+            Element::U32 => format!(
+                "\nfn {}(k: u32) -> u32 {{\n    return table_texel({}, k >> 2u)[k & 3u];\n}}\n",
+                t.loader, t.texture
+            ),
+            Element::F32 => format!(
+                "\nfn {}(k: u32) -> f32 {{\n    return bitcast<f32>(table_texel({}, k >> 2u)[k & 3u]);\n}}\n",
+                t.loader, t.texture
+            ),
+            Element::Struct(layout) => struct_loader(t, &layout),
+        };
+    }
+    out
+}
+
+/// The loader of a table of structs: the texels it needs, then the struct built from them
+/// in member order.
+fn struct_loader(t: &Table, layout: &StructLayout) -> String {
+    assert!(layout.size % 16 == 0, "{}: not whole texels", layout.name);
+    let texels = layout.size / 16;
+    let mut members: Vec<&Member> = layout
+        .members
+        .iter()
+        .filter(|m| m.wgsl != "padding")
+        .collect();
+    members.sort_by_key(|m| m.offset);
+    let mut used = vec![false; texels];
+    let args: Vec<String> = members
+        .iter()
+        .map(|m| {
+            let (texel, first) = (m.offset / 16, m.offset % 16 / 4);
+            let words = m.size / 4;
+            assert!(
+                first + words <= 4,
+                "{}.{} straddles two texels",
+                layout.name,
+                m.name
+            );
+            used[texel] = true;
+            let words = match words {
+                4 => format!("t{texel}"),
+                _ => format!("t{texel}.{}", &"xyzw"[first..first + words]),
+            };
+            match m.wgsl {
+                "u32" => words,
+                ty => format!("bitcast<{ty}>({words})"),
+            }
+        })
+        .collect();
+    let mut body = String::new();
+    for (k, _) in used.iter().enumerate().filter(|(_, u)| **u) {
+        body += &format!(
+            "    let t{k} = table_texel({}, {texels}u * i + {k}u);\n",
+            t.texture
+        );
+    }
+    format!(
+        "\nfn {}(i: u32) -> {} {{\n{body}    return {}({});\n}}\n",
+        t.loader,
+        layout.name,
+        layout.name,
+        args.join(", ")
+    )
 }
 
 /// A scene uploaded to one device: its table textures and the layout of the bind group
@@ -44,10 +202,9 @@ pub struct SceneTables {
 impl SceneTables {
     /// Uploads every table, checking each against the adapter's limits.
     pub fn new(ctx: &GpuContext, scene: &RenderScene) -> Result<Self, GpuError> {
-        let materials: Vec<GpuMaterial> = scene.materials.iter().map(GpuMaterial::from).collect();
-        let views = scene_tables(scene, &materials)
-            .into_iter()
-            .map(|(what, data)| table_texture(ctx, what, data))
+        let views = TABLES
+            .iter()
+            .map(|t| table_texture(ctx, t.what, (t.bytes)(scene)))
             .collect::<Result<Vec<_>, _>>()?;
         let mut entries = vec![wgpu::BindGroupLayoutEntry {
             binding: 0,
@@ -55,7 +212,7 @@ impl SceneTables {
             ty: wgpu::BindingType::Buffer {
                 ty: wgpu::BufferBindingType::Uniform,
                 has_dynamic_offset: false,
-                min_binding_size: wgpu::BufferSize::new(size_of::<GpuParams>() as u64),
+                min_binding_size: wgpu::BufferSize::new(size_of::<Params>() as u64),
             },
             count: None,
         }];
@@ -81,7 +238,7 @@ impl SceneTables {
         Ok(Self { views, layout })
     }
 
-    /// The scene bind group: `params` (one [`GpuParams`] block) and the tables.
+    /// The scene bind group: `params` (one [`Params`] block) and the tables.
     pub fn bind_group(&self, ctx: &GpuContext, params: &wgpu::Buffer) -> wgpu::BindGroup {
         let mut entries = vec![wgpu::BindGroupEntry {
             binding: 0,
@@ -108,7 +265,7 @@ impl SceneTables {
 pub fn params_buffer(ctx: &GpuContext) -> wgpu::Buffer {
     ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("dispatch parameters"),
-        size: size_of::<GpuParams>() as u64,
+        size: size_of::<Params>() as u64,
         usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     })
