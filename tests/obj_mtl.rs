@@ -2,7 +2,7 @@
 //! "OBJ and MTL" and "A bare OBJ"): through `load_obj`, scene files and bare OBJs.
 
 use glam::Vec3;
-use meshtrace::scene::obj::{Fs, ObjMesh, load_obj};
+use meshtrace::scene::obj::{Fs, MeshPart, load_obj};
 use meshtrace::scene::{Material, MaterialKind, NO_NORMAL, SceneError, Sky, load_scene};
 use std::path::{Path, PathBuf};
 
@@ -12,15 +12,15 @@ fn data(name: &str) -> PathBuf {
         .join(name)
 }
 
-fn obj(name: &str) -> ObjMesh {
+fn obj(name: &str) -> MeshPart {
     load_obj(&data(name), &Fs).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 /// The corners of each triangle as coordinates, in order.
-fn corners(m: &ObjMesh) -> Vec<[[f32; 3]; 3]> {
+fn corners(m: &MeshPart) -> Vec<[[f32; 3]; 3]> {
     m.triangles
         .iter()
-        .map(|(p, _, _)| p.map(|i| m.positions[i as usize].to_array()))
+        .map(|t| t.p.map(|i| m.positions[i as usize].to_array()))
         .collect()
 }
 
@@ -43,9 +43,9 @@ fn fans_and_relative_indices() {
         [v(3.5, 1.0), v(2.5, 2.0), v(1.5, 1.0)],
     ];
     assert_eq!(corners(&m), expected);
-    for (_, n, mat) in &m.triangles {
-        assert_eq!(*n, [NO_NORMAL; 3], "faces without vn have no normals");
-        assert_eq!(*mat, None);
+    for t in &m.triangles {
+        assert_eq!(t.n, [NO_NORMAL; 3], "faces without vn have no normals");
+        assert_eq!(t.material, None);
     }
     assert!(m.normals.is_empty());
     assert!(m.materials.is_empty());
@@ -56,7 +56,7 @@ fn per_corner_normals() {
     let m = obj("normals.obj");
     assert_eq!(m.triangles.len(), 2);
     let normal = |t: usize, k: usize| {
-        let i = m.triangles[t].1[k];
+        let i = m.triangles[t].n[k];
         assert_ne!(i, NO_NORMAL);
         m.normals[i as usize].to_array()
     };
@@ -75,12 +75,12 @@ fn per_corner_normals() {
 fn face_without_normals_among_faces_with_normals_is_flat() {
     let m = obj("mixed_normals.obj");
     assert_eq!(m.triangles.len(), 2);
-    assert_ne!(m.triangles[0].1, [NO_NORMAL; 3]);
+    assert_ne!(m.triangles[0].n, [NO_NORMAL; 3]);
     assert_eq!(
-        m.triangles[1].1,
+        m.triangles[1].n,
         [NO_NORMAL; 3],
         "`f 2 4 3` has no vn: flat geometric normals (spec), got normals {:?}",
-        m.triangles[1].1.map(|i| m.normals.get(i as usize).copied())
+        m.triangles[1].n.map(|i| m.normals.get(i as usize).copied())
     );
 }
 
@@ -88,13 +88,13 @@ fn face_without_normals_among_faces_with_normals_is_flat() {
 
 /// The material of each triangle of materials.obj, by its MTL name (`None` for the
 /// first triangle, which names none).
-fn materials() -> (ObjMesh, Vec<Option<Material>>) {
+fn materials() -> (MeshPart, Vec<Option<Material>>) {
     let m = obj("materials.obj");
     assert!(m.warnings.is_empty(), "{:?}", m.warnings);
     let mats = m
         .triangles
         .iter()
-        .map(|(_, _, mat)| mat.map(|i| m.materials[i as usize].clone()))
+        .map(|t| t.material.map(|i| m.materials[i as usize].clone()))
         .collect();
     (m, mats)
 }
@@ -193,7 +193,7 @@ fn dissolve_with_ni_is_dielectric() {
 #[test]
 fn face_without_material_is_default_diffuse() {
     let (m, mats) = materials();
-    assert_eq!(m.triangles[0].2, None);
+    assert_eq!(m.triangles[0].material, None);
     assert!(mats[0].is_none());
     // ... and in a scene it gets the default diffuse 0.8
     let s = load_scene(&data("materials.obj")).unwrap();
@@ -234,7 +234,7 @@ fn scene_material_overrides_every_face() {
 fn missing_mtl_is_a_warning() {
     let m = obj("missing_mtl.obj");
     assert_eq!(m.triangles.len(), 1);
-    assert_eq!(m.triangles[0].2, None);
+    assert_eq!(m.triangles[0].material, None);
     assert_eq!(m.warnings.len(), 1, "{:?}", m.warnings);
     let w = &m.warnings[0];
     assert!(w.contains("missing_mtl.obj"), "{w}");
@@ -266,17 +266,25 @@ fn missing_second_mtl_is_a_warning() {
 
 #[test]
 fn malformed_mtl_does_not_panic() {
+    // `Kd 0.5`: one number where r g b are needed (tobj 4 panicked on it).
     let path = data("short_kd.obj");
     let result = std::panic::catch_unwind(|| load_obj(&path, &Fs));
     let result = result.expect("load_obj panicked on a malformed MTL");
-    match result {
-        Ok(m) => assert!(
-            m.warnings.iter().any(|w| w.contains("short_kd")),
-            "{:?}",
-            m.warnings
-        ),
-        Err(e) => assert!(e.to_string().contains("short_kd"), "{e}"),
+    let err = result.expect_err("a malformed MTL line is an error");
+    let msg = err.to_string();
+    let prefix = format!("{}:2: ", data("short_kd.mtl").display());
+    assert!(msg.starts_with(&prefix), "expected {prefix:?}: {msg}");
+    assert!(msg.contains("`Kd`") && msg.contains("1 number"), "{msg}");
+    assert!(!msg.contains('\n'), "{msg}");
+    match &err {
+        SceneError::Obj { path, line, .. } => {
+            assert_eq!(*path, data("short_kd.mtl").display().to_string());
+            assert_eq!(*line, Some(2));
+        }
+        other => panic!("expected SceneError::Obj, got {other:?}"),
     }
+    // the same error through a scene load
+    assert_eq!(load_scene(&path).unwrap_err().to_string(), msg);
 }
 
 #[test]
@@ -449,11 +457,11 @@ fn valid_crlf_file_with_every_corner_form_loads() {
             [o, x, xy],
         ]
     );
-    let normals: Vec<bool> = m.triangles.iter().map(|t| t.1 != [NO_NORMAL; 3]).collect();
+    let normals: Vec<bool> = m.triangles.iter().map(|t| t.n != [NO_NORMAL; 3]).collect();
     assert_eq!(normals, [false, false, true, true]);
-    for (_, n, _) in &m.triangles[2..] {
-        for i in n {
-            assert_eq!(m.normals[*i as usize], Vec3::Z);
+    for t in &m.triangles[2..] {
+        for i in t.n {
+            assert_eq!(m.normals[i as usize], Vec3::Z);
         }
     }
 }
@@ -558,7 +566,7 @@ fn suzanne() {
 
     let m = load_obj(&path, &Fs).unwrap();
     assert_eq!(m.triangles.len(), expected);
-    assert!(m.triangles.iter().all(|t| t.1 != [NO_NORMAL; 3]), "has vn");
+    assert!(m.triangles.iter().all(|t| t.n != [NO_NORMAL; 3]), "has vn");
     let s = load_scene(&path).unwrap();
     assert_eq!(s.mesh.triangles.len(), expected, "no degenerate triangles");
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
@@ -604,6 +612,6 @@ fn unknown_usemtl_is_a_warning_with_its_line() {
         "{w}"
     );
     // The face falls back to the default material; the known one keeps its own.
-    assert!(m.triangles[0].2.is_some());
-    assert_eq!(m.triangles[1].2, None);
+    assert!(m.triangles[0].material.is_some());
+    assert_eq!(m.triangles[1].material, None);
 }
