@@ -2,7 +2,7 @@
 //! "OBJ and MTL" and "A bare OBJ"): through `load_obj`, scene files and bare OBJs.
 
 use glam::Vec3;
-use meshtrace::scene::obj::{Fs, ObjMesh, load_obj};
+use meshtrace::scene::obj::{Fs, MeshPart, load_obj};
 use meshtrace::scene::{Material, MaterialKind, NO_NORMAL, SceneError, Sky, load_scene};
 use std::path::{Path, PathBuf};
 
@@ -12,15 +12,15 @@ fn data(name: &str) -> PathBuf {
         .join(name)
 }
 
-fn obj(name: &str) -> ObjMesh {
+fn obj(name: &str) -> MeshPart {
     load_obj(&data(name), &Fs).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 /// The corners of each triangle as coordinates, in order.
-fn corners(m: &ObjMesh) -> Vec<[[f32; 3]; 3]> {
+fn corners(m: &MeshPart) -> Vec<[[f32; 3]; 3]> {
     m.triangles
         .iter()
-        .map(|(p, _, _)| p.map(|i| m.positions[i as usize].to_array()))
+        .map(|t| t.p.map(|i| m.positions[i as usize].to_array()))
         .collect()
 }
 
@@ -43,9 +43,9 @@ fn fans_and_relative_indices() {
         [v(3.5, 1.0), v(2.5, 2.0), v(1.5, 1.0)],
     ];
     assert_eq!(corners(&m), expected);
-    for (_, n, mat) in &m.triangles {
-        assert_eq!(*n, [NO_NORMAL; 3], "faces without vn have no normals");
-        assert_eq!(*mat, None);
+    for t in &m.triangles {
+        assert_eq!(t.n, [NO_NORMAL; 3], "faces without vn have no normals");
+        assert_eq!(t.material, None);
     }
     assert!(m.normals.is_empty());
     assert!(m.materials.is_empty());
@@ -56,7 +56,7 @@ fn per_corner_normals() {
     let m = obj("normals.obj");
     assert_eq!(m.triangles.len(), 2);
     let normal = |t: usize, k: usize| {
-        let i = m.triangles[t].1[k];
+        let i = m.triangles[t].n[k];
         assert_ne!(i, NO_NORMAL);
         m.normals[i as usize].to_array()
     };
@@ -75,12 +75,12 @@ fn per_corner_normals() {
 fn face_without_normals_among_faces_with_normals_is_flat() {
     let m = obj("mixed_normals.obj");
     assert_eq!(m.triangles.len(), 2);
-    assert_ne!(m.triangles[0].1, [NO_NORMAL; 3]);
+    assert_ne!(m.triangles[0].n, [NO_NORMAL; 3]);
     assert_eq!(
-        m.triangles[1].1,
+        m.triangles[1].n,
         [NO_NORMAL; 3],
         "`f 2 4 3` has no vn: flat geometric normals (spec), got normals {:?}",
-        m.triangles[1].1.map(|i| m.normals.get(i as usize).copied())
+        m.triangles[1].n.map(|i| m.normals.get(i as usize).copied())
     );
 }
 
@@ -88,14 +88,14 @@ fn face_without_normals_among_faces_with_normals_is_flat() {
 
 /// The material of each triangle of materials.obj, by its MTL name (`None` for the
 /// first triangle, which names none).
-fn materials() -> (ObjMesh, Vec<Option<(String, Material)>>) {
+fn materials() -> (MeshPart, Vec<Option<(String, Material)>>) {
     let m = obj("materials.obj");
     assert!(m.warnings.is_empty(), "{:?}", m.warnings);
     let mats = m
         .triangles
         .iter()
-        .map(|(_, _, mat)| {
-            mat.map(|i| {
+        .map(|t| {
+            t.material.map(|i| {
                 (
                     m.material_names[i as usize].clone(),
                     m.materials[i as usize],
@@ -201,7 +201,7 @@ fn dissolve_with_ni_is_dielectric() {
 #[test]
 fn face_without_material_is_default_diffuse() {
     let (m, mats) = materials();
-    assert_eq!(m.triangles[0].2, None);
+    assert_eq!(m.triangles[0].material, None);
     assert!(mats[0].is_none());
     // ... and in a scene it gets the default diffuse 0.8
     let s = load_scene(&data("materials.obj")).unwrap();
@@ -242,7 +242,7 @@ fn scene_material_overrides_every_face() {
 fn missing_mtl_is_a_warning() {
     let m = obj("missing_mtl.obj");
     assert_eq!(m.triangles.len(), 1);
-    assert_eq!(m.triangles[0].2, None);
+    assert_eq!(m.triangles[0].material, None);
     assert_eq!(m.warnings.len(), 1, "{:?}", m.warnings);
     let w = &m.warnings[0];
     assert!(w.contains("missing_mtl.obj"), "{w}");
@@ -274,17 +274,25 @@ fn missing_second_mtl_is_a_warning() {
 
 #[test]
 fn malformed_mtl_does_not_panic() {
+    // `Kd 0.5`: one number where r g b are needed (tobj 4 panicked on it).
     let path = data("short_kd.obj");
     let result = std::panic::catch_unwind(|| load_obj(&path, &Fs));
     let result = result.expect("load_obj panicked on a malformed MTL");
-    match result {
-        Ok(m) => assert!(
-            m.warnings.iter().any(|w| w.contains("short_kd")),
-            "{:?}",
-            m.warnings
-        ),
-        Err(e) => assert!(e.to_string().contains("short_kd"), "{e}"),
+    let err = result.expect_err("a malformed MTL line is an error");
+    let msg = err.to_string();
+    let prefix = format!("{}:2: ", data("short_kd.mtl").display());
+    assert!(msg.starts_with(&prefix), "expected {prefix:?}: {msg}");
+    assert!(msg.contains("`Kd`") && msg.contains("1 number"), "{msg}");
+    assert!(!msg.contains('\n'), "{msg}");
+    match &err {
+        SceneError::Obj { path, line, .. } => {
+            assert_eq!(*path, data("short_kd.mtl").display().to_string());
+            assert_eq!(*line, Some(2));
+        }
+        other => panic!("expected SceneError::Obj, got {other:?}"),
     }
+    // the same error through a scene load
+    assert_eq!(load_scene(&path).unwrap_err().to_string(), msg);
 }
 
 #[test]
@@ -417,8 +425,8 @@ fn non_integer_index_names_its_line() {
 
 #[test]
 fn forward_index_beyond_the_file_names_the_face_line() {
-    // tobj accepts faces before their vertices (`f 1 2 3` on line 2 loads); line 3's `5`
-    // is past the four vertices the file ends up defining.
+    // Faces may come before their vertices, as tobj allowed (`f 1 2 3` on line 2 loads);
+    // line 3's `5` is past the four vertices the file ends up defining.
     obj_error_at("forward_index.obj", 3, &["vertex 5", "defines 4 vertices"]);
 }
 
@@ -457,11 +465,11 @@ fn valid_crlf_file_with_every_corner_form_loads() {
             [o, x, xy],
         ]
     );
-    let normals: Vec<bool> = m.triangles.iter().map(|t| t.1 != [NO_NORMAL; 3]).collect();
+    let normals: Vec<bool> = m.triangles.iter().map(|t| t.n != [NO_NORMAL; 3]).collect();
     assert_eq!(normals, [false, false, true, true]);
-    for (_, n, _) in &m.triangles[2..] {
-        for i in n {
-            assert_eq!(m.normals[*i as usize], Vec3::Z);
+    for t in &m.triangles[2..] {
+        for i in t.n {
+            assert_eq!(m.normals[i as usize], Vec3::Z);
         }
     }
 }
@@ -566,7 +574,7 @@ fn suzanne() {
 
     let m = load_obj(&path, &Fs).unwrap();
     assert_eq!(m.triangles.len(), expected);
-    assert!(m.triangles.iter().all(|t| t.1 != [NO_NORMAL; 3]), "has vn");
+    assert!(m.triangles.iter().all(|t| t.n != [NO_NORMAL; 3]), "has vn");
     let s = load_scene(&path).unwrap();
     assert_eq!(s.mesh.triangles.len(), expected, "no degenerate triangles");
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
@@ -612,6 +620,244 @@ fn unknown_usemtl_is_a_warning_with_its_line() {
         "{w}"
     );
     // The face falls back to the default material; the known one keeps its own.
-    assert!(m.triangles[0].2.is_some());
-    assert_eq!(m.triangles[1].2, None);
+    assert!(m.triangles[0].material.is_some());
+    assert_eq!(m.triangles[1].material, None);
+}
+
+// ---------------------------------------------------------------- the parser's semantics
+
+/// Writes `files` (name, contents) into a fresh folder `name` and loads its `m.obj`;
+/// returns the folder (removed again) and the result.
+fn load_files(name: &str, files: &[(&str, &[u8])]) -> (PathBuf, Result<MeshPart, SceneError>) {
+    let dir = temp_dir(name);
+    for (file, contents) in files {
+        std::fs::write(dir.join(file), contents).unwrap();
+    }
+    let result = load_obj(&dir.join("m.obj"), &Fs);
+    std::fs::remove_dir_all(&dir).unwrap();
+    (dir, result)
+}
+
+/// The name of each triangle's material (`None` for the default).
+fn material_names(m: &MeshPart) -> Vec<Option<&str>> {
+    m.triangles
+        .iter()
+        .map(|t| t.material.map(|i| m.material_names[i as usize].as_str()))
+        .collect()
+}
+
+const TRI: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+
+#[test]
+fn malformed_mtl_lines_are_errors_naming_the_library_and_line() {
+    // (library text, line at fault, what the message says)
+    let cases: &[(&[u8], usize, &[&str])] = &[
+        (b"newmtl a\nKd 0.5 0.5\n", 2, &["`Kd`", "found 2 numbers"]),
+        (
+            b"# c\nnewmtl a\nKs 1 x 1\n",
+            3,
+            &["`Ks`", "`x` is not a number"],
+        ),
+        (b"newmtl a\nKe 1 2\n", 2, &["`Ke`", "found 2 numbers"]),
+        (b"newmtl a\n\nNi\n", 3, &["`Ni`", "expected a number"]),
+        (b"newmtl a\nd half\n", 2, &["`d`", "`half` is not a number"]),
+        (b"newmtl a\nillum 3.5\n", 2, &["`illum`", "`3.5`"]),
+        (b"newmtl a\nPm 1 0\n", 2, &["`Pm`", "expected one number"]),
+        (
+            b"newmtl a\nPr rough\n",
+            2,
+            &["`Pr`", "`rough` is not a number"],
+        ),
+        (
+            b"newmtl a\nKd 1 1 1\nnewmtl  \r\n",
+            3,
+            &["`newmtl` names no material"],
+        ),
+        // Statements before any `newmtl` are checked too.
+        (b"Kd 1\nnewmtl a\n", 1, &["`Kd`", "found 1 number"]),
+        // The first bad line is reported, before a later non-UTF-8 one.
+        (b"newmtl a\r\nKd 1 2\r\n\xff\n", 2, &["`Kd`"]),
+        (b"newmtl a\nKd 1 1 1\n\xffKd\n", 3, &["not valid UTF-8"]),
+    ];
+    for (k, (mtl, line, needles)) in cases.iter().enumerate() {
+        let obj = format!("mtllib my lib.mtl\n{TRI}usemtl a\nf 1 2 3\n");
+        let (dir, result) = load_files(
+            &format!("mtl-error-{k}"),
+            &[("m.obj", obj.as_bytes()), ("my lib.mtl", mtl)],
+        );
+        let lib = dir.join("my lib.mtl").display().to_string();
+        let err = result.expect_err(&format!("case {k}: expected an error"));
+        let msg = err.to_string();
+        assert!(
+            msg.starts_with(&format!("{lib}:{line}: ")),
+            "case {k}: expected {lib}:{line}: … got {msg}"
+        );
+        assert!(!msg.contains('\n'), "case {k}: {msg}");
+        for needle in *needles {
+            assert!(msg.contains(needle), "case {k}: expected {needle:?}: {msg}");
+        }
+        match err {
+            SceneError::Obj { path, line: at, .. } => {
+                assert_eq!(path, lib, "case {k}");
+                assert_eq!(at, Some(*line), "case {k}");
+            }
+            other => panic!("case {k}: expected SceneError::Obj, got {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn mtl_values_are_read_as_before() {
+    // `Ke` may be one grey number; extra words after `Kd`'s three numbers are ignored (as
+    // tobj did); unused statements (Ka, Ns, Tr, texture maps, unknown ones) are not checked.
+    let mtl = b"newmtl grey_light\nKd 0.25 0.5 1 # comment\nKe 3\nKa x\nNs\nTr y\n\
+map_Kd\nbump\nfoo bar\n";
+    let obj = format!("mtllib m.mtl\n{TRI}usemtl grey_light\nf 1 2 3\n");
+    let (_, result) = load_files("mtl-values", &[("m.obj", obj.as_bytes()), ("m.mtl", mtl)]);
+    let m = result.unwrap();
+    assert!(m.warnings.is_empty(), "{:?}", m.warnings);
+    let index = m.triangles[0].material.unwrap() as usize;
+    let mat = &m.materials[index];
+    assert_eq!(m.material_names[index], "grey_light");
+    assert_eq!(mat.kind, MaterialKind::DIFFUSE);
+    assert_eq!(mat.albedo, Vec3::new(0.25, 0.5, 1.0));
+    assert_eq!(mat.emission, Vec3::splat(3.0));
+}
+
+#[test]
+fn usemtl_before_its_mtllib_uses_the_default_material() {
+    // As in tobj, a library applies from its `mtllib` line on: `blue` is unknown at line 7.
+    let obj = format!(
+        "mtllib red.mtl\n{TRI}usemtl red\nf 1 2 3\nusemtl blue\nf 1 2 3\n\
+mtllib blue.mtl\nusemtl blue\nf 1 2 3\n"
+    );
+    let (dir, result) = load_files(
+        "usemtl-before-mtllib",
+        &[
+            ("m.obj", obj.as_bytes()),
+            ("red.mtl", b"newmtl red\nKd 1 0 0\n"),
+            ("blue.mtl", b"newmtl blue\nKd 0 0 1\n"),
+        ],
+    );
+    let m = result.unwrap();
+    assert_eq!(
+        material_names(&m),
+        [Some("red"), None, Some("blue")],
+        "the face after `usemtl blue` on line 7 (before blue.mtl) is default"
+    );
+    // Said once, at its line: the name is only defined later.
+    assert_eq!(m.warnings.len(), 1, "{:?}", m.warnings);
+    let w = &m.warnings[0];
+    let prefix = format!("{}:7: ", dir.join("m.obj").display());
+    assert!(w.starts_with(&prefix), "expected {prefix:?}: {w}");
+    assert!(w.contains("`blue`") && w.contains("after this line"), "{w}");
+}
+
+#[test]
+fn duplicated_material_names_use_the_last_definition() {
+    // Twice in one library, and again in a second one; every definition is listed.
+    let obj = format!(
+        "mtllib a.mtl\n{TRI}usemtl dup\nf 1 2 3\nmtllib b.mtl\nusemtl dup\nf 1 2 3\n\
+usemtl once\nf 1 2 3\n"
+    );
+    let (_, result) = load_files(
+        "duplicate-names",
+        &[
+            ("m.obj", obj.as_bytes()),
+            (
+                "a.mtl",
+                b"newmtl dup\nKd 1 0 0\nnewmtl once\nKd 0 1 0\nnewmtl dup\nKd 0 0 1\n",
+            ),
+            ("b.mtl", b"newmtl dup\nKd 0.5 0.5 0.5\n"),
+        ],
+    );
+    let m = result.unwrap();
+    assert!(m.warnings.is_empty(), "{:?}", m.warnings);
+    let names: Vec<&str> = m.material_names.iter().map(String::as_str).collect();
+    assert_eq!(names, ["dup", "once", "dup", "dup"]);
+    let albedo = |t: usize| m.materials[m.triangles[t].material.unwrap() as usize].albedo;
+    // Before b.mtl: a.mtl's second `dup`; after: b.mtl's.
+    assert_eq!(albedo(0), Vec3::new(0.0, 0.0, 1.0));
+    assert_eq!(albedo(1), Vec3::splat(0.5));
+    assert_eq!(albedo(2), Vec3::new(0.0, 1.0, 0.0));
+    assert_eq!(m.triangles[0].material, Some(2));
+    assert_eq!(m.triangles[1].material, Some(3));
+}
+
+#[test]
+fn lines_of_three_or_more_points_are_polygons() {
+    // `l` of 1 or 2 points is dropped, longer ones fan like faces (as tobj did); `p` is
+    // ignored.
+    let obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nl 1 2\nl 3\np 1 2 3\nl 1 2 3 4\n\
+l 1/1 -3/2 -2/1\nvt 0 0\nvt 1 0\nf 4 1 2\n";
+    let (_, result) = load_files("l-polygons", &[("m.obj", obj.as_bytes())]);
+    let m = result.unwrap();
+    let (o, x, xy, y) = (
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+    );
+    assert_eq!(corners(&m), [[o, x, xy], [o, xy, y], [o, x, xy], [y, o, x]]);
+    assert!(m.triangles.iter().all(|t| t.n == [NO_NORMAL; 3]));
+    // An `l` line of three points is checked like a face; an empty one is an error.
+    let (_, result) = load_files("l-bad", &[("m.obj", b"v 0 0 0\nl 1 2 3\n")]);
+    let msg = result.unwrap_err().to_string();
+    assert!(msg.contains(":2: ") && msg.contains("vertex 2"), "{msg}");
+    let (_, result) = load_files("l-empty", &[("m.obj", b"v 0 0 0\nl\n")]);
+    let msg = result.unwrap_err().to_string();
+    assert!(msg.contains(":2: malformed line (`l`)"), "{msg}");
+}
+
+#[test]
+fn face_with_normals_on_only_some_corners_is_flat() {
+    // The quad's first triangle (1 2 3) has a vn at every corner, but its face does not:
+    // both of its triangles are flat, like the triangle with one bare corner. tobj would
+    // have lent the bare corners a neighbour's normal.
+    let obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\nvn 0.6 0 0.8\n\
+f 1//1 2//2 3//1 4\nf 1//2 3 4//1\nf 1//1 2//2 3//2 4//1\n";
+    let (_, result) = load_files("partial-vn", &[("m.obj", obj.as_bytes())]);
+    let m = result.unwrap();
+    let n: Vec<[u32; 3]> = m.triangles.iter().map(|t| t.n).collect();
+    assert_eq!(
+        n,
+        [
+            [NO_NORMAL; 3],
+            [NO_NORMAL; 3],
+            [NO_NORMAL; 3],
+            [0, 1, 1],
+            [0, 1, 0],
+        ]
+    );
+}
+
+#[test]
+fn bare_obj_is_framed_by_the_vertices_its_faces_use() {
+    // box.obj plus vertices no face uses (one before, one after, far away): the camera
+    // must not move.
+    let text = std::fs::read_to_string(data("box.obj")).unwrap();
+    // One vertex more in front: every face index moves up by one.
+    let shifted: String = text
+        .lines()
+        .map(|line| match line.strip_prefix("f ") {
+            Some(corners) => {
+                let corners: Vec<String> = corners
+                    .split_whitespace()
+                    .map(|i| (i.parse::<u32>().unwrap() + 1).to_string())
+                    .collect();
+                format!("f {}\n", corners.join(" "))
+            }
+            None => format!("{line}\n"),
+        })
+        .collect();
+    let padded = format!("v -100 -100 -100\n{shifted}v 100 100 100\n");
+    let dir = temp_dir("unused-vertices");
+    let path = dir.join("padded.obj");
+    std::fs::write(&path, padded).unwrap();
+    let padded = load_scene(&path);
+    std::fs::remove_dir_all(&dir).unwrap();
+    let padded = padded.unwrap();
+    let plain = load_scene(&data("box.obj")).unwrap();
+    assert_eq!(padded.mesh.triangles.len(), 12);
+    assert_eq!(padded.camera, plain.camera);
 }

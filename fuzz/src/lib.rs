@@ -82,7 +82,8 @@ pub fn obj_mtl(data: &[u8]) {
     let Ok(obj) = load_obj(Path::new("m.obj"), &files) else {
         return;
     };
-    for (k, (p, n, material)) in obj.triangles.iter().enumerate() {
+    for (k, t) in obj.triangles.iter().enumerate() {
+        let (p, n, material) = (&t.p, &t.n, t.material);
         assert!(
             p.iter().all(|&i| (i as usize) < obj.positions.len()),
             "triangle {k}: position index out of range: {p:?} of {}",
@@ -176,10 +177,9 @@ thread_local! {
 }
 
 /// Makes panics inside [`replay`] quiet: their message is recorded (per thread) instead of
-/// printed. The library catches the panics of tobj on some malformed MTL lines by design,
-/// and those must neither abort the fuzzer (libFuzzer's hook aborts on every panic) nor
-/// flood the log; panics that escape are reported by [`guarded`] and [`replay`]. Panics
-/// elsewhere go to the previous hook. Installing twice is harmless.
+/// printed, so that [`guarded`] and [`replay`] report each escaped panic once, with its
+/// message and place, rather than libFuzzer's hook aborting on it first. Panics elsewhere go
+/// to the previous hook. Installing twice is harmless.
 pub fn install_panic_hook() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {

@@ -2,7 +2,7 @@
 //! Each error names the file and the line or field at fault.
 
 use super::file::{MaterialFile, MaterialType, ObjectFile, ScaleFile, SceneFile};
-use super::obj::{FileSource, Fs, load_obj};
+use super::obj::{FileSource, Fs, MeshPart, PartTriangle, load_obj};
 use super::sphere::{default_subdivisions, icosphere};
 use super::{
     Camera, Material, MaterialKind, Mesh, NO_NORMAL, RenderSettings, Scene, SceneError, Sky,
@@ -72,9 +72,23 @@ fn parse_scene_from(text: &str, path: &Path, files: &dyn FileSource) -> Result<S
 /// front (+Z) and slightly above.
 fn load_bare_obj(path: &Path, files: &dyn FileSource) -> Result<Scene, SceneError> {
     let mut builder = Builder::default();
-    let obj = load_obj(path, files)?;
-    builder.append_obj(obj, Mat4::IDENTITY, None);
-    let bounds = Aabb::from_points(&builder.mesh.positions);
+    let part = load_obj(path, files)?;
+    // The frame is that of the vertices the faces use, degenerate faces included: a file
+    // may define vertices that no face uses, and they must not move the camera.
+    let mut used = vec![false; part.positions.len()];
+    for t in &part.triangles {
+        for i in t.p {
+            used[i as usize] = true;
+        }
+    }
+    builder.append_part(part, Mat4::IDENTITY, None);
+    let bounds = builder
+        .mesh
+        .positions
+        .iter()
+        .zip(&used)
+        .filter(|&(_, &used)| used)
+        .fold(Aabb::EMPTY, |b, (&p, _)| b.grow(p));
     if bounds.is_empty() {
         return Err(SceneError::Obj {
             path: super::shown(path),
@@ -129,37 +143,38 @@ impl Builder {
         }
     }
 
-    /// Appends a mesh transformed by `m`; `material` overrides the file's own materials.
-    fn append_obj(&mut self, obj: super::obj::ObjMesh, m: Mat4, material: Option<u32>) {
-        self.warnings.extend(obj.warnings);
+    /// Appends a mesh part transformed by `m`; `material` overrides the part's own
+    /// materials. Degenerate triangles are dropped (and counted).
+    fn append_part(&mut self, part: MeshPart, m: Mat4, material: Option<u32>) {
+        self.warnings.extend(part.warnings);
         let base_p = self.mesh.positions.len() as u32;
         let base_n = self.mesh.normals.len() as u32;
         let normal_matrix = Mat3::from_mat4(m).inverse().transpose();
         self.mesh
             .positions
-            .extend(obj.positions.iter().map(|&p| m.transform_point3(p)));
+            .extend(part.positions.iter().map(|&p| m.transform_point3(p)));
         self.mesh.normals.extend(
-            obj.normals
+            part.normals
                 .iter()
                 .map(|&n| (normal_matrix * n).normalize_or_zero()),
         );
-        let local: Vec<u32> = obj
+        let local: Vec<u32> = part
             .materials
             .into_iter()
-            .zip(&obj.material_names)
+            .zip(&part.material_names)
             .map(|(mat, name)| self.add_material(name, mat))
             .collect();
-        for (p, n, mat) in obj.triangles {
-            let material = match (material, mat) {
+        for t in part.triangles {
+            let material = match (material, t.material) {
                 (Some(m), _) => m,
                 (None, Some(i)) => local[i as usize],
                 (None, None) => self.default_material(),
             };
-            let p = p.map(|i| i + base_p);
-            let mut n = if n[0] == NO_NORMAL {
-                n
+            let p = t.p.map(|i| i + base_p);
+            let mut n = if t.n[0] == NO_NORMAL {
+                t.n
             } else {
-                n.map(|i| i + base_n)
+                t.n.map(|i| i + base_n)
             };
             let [a, b, c] = p.map(|i| self.mesh.positions[i as usize]);
             let area2 = (b - a).cross(c - a).length();
@@ -402,8 +417,8 @@ impl Ctx<'_> {
         let transform = self.transform(o, &field)?;
         match (&o.mesh, &o.sphere) {
             (Some(mesh), None) => {
-                let obj = load_obj(&self.dir.join(mesh), self.files)?;
-                builder.append_obj(obj, transform, material);
+                let part = load_obj(&self.dir.join(mesh), self.files)?;
+                builder.append_part(part, transform, material);
             }
             (None, Some(s)) => {
                 let center = self.vec3(&field("sphere.center"), s.center)?;
@@ -420,15 +435,22 @@ impl Ctx<'_> {
                     None => default_subdivisions(),
                 };
                 let (verts, faces) = icosphere(level);
-                let obj = super::obj::ObjMesh {
+                let part = MeshPart {
                     positions: verts.iter().map(|&v| center + radius * v).collect(),
                     normals: verts,
-                    triangles: faces.into_iter().map(|f| (f, f, None)).collect(),
+                    triangles: faces
+                        .into_iter()
+                        .map(|f| PartTriangle {
+                            p: f,
+                            n: f,
+                            material: None,
+                        })
+                        .collect(),
                     materials: Vec::new(),
                     material_names: Vec::new(),
                     warnings: Vec::new(),
                 };
-                builder.append_obj(obj, transform, material);
+                builder.append_part(part, transform, material);
             }
             (Some(_), Some(_)) => {
                 return Err(self.invalid(

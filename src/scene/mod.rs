@@ -9,6 +9,7 @@ pub mod camera;
 pub mod file;
 pub mod load;
 pub mod material;
+pub mod mtl;
 pub mod obj;
 pub mod sphere;
 
@@ -133,8 +134,8 @@ pub enum SceneError {
         field: String,
         message: String,
     },
-    /// A problem with an OBJ file (or its meshes), at `line` when the validating scan found
-    /// it; tobj's own errors and whole-mesh problems have no line.
+    /// A problem with an OBJ file or an MTL library it loads (`path` names the file at
+    /// fault), at `line` when one line is at fault; whole-mesh problems have no line.
     #[error("{path}{}: {message}", at_line(*.line))]
     Obj {
         path: String,

@@ -1,7 +1,17 @@
-//! Wavefront OBJ and MTL files, read through tobj and mapped onto meshtrace materials.
+//! Wavefront OBJ files, read in one pass by meshtrace's own parser, and the mapping of
+//! their MTL materials (read by [`super::mtl`]) onto meshtrace materials.
+//!
+//! The parser keeps the geometry that tobj (the crate meshtrace used before) produced, so
+//! that images stay the same: triangles in file order, polygons fanned from their first
+//! corner, `v x y z w` divided by w, `l` lines of three or more points read as polygons,
+//! `usemtl` resolved against the libraries loaded before it. Unlike tobj it names the line
+//! of every error, and a face only partly given `vn` indices is flat-shaded rather than
+//! borrowing a neighbour's normal.
 
-use super::{Material, MaterialKind, SceneError};
+use super::mtl::{MtlMaterial, parse_mtl};
+use super::{Material, MaterialKind, NO_NORMAL, SceneError};
 use glam::Vec3;
+use std::collections::HashMap;
 use std::path::Path;
 
 /// Where scene files and meshes are read from: the file system, or the scenes built in.
@@ -18,157 +28,59 @@ impl FileSource for Fs {
     }
 }
 
-/// One OBJ file's geometry in its own space, with its materials already mapped.
+/// One piece of geometry in its own space, as a scene object brings it: an OBJ file with
+/// its materials already mapped, or a sphere. The scene builder transforms it and appends
+/// it to the scene mesh.
 #[derive(Debug, Default)]
-pub struct ObjMesh {
+pub struct MeshPart {
+    /// Every vertex position the part defines (for an OBJ, every `v` line in file order,
+    /// whether or not a face uses it).
     pub positions: Vec<Vec3>,
+    /// Every vertex normal the part defines (for an OBJ, every `vn` line in file order).
     pub normals: Vec<Vec3>,
-    /// Position indices, normal indices (or `NO_NORMAL`) and an index into `materials`
-    /// (or `None` for faces that name no material).
-    pub triangles: Vec<([u32; 3], [u32; 3], Option<u32>)>,
+    /// The triangles, in file order.
+    pub triangles: Vec<PartTriangle>,
+    /// The materials the triangles refer to: for an OBJ, every material of every library it
+    /// loaded, in load order (a name defined twice is listed twice).
     pub materials: Vec<Material>,
     /// The MTL name of each of `materials`.
     pub material_names: Vec<String>,
+    /// Problems that did not stop loading, each one line naming the file.
     pub warnings: Vec<String>,
 }
 
-/// Reads an OBJ file, fan-triangulating polygons, and maps its MTL materials.
-pub fn load_obj(path: &Path, files: &dyn FileSource) -> Result<ObjMesh, SceneError> {
+/// One triangle of a [`MeshPart`], by index into the part's own tables.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PartTriangle {
+    /// Corner positions, indices into [`MeshPart::positions`].
+    pub p: [u32; 3],
+    /// Corner normals, indices into [`MeshPart::normals`], or `[NO_NORMAL; 3]` for a
+    /// flat-shaded triangle.
+    pub n: [u32; 3],
+    /// Index into [`MeshPart::materials`], or `None` for a face that names no material
+    /// (or an unknown one): the scene's default material.
+    pub material: Option<u32>,
+}
+
+/// Reads an OBJ file and the MTL libraries it names, fan-triangulating polygons. An error
+/// names the file (the OBJ, or the MTL library at fault) and, where one is at fault, the
+/// line.
+pub fn load_obj(path: &Path, files: &dyn FileSource) -> Result<MeshPart, SceneError> {
     let shown = super::shown(path);
-    let err = |message: String| SceneError::Obj {
-        path: shown.clone(),
-        line: None,
-        message,
-    };
     let bytes = files.read(path).map_err(|source| SceneError::Io {
         path: shown.clone(),
         source,
     })?;
-    // Before tobj, whose errors name no line: the scan rejects what tobj would (and a few
-    // things it lets through) with the line at fault.
-    let scan = scan_obj(&bytes).map_err(|bad| SceneError::Obj {
-        path: shown.clone(),
-        line: Some(bad.line),
-        message: bad.message,
-    })?;
-    let options = tobj::LoadOptions {
-        triangulate: true,
-        single_index: false,
-        ignore_points: true,
-        ignore_lines: true,
-    };
     let dir = path.parent().unwrap_or(Path::new(""));
-    let mut out = ObjMesh::default();
-    // tobj reports an unreadable library only when no library at all could be read, so
-    // every failure is noted here as it happens.
-    let failed_mtl = std::cell::RefCell::new(Vec::new());
-    // tobj 4 panics on some malformed lines (a one-number `Kd`); that is bad input, not a
-    // bug of ours, so it becomes an error naming the file.
-    let parsed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        tobj::load_obj_buf(&mut bytes.as_slice(), &options, |mtl| {
-            let result = files
-                .read(&dir.join(mtl))
-                .map_err(|_| tobj::LoadError::OpenFileFailed)
-                .and_then(|b| tobj::load_mtl_buf(&mut b.as_slice()));
-            if let Err(e) = &result {
-                failed_mtl.borrow_mut().push(format!(
-                    "{} ({})",
-                    dir.join(mtl).display(),
-                    describe_tobj_error(e)
-                ));
-            }
-            result
-        })
-    }))
-    .map_err(|_| err("malformed OBJ or MTL data (the parser rejected a line)".into()))?;
-    let (models, materials) = parsed.map_err(|e| err(describe_tobj_error(&e)))?;
-    let failed_mtl = failed_mtl.into_inner();
-    let failed_mtl_count = failed_mtl.len();
-    for lib in failed_mtl {
-        out.warnings.push(format!(
-            "{shown}: material library {lib} could not be read; its materials fall back to the default"
-        ));
-    }
-    if let Ok(mtls) = materials {
-        out.materials = mtls.iter().map(map_mtl).collect();
-        out.material_names = mtls.iter().map(|m| m.name.clone()).collect();
-    }
-    let names: Vec<&str> = out.material_names.iter().map(String::as_str).collect();
-    if failed_mtl_count == 0 {
-        for (line, name) in &scan.usemtl {
-            if !names.contains(&name.as_str()) {
-                out.warnings.push(format!(
-                    "{shown}:{line}: unknown material `{name}`; its faces use the default material"
-                ));
-            }
-        }
-    }
-    // Which triangles came from faces with normals, in file order (tobj keeps that order
-    // and fans each polygon into `corners - 2` triangles); tobj itself fills a missing
-    // `vn` with a neighbour's, which would smooth-shade a face that asked to be flat.
-    let total: usize = models.iter().map(|m| m.mesh.indices.len() / 3).sum();
-    let tri_has_normal: Option<Vec<bool>> =
-        (scan.faces.iter().map(|f| f.0).sum::<usize>() == total).then(|| {
-            scan.faces
-                .iter()
-                .flat_map(|&(n, has)| std::iter::repeat_n(has, n))
-                .collect()
-        });
-    let mut tri_index = 0usize;
-    for model in &models {
-        let m = &model.mesh;
-        let base_p = out.positions.len() as u32;
-        let base_n = out.normals.len() as u32;
-        for (i, p) in m.positions.chunks_exact(3).enumerate() {
-            let v = Vec3::new(p[0], p[1], p[2]);
-            // The scan rejects these with their line; this is a fallback in case tobj's
-            // arithmetic ever differs from the scan's.
-            if !v.is_finite() {
-                return Err(err(format!(
-                    "object `{}`: vertex {} has a non-finite coordinate {v}",
-                    model.name,
-                    i + 1
-                )));
-            }
-            out.positions.push(v);
-        }
-        for n in m.normals.chunks_exact(3) {
-            out.normals.push(Vec3::new(n[0], n[1], n[2]));
-        }
-        let material = match m.material_id {
-            Some(id) if id < out.materials.len() => Some(id as u32),
-            Some(_) => None,
-            None => None,
-        };
-        let has_normals = m.normal_indices.len() == m.indices.len() && !m.normals.is_empty();
-        for (f, tri) in m.indices.chunks_exact(3).enumerate() {
-            let p = [tri[0] + base_p, tri[1] + base_p, tri[2] + base_p];
-            let face_has_normals = tri_has_normal.as_ref().is_none_or(|v| v[tri_index]);
-            tri_index += 1;
-            let n = if has_normals && face_has_normals {
-                let ni = &m.normal_indices[3 * f..3 * f + 3];
-                [ni[0] + base_n, ni[1] + base_n, ni[2] + base_n]
-            } else {
-                [super::NO_NORMAL; 3]
-            };
-            out.triangles.push((p, n, material));
-        }
-    }
-    Ok(out)
+    parse_obj(&bytes, &shown, dir, files)
 }
 
-/// What tobj does not report: each face's triangle count and whether all its corners have
-/// normals, and every `usemtl` with its line number.
-struct ObjScan {
-    faces: Vec<(usize, bool)>,
-    usemtl: Vec<(usize, String)>,
-}
-
-/// The first line of an OBJ file that the scan rejects: its 1-based number and why.
+/// The first line of an OBJ or MTL file that the parser rejects: its 1-based number and
+/// why.
 #[derive(Debug)]
-struct BadLine {
-    line: usize,
-    message: String,
+pub(super) struct BadLine {
+    pub line: usize,
+    pub message: String,
 }
 
 /// The three kinds of element a face corner refers to, in corner order (`v/vt/vn`).
@@ -178,41 +90,57 @@ const ELEMENTS: [(&str, &str); 3] = [
     ("normal", "normals"),
 ];
 
-/// Walks every line of an OBJ file once, before tobj sees it, collecting what tobj does not
-/// report ([`ObjScan`]) and rejecting the first malformed line with its number, since tobj's
-/// errors name no line.
+/// One corner of the face being read: its position index and its normal index (or
+/// `NO_NORMAL`), 0-based.
+type Corner = (u32, u32);
+
+/// Parses an OBJ file's bytes; `shown` names it in messages and warnings, `dir` anchors its
+/// `mtllib` paths, which are read through `files`.
 ///
-/// Lines are what tobj reads (`BufRead::lines`): split at `\n`, so a `\r\n` ending leaves a
-/// `\r` that splitting at whitespace drops, and a trailing `\` continues nothing (tobj does
-/// not join lines, so a `\` among numbers or indices is an error, and line numbers are the
-/// file's own). Keywords tobj skips (`#`, `o`, `g`, `s`, `mtllib`, `p`, unknown ones) are not
-/// looked at. Indices follow tobj: negative ones count back from the elements defined so
-/// far; positive ones may refer forward, so those are checked against the file's totals once
-/// the walk is done, and such an error is reported only when no line is rejected on sight.
-/// Besides an entry per face, the walk allocates only for `usemtl` names, messages and the
-/// rare forward reference.
-fn scan_obj(bytes: &[u8]) -> Result<ObjScan, BadLine> {
-    let mut scan = ObjScan {
-        faces: Vec::new(),
-        usemtl: Vec::new(),
+/// Lines are split at `\n`, so a `\r\n` ending leaves a `\r` that splitting at whitespace
+/// drops; a trailing `\` continues nothing (line numbers are the file's own), so a `\`
+/// among numbers or indices is an error. Keywords that carry no geometry (`#`, `o`, `g`,
+/// `s`, `p`, unknown ones) are skipped. Indices may be negative, counting back from the
+/// elements defined so far, and positive ones may refer forward (as tobj allowed), so
+/// those are checked against the file's totals once every line is read; such an error is
+/// reported only when no line is rejected on sight.
+fn parse_obj(
+    bytes: &[u8],
+    shown: &str,
+    dir: &Path,
+    files: &dyn FileSource,
+) -> Result<MeshPart, SceneError> {
+    let at = |bad: BadLine| SceneError::Obj {
+        path: shown.to_string(),
+        line: Some(bad.line),
+        message: bad.message,
     };
-    // Elements defined so far, in `ELEMENTS` order.
+    let (text, not_utf8) = text_lines(bytes);
+    let mut part = MeshPart::default();
+    // Elements defined so far, in `ELEMENTS` order (texture coordinates are only counted).
     let mut defined = [0usize; 3];
     // Per element, the (line, index) of each reference beyond what was defined at that
     // line and beyond every earlier such reference: the first line whose index exceeds the
     // file's total is always among them (any earlier reference is at most that total).
     // The third field is the message's subject (a face or a line).
     let mut forward: [Vec<(usize, usize, &str)>; 3] = Default::default();
-    for (i, raw) in bytes.split(|&b| b == b'\n').enumerate() {
+    // Material name to index into `part.materials`, from the libraries loaded so far; a
+    // name defined again maps to its last definition.
+    let mut by_name: HashMap<String, u32> = HashMap::new();
+    let mut current: Option<u32> = None;
+    // `usemtl` lines whose name no library loaded before them defines.
+    let mut unresolved: Vec<(usize, String)> = Vec::new();
+    let mut failed_libraries: Vec<String> = Vec::new();
+    // The corners of the face being read, reused from face to face.
+    let mut corners: Vec<Corner> = Vec::new();
+    for (i, text) in text.split('\n').enumerate() {
         let line = i + 1;
-        let bad = |message: String| BadLine { line, message };
-        let Ok(text) = std::str::from_utf8(raw) else {
-            return Err(bad("the line is not valid UTF-8 text".into()));
-        };
+        let bad = |message: String| at(BadLine { line, message });
         let mut words = text.split_whitespace();
         match words.next() {
             Some("v") => {
-                check_position(words, defined[0] + 1).map_err(bad)?;
+                let p = parse_position(words, defined[0] + 1).map_err(bad)?;
+                part.positions.push(p);
                 defined[0] += 1;
             }
             Some("vt") => {
@@ -221,20 +149,22 @@ fn scan_obj(bytes: &[u8]) -> Result<ObjScan, BadLine> {
                 defined[1] += 1;
             }
             Some("vn") => {
-                check_numbers(words, 3..=3, "normal (`vn`)", "x y z").map_err(bad)?;
+                let n = parse_normal(words).map_err(bad)?;
+                part.normals.push(n);
                 defined[2] += 1;
             }
             Some(keyword @ ("f" | "l")) => {
                 let face = keyword == "f";
-                // tobj drops `l` lines of one or two points unchecked and turns longer
-                // ones into triangles like faces.
+                // `l` lines of one or two points are dropped (their corners are only
+                // checked for syntax), longer ones become polygons like faces, as in tobj.
                 let polygon = face || words.clone().nth(2).is_some();
                 let what = if face { "face (`f`)" } else { "line (`l`)" };
                 let subject = if face { "a face" } else { "a line (`l`)" };
-                let mut corners = 0usize;
+                corners.clear();
+                let mut count = 0usize;
                 let mut all_normals = true;
                 for word in words {
-                    corners += 1;
+                    count += 1;
                     let Some(corner) = parse_corner(word) else {
                         return Err(bad(format!(
                             "malformed {what}: corner {} is not `v`, `v/vt`, `v//vn` or \
@@ -247,6 +177,7 @@ fn scan_obj(bytes: &[u8]) -> Result<ObjScan, BadLine> {
                     if !polygon {
                         continue;
                     }
+                    let mut resolved = [NO_NORMAL; 3];
                     for (k, index) in corner.into_iter().enumerate() {
                         let Some(index) = index else { continue };
                         let (one, many) = ELEMENTS[k];
@@ -270,27 +201,79 @@ fn scan_obj(bytes: &[u8]) -> Result<ObjScan, BadLine> {
                         {
                             records.push((line, back, subject));
                         }
+                        let zero_based = if index < 0 {
+                            defined[k] - back
+                        } else {
+                            back - 1
+                        };
+                        // An index past `u32::MAX` is past the file's total too (checked
+                        // below), so saturating loses nothing.
+                        resolved[k] = u32::try_from(zero_based).unwrap_or(u32::MAX);
                     }
+                    corners.push((resolved[0], resolved[2]));
                 }
-                if face && corners < 3 {
+                if face && count < 3 {
                     return Err(bad(format!(
-                        "malformed face (`f`): {corners} corners, a face needs at least 3"
+                        "malformed face (`f`): {count} corners, a face needs at least 3"
                     )));
                 }
+                if count == 0 {
+                    // tobj rejected an empty `l` line as an invalid polygon.
+                    return Err(bad("malformed line (`l`): no points".into()));
+                }
                 if polygon {
-                    scan.faces.push((corners - 2, all_normals));
+                    // A fan from the first corner: (a, b, c), (a, c, d), (a, d, e)…
+                    let (a, rest) = (corners[0], &corners[1..]);
+                    for pair in rest.windows(2) {
+                        let (b, c) = (pair[0], pair[1]);
+                        part.triangles.push(PartTriangle {
+                            p: [a.0, b.0, c.0],
+                            n: if all_normals {
+                                [a.1, b.1, c.1]
+                            } else {
+                                [NO_NORMAL; 3]
+                            },
+                            material: current,
+                        });
+                    }
                 }
             }
             Some("usemtl") => {
-                // tobj's reading of the name, so that it is looked up as tobj does.
+                // The name as tobj read it: after the first space, trimmed.
                 let name = text.split_once(' ').map_or("", |(_, rest)| rest.trim());
                 if name.is_empty() {
                     return Err(bad("`usemtl` names no material".into()));
                 }
-                scan.usemtl.push((line, name.to_string()));
+                current = by_name.get(name).copied();
+                if current.is_none() {
+                    unresolved.push((line, name.to_string()));
+                }
+            }
+            Some("mtllib") => {
+                // One file name, which may hold spaces: the rest of the line, as tobj
+                // read it.
+                let name = text.split_once(' ').map_or("", |(_, rest)| rest.trim());
+                let lib = dir.join(name);
+                let Ok(lib_bytes) = files.read(&lib) else {
+                    failed_libraries.push(format!("{} (cannot open file)", super::shown(&lib)));
+                    continue;
+                };
+                let materials = parse_mtl(&lib_bytes).map_err(|bad| SceneError::Obj {
+                    path: super::shown(&lib),
+                    line: Some(bad.line),
+                    message: bad.message,
+                })?;
+                for m in materials {
+                    by_name.insert(m.name.clone(), part.materials.len() as u32);
+                    part.materials.push(map_mtl(&m));
+                    part.material_names.push(m.name.clone());
+                }
             }
             _ => {}
         }
+    }
+    if let Some(bad) = not_utf8 {
+        return Err(at(bad));
     }
     let first_beyond = (0..3)
         .filter_map(|k| {
@@ -302,21 +285,70 @@ fn scan_obj(bytes: &[u8]) -> Result<ObjScan, BadLine> {
         .min();
     if let Some((line, k, index, subject)) = first_beyond {
         let (one, many) = ELEMENTS[k];
-        return Err(BadLine {
+        return Err(at(BadLine {
             line,
             message: format!(
                 "{subject} refers to {one} {index}, which does not exist (the file defines \
                  {} {many})",
                 defined[k]
             ),
+        }));
+    }
+    // Indices are `u32`, and `NO_NORMAL` is `u32::MAX`.
+    if part.positions.len() >= u32::MAX as usize || part.normals.len() >= u32::MAX as usize {
+        return Err(SceneError::Obj {
+            path: shown.to_string(),
+            line: None,
+            message: "more than 2^32 - 2 vertices or normals".into(),
         });
     }
-    Ok(scan)
+    for lib in &failed_libraries {
+        part.warnings.push(format!(
+            "{shown}: material library {lib} could not be read; its materials fall back to the default"
+        ));
+    }
+    for (line, name) in unresolved {
+        if by_name.contains_key(&name) {
+            // As in tobj, a library applies from its `mtllib` line on.
+            part.warnings.push(format!(
+                "{shown}:{line}: material `{name}` is defined only by a material library \
+                 loaded after this line; its faces use the default material"
+            ));
+        } else if failed_libraries.is_empty() {
+            // When a library could not be read, the name may well be one of its own.
+            part.warnings.push(format!(
+                "{shown}:{line}: unknown material `{name}`; its faces use the default material"
+            ));
+        }
+    }
+    Ok(part)
+}
+
+/// A file's text up to the first line that is not valid UTF-8 (all of it when every line
+/// is), and that line's error, to report once the lines before it have been read: the first
+/// malformed line is the one reported. One check for the whole file is faster than one per
+/// line.
+pub(super) fn text_lines(bytes: &[u8]) -> (&str, Option<BadLine>) {
+    match std::str::from_utf8(bytes) {
+        Ok(text) => (text, None),
+        Err(e) => {
+            let valid = &bytes[..e.valid_up_to()];
+            let start = valid.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+            // A prefix of the valid part, so this cannot fail.
+            let text = std::str::from_utf8(&valid[..start]).unwrap_or_default();
+            let line = valid[..start].iter().filter(|&&b| b == b'\n').count() + 1;
+            let bad = BadLine {
+                line,
+                message: "the line is not valid UTF-8 text".into(),
+            };
+            (text, Some(bad))
+        }
+    }
 }
 
 /// The indices of one face corner as written: `v`, `v/vt`, `v//vn` or `v/vt/vn`, each an
-/// integer as tobj reads it (`isize`, negative counting back). `None` for anything else.
-/// Byte by byte rather than through `split('/')` and `str::parse`: faces are most of a
+/// integer as `isize::from_str` reads it (negative counting back). `None` for anything
+/// else. Byte by byte rather than through `split('/')` and `str::parse`: faces are most of a
 /// large mesh's lines, and this runs on every corner.
 fn parse_corner(word: &str) -> Option<[Option<isize>; 3]> {
     let mut fields = [None; 3];
@@ -364,10 +396,11 @@ fn parse_index(text: &[u8]) -> Option<isize> {
     Some(value)
 }
 
-/// A `v` line's fields: x y z, then tobj's optional w (which divides x y z and must not be
-/// 0) or r g b; the coordinates, after any division, must be finite. `number` is the
-/// vertex's 1-based index, for the message.
-fn check_position(words: std::str::SplitWhitespace, number: usize) -> Result<(), String> {
+/// A `v` line's fields: x y z, then an optional w (which divides x y z and must not be 0)
+/// or r g b (a vertex colour, checked and ignored); the coordinates, after any division,
+/// must be finite. Numbers are read by `str::parse::<f32>`, as tobj read them, so every
+/// coordinate keeps its bits. `number` is the vertex's 1-based index, for the message.
+fn parse_position(words: std::str::SplitWhitespace, number: usize) -> Result<Vec3, String> {
     let mut values = [0f32; 4];
     let mut count = 0usize;
     for word in words {
@@ -402,7 +435,15 @@ fn check_position(words: std::str::SplitWhitespace, number: usize) -> Result<(),
             "vertex {number} has a non-finite coordinate: {x} {y} {z}"
         ));
     }
-    Ok(())
+    Ok(Vec3::new(x, y, z))
+}
+
+/// A `vn` line's three numbers.
+fn parse_normal(words: std::str::SplitWhitespace) -> Result<Vec3, String> {
+    let mut values = [0f32; 3];
+    let count = check_numbers_into(words, &mut values, 3..=3, "normal (`vn`)", "x y z")?;
+    debug_assert_eq!(count, 3);
+    Ok(Vec3::from(values))
 }
 
 /// Checks that a line's fields after its keyword are a count of numbers within `allowed`;
@@ -413,19 +454,33 @@ fn check_numbers(
     what: &str,
     form: &str,
 ) -> Result<(), String> {
+    check_numbers_into(words, &mut [], allowed, what, form).map(|_| ())
+}
+
+/// [`check_numbers`], keeping the first numbers in `values`; returns the count.
+fn check_numbers_into(
+    words: std::str::SplitWhitespace,
+    values: &mut [f32],
+    allowed: std::ops::RangeInclusive<usize>,
+    what: &str,
+    form: &str,
+) -> Result<usize, String> {
     let mut count = 0usize;
     for word in words {
-        if word.parse::<f32>().is_err() {
+        let Ok(value) = word.parse::<f32>() else {
             return Err(format!(
                 "malformed {what}: {} is not a number{}",
                 quoted(word),
                 continuation_hint(word)
             ));
+        };
+        if let Some(slot) = values.get_mut(count) {
+            *slot = value;
         }
         count += 1;
     }
     if allowed.contains(&count) {
-        Ok(())
+        Ok(count)
     } else {
         Err(format!(
             "malformed {what}: expected {form}, found {count} numbers"
@@ -434,7 +489,7 @@ fn check_numbers(
 }
 
 /// A word of the file as a message shows it: quoted, escaped onto one line, and cut short.
-fn quoted(word: &str) -> String {
+pub(super) fn quoted(word: &str) -> String {
     const MAX: usize = 32;
     let cut: String = word.chars().take(MAX).collect();
     let more = if word.chars().nth(MAX).is_some() {
@@ -445,10 +500,10 @@ fn quoted(word: &str) -> String {
     format!("`{}{more}`", cut.escape_debug())
 }
 
-/// Why a word ending in `\` failed: OBJ's line continuation, which tobj does not support.
+/// Why a word ending in `\` failed: OBJ's line continuation, which is not supported.
 fn continuation_hint(word: &str) -> &'static str {
     if word.ends_with('\\') {
-        " (tobj does not join lines continued with `\\`)"
+        " (lines continued with `\\` are not joined)"
     } else {
         ""
     }
@@ -456,26 +511,11 @@ fn continuation_hint(word: &str) -> &'static str {
 
 /// The MTL mapping of the scene format: Kd, Ke, illum 3 / Pm (conductors, rough with Pr),
 /// illum 7 / d < 1 with Ni > 1 (dielectric).
-pub fn map_mtl(m: &tobj::Material) -> Material {
-    let param = |key: &str| -> Option<&str> { m.unknown_param.get(key).map(|s| s.trim()) };
-    let scalar = |key: &str| param(key).and_then(|s| s.parse::<f32>().ok());
-    let color = |key: &str| {
-        param(key).and_then(|s| {
-            let v: Vec<f32> = s
-                .split_whitespace()
-                .filter_map(|x| x.parse().ok())
-                .collect();
-            match v.as_slice() {
-                [r, g, b] => Some(Vec3::new(*r, *g, *b)),
-                [x] => Some(Vec3::splat(*x)),
-                _ => None,
-            }
-        })
-    };
-    let kd = m.diffuse.map(Vec3::from).unwrap_or(Vec3::splat(0.8));
-    let ks = m.specular.map(Vec3::from);
+pub fn map_mtl(m: &MtlMaterial) -> Material {
+    let kd = m.diffuse.unwrap_or(Vec3::splat(0.8));
+    let ks = m.specular;
     let illum = m.illumination_model;
-    let metallic = illum == Some(3) || scalar("Pm").is_some_and(|pm| pm >= 0.5);
+    let metallic = illum == Some(3) || m.metallic.is_some_and(|pm| pm >= 0.5);
     let ior = m.optical_density.unwrap_or(1.0);
     let glass = illum == Some(7) || (m.dissolve.is_some_and(|d| d < 1.0) && ior > 1.0);
     let mut mat = Material::diffuse(kd);
@@ -485,7 +525,7 @@ pub fn map_mtl(m: &tobj::Material) -> Material {
         mat.ior = if ior > 0.0 { ior } else { 1.5 };
     } else if metallic {
         mat.albedo = ks.unwrap_or(kd);
-        match scalar("Pr") {
+        match m.roughness {
             Some(r) if r > 0.0 => {
                 mat.kind = MaterialKind::ROUGH_CONDUCTOR;
                 mat.roughness = r.min(1.0);
@@ -493,34 +533,6 @@ pub fn map_mtl(m: &tobj::Material) -> Material {
             _ => mat.kind = MaterialKind::CONDUCTOR,
         }
     }
-    mat.emission = m
-        .emissive
-        .map(Vec3::from)
-        .or_else(|| color("Ke"))
-        .unwrap_or(Vec3::ZERO)
-        .max(Vec3::ZERO);
+    mat.emission = m.emission.unwrap_or(Vec3::ZERO).max(Vec3::ZERO);
     mat
-}
-
-fn describe_tobj_error(e: &tobj::LoadError) -> String {
-    use tobj::LoadError::*;
-    match e {
-        OpenFileFailed => "cannot open file".into(),
-        ReadError => "read error".into(),
-        UnrecognizedCharacter => "unrecognized character".into(),
-        PositionParseError => "malformed vertex position (`v`)".into(),
-        NormalParseError => "malformed normal (`vn`)".into(),
-        TexcoordParseError => "malformed texture coordinate (`vt`)".into(),
-        FaceParseError => "malformed face (`f`)".into(),
-        MaterialParseError => "malformed material library".into(),
-        InvalidObjectName => "invalid object name".into(),
-        InvalidPolygon => "invalid polygon (fewer than 3 vertices)".into(),
-        FaceVertexOutOfBounds => "a face refers to a vertex that does not exist".into(),
-        FaceTexCoordOutOfBounds => {
-            "a face refers to a texture coordinate that does not exist".into()
-        }
-        FaceNormalOutOfBounds => "a face refers to a normal that does not exist".into(),
-        FaceColorOutOfBounds => "a face refers to a vertex colour that does not exist".into(),
-        other => format!("{other}"),
-    }
 }
