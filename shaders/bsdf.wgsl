@@ -13,11 +13,6 @@ fn no_sample() -> BsdfSample {
     return BsdfSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, false, 1.0, false);
 }
 
-// mirror: src/scene/material.rs `Material::is_emissive`
-fn is_emissive(m: Material) -> bool {
-    return max(max(m.emission.x, m.emission.y), m.emission.z) > 0.0;
-}
-
 // mirror: src/render/bsdf.rs `bsdf_is_delta`
 fn bsdf_is_delta(m: Material) -> bool {
     return m.kind == MAT_CONDUCTOR || m.kind == MAT_DIELECTRIC;

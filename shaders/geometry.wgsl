@@ -1,4 +1,11 @@
-// Ray–triangle and ray–box tests. mirror: src/geometry.rs
+// Triangles, and the ray–triangle and ray–box tests. mirror: src/geometry.rs
+
+// mirror: src/geometry.rs `TriVerts` (48 bytes)
+struct TriVerts {
+    v0: vec4<f32>,
+    v1: vec4<f32>,
+    v2: vec4<f32>,
+}
 
 struct TriHit {
     t: f32,

@@ -12,13 +12,6 @@ struct BvhNode {
     count: u32,
 }
 
-// mirror: src/geometry.rs `TriVerts` (48 bytes)
-struct TriVerts {
-    v0: vec4<f32>,
-    v1: vec4<f32>,
-    v2: vec4<f32>,
-}
-
 // mirror: src/render/mod.rs `TriShading` (48 bytes)
 struct TriShading {
     n0: vec3<f32>,
@@ -27,19 +20,6 @@ struct TriShading {
     emitter_pmf: f32,
     n2: vec3<f32>,
     flags: u32,
-}
-
-// mirror: src/scene/material.rs `Material` (48 bytes). Its kind is a MAT_* code; each
-// texture slot holds a texture's index, or NO_TEXTURE.
-struct Material {
-    albedo: vec3<f32>,
-    kind: u32,
-    emission: vec3<f32>,
-    roughness: f32,
-    ior: f32,
-    albedo_texture: u32,
-    emission_texture: u32,
-    roughness_texture: u32,
 }
 
 // mirror: src/render/gpu/params.rs `Params` (144 bytes): one dispatch's camera, sky and range.
@@ -74,10 +54,6 @@ struct Params {
     _pad1: u32,
 }
 
-struct Ray {
-    origin: vec3<f32>,
-    dir: vec3<f32>,
-}
 
 // A leaf-order triangle index that stands for "no hit" (T_INF, the largest finite float,
 // stands for "no hit" and "unbounded ray": WGSL has no infinity literal).

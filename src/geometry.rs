@@ -9,7 +9,7 @@ use glam::{Vec3, Vec3Swizzles};
 pub const T_INF: f32 = f32::MAX;
 
 /// A triangle's three corners in BVH leaf order, padded to 16-byte rows as WGSL lays out
-/// `array<vec4<f32>>` (48 bytes). mirror: shaders/types.wgsl `TriVerts`
+/// `array<vec4<f32>>` (48 bytes). mirror: shaders/geometry.wgsl `TriVerts`
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct TriVerts {

@@ -1,8 +1,10 @@
-//! Rays and axis-aligned boxes: the two geometric primitives every other module speaks.
+//! Rays, axis-aligned boxes and frames: the geometric primitives every other module
+//! speaks. The ray and the frame have WGSL twins in `shaders/math.wgsl`.
 
 use glam::Vec3;
 
 /// A ray `origin + t * dir` for `t` in `[0, t_max)`; `dir` need not be normalised.
+/// mirror: shaders/math.wgsl `Ray`
 #[derive(Clone, Copy, Debug)]
 pub struct Ray {
     pub origin: Vec3,
@@ -77,7 +79,7 @@ impl Aabb {
 }
 
 /// Orthonormal basis around a unit normal (Duff et al. 2017, "Building an Orthonormal Basis, Revisited").
-/// mirror: shaders/sampling.wgsl `onb_from_normal`
+/// mirror: shaders/math.wgsl `onb_from_normal`
 pub fn onb_from_normal(n: Vec3) -> (Vec3, Vec3) {
     let sign = if n.z >= 0.0 { 1.0 } else { -1.0 };
     let a = -1.0 / (sign + n.z);

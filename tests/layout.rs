@@ -455,32 +455,154 @@ fn documented_struct_sizes_match_naga() {
     // Tags such as "mirror: src/bvh/mod.rs `BvhNode` (32 bytes)" state the size of the
     // WGSL struct declared next.
     let module = &modules()[0].1;
-    let text = std::fs::read_to_string(root().join("shaders/types.wgsl")).unwrap();
-    let lines: Vec<&str> = text.lines().collect();
     let mut checked = 0;
-    for (i, line) in lines.iter().enumerate() {
-        let Some(rest) = line.split_once("mirror:").map(|x| x.1) else {
-            continue;
-        };
-        let Some(bytes) = rest
-            .split_once('(')
-            .and_then(|(_, r)| r.split_once(" bytes)"))
-            .and_then(|(n, _)| n.trim().parse::<usize>().ok())
-        else {
-            continue;
-        };
-        let name = lines[i..]
-            .iter()
-            .find_map(|l| l.strip_prefix("struct "))
-            .and_then(|l| l.split_whitespace().next())
-            .expect("a struct after the tag");
-        assert_eq!(
-            wgsl_layout(module, name).0,
-            bytes,
-            "types.wgsl:{}: `{name}` documented as {bytes} bytes",
-            i + 1
-        );
-        checked += 1;
+    for file in files_in("shaders", "wgsl") {
+        let text = std::fs::read_to_string(&file).unwrap();
+        let fname = file.file_name().unwrap().to_string_lossy().to_string();
+        let lines: Vec<&str> = text.lines().collect();
+        for (i, line) in lines.iter().enumerate() {
+            let Some(rest) = line.split_once("mirror:").map(|x| x.1) else {
+                continue;
+            };
+            let Some(bytes) = rest
+                .split_once('(')
+                .and_then(|(_, r)| r.split_once(" bytes)"))
+                .and_then(|(n, _)| n.trim().parse::<usize>().ok())
+            else {
+                continue;
+            };
+            let name = lines[i..]
+                .iter()
+                .find_map(|l| l.strip_prefix("struct "))
+                .and_then(|l| l.split_whitespace().next())
+                .expect("a struct after the tag");
+            assert_eq!(
+                wgsl_layout(module, name).0,
+                bytes,
+                "{fname}:{}: `{name}` documented as {bytes} bytes",
+                i + 1
+            );
+            checked += 1;
+        }
     }
     assert!(checked >= 5, "{checked}");
+}
+
+/// The twin files: each concept is one Rust file and one WGSL file of the same name.
+const TWINS: &[(&str, &str)] = &[
+    ("src/math.rs", "shaders/math.wgsl"),
+    ("src/geometry.rs", "shaders/geometry.wgsl"),
+    ("src/bvh/traverse.rs", "shaders/traverse.wgsl"),
+    ("src/scene/material.rs", "shaders/material.wgsl"),
+    ("src/render/rng.rs", "shaders/rng.wgsl"),
+    ("src/render/sampling.rs", "shaders/sampling.wgsl"),
+    ("src/render/bsdf.rs", "shaders/bsdf.wgsl"),
+    ("src/render/camera.rs", "shaders/camera.wgsl"),
+    ("src/render/lights.rs", "shaders/lights.wgsl"),
+    ("src/render/integrator.rs", "shaders/integrator.wgsl"),
+];
+
+/// The name declared by the first `fn`, `struct` or `const` line at or after line `i`.
+fn declared_after(lines: &[&str], i: usize) -> Option<String> {
+    lines[i..].iter().find_map(|l| {
+        let l = l.trim_start().trim_start_matches("pub ");
+        ["fn ", "struct ", "const ", "enum "].iter().find_map(|kw| {
+            let rest = l.strip_prefix(kw)?;
+            let name: String = rest.chars().take_while(|&c| is_ident(c)).collect();
+            (!name.is_empty()).then_some(name)
+        })
+    })
+}
+
+/// The type of the `impl` block that line `i` lies in, if any.
+fn impl_before(lines: &[&str], i: usize) -> Option<String> {
+    lines[..=i].iter().rev().find_map(|l| {
+        if l.starts_with('}') {
+            return Some(None);
+        }
+        let rest = l.strip_prefix("impl ")?;
+        Some(Some(rest.split_whitespace().next()?.to_string()))
+    })?
+}
+
+/// Whether a tag naming `tagged` fits the declaration `declared` that follows it: the same
+/// name (for `Type::method`, the method's), or `Type::new` for WGSL's snake-case `type`.
+fn same_name(tagged: &str, declared: &str) -> bool {
+    match tagged.rsplit_once("::") {
+        Some((ty, "new")) => declared == "new" || declared == ty || snake_case(ty) == declared,
+        Some((_, item)) => item == declared,
+        None => tagged == declared,
+    }
+}
+
+fn snake_case(name: &str) -> String {
+    let mut out = String::new();
+    for (i, c) in name.chars().enumerate() {
+        if c.is_uppercase() && i > 0 {
+            out.push('_');
+        }
+        out.extend(c.to_lowercase());
+    }
+    out
+}
+
+/// Every problem with the twin files: a file missing, stems that differ, a tag in one
+/// twin that names a file other than its twin, or a tag whose name is not that of the
+/// function, struct or constant it stands on.
+fn twin_problems(twins: &[(&str, &str)]) -> (usize, Vec<String>) {
+    let mut problems = Vec::new();
+    let mut checked = 0;
+    for &(rust, wgsl) in twins {
+        let stem = |p: &str| {
+            Path::new(p)
+                .file_stem()
+                .unwrap()
+                .to_string_lossy()
+                .to_string()
+        };
+        if stem(rust) != stem(wgsl) {
+            problems.push(format!("{rust} and {wgsl}: the twins' names differ"));
+        }
+        for (this, twin, ext) in [(rust, wgsl, ".wgsl"), (wgsl, rust, ".rs")] {
+            let Ok(text) = std::fs::read_to_string(root().join(this)) else {
+                problems.push(format!("{this} does not exist"));
+                continue;
+            };
+            let lines: Vec<&str> = text.lines().collect();
+            for (line, paths, names) in mirror_tags(&text, ext) {
+                for p in paths.iter().filter(|p| *p != twin) {
+                    problems.push(format!("{this}:{line}: names {p}, not its twin {twin}"));
+                }
+                // A tag on a declaration (a file's heading tag stands on none).
+                if let [name] = names.as_slice() {
+                    if let Some(declared) = declared_after(&lines, line - 1) {
+                        checked += 1;
+                        // A Rust constructor is `Type::new` where WGSL has `type`.
+                        let declared = match impl_before(&lines, line - 1) {
+                            Some(ty) if declared == "new" => format!("{ty}::new"),
+                            _ => declared,
+                        };
+                        if !same_name(name, &declared) && !same_name(&declared, name) {
+                            problems.push(format!(
+                                "{this}:{line}: tag `{name}` stands on `{declared}`"
+                            ));
+                        }
+                    }
+                }
+            }
+        }
+    }
+    (checked, problems)
+}
+
+#[test]
+fn twin_files_hold_the_same_functions_under_the_same_names() {
+    let (checked, problems) = twin_problems(TWINS);
+    assert!(checked >= 60, "only {checked} tagged declarations");
+    assert!(problems.is_empty(), "twin files:\n{}", problems.join("\n"));
+    // The check can fail: pairing files with the wrong twins is caught.
+    let crossed = [("src/render/lights.rs", "shaders/camera.wgsl")];
+    assert!(!twin_problems(&crossed).1.is_empty());
+    assert!(same_name("ShearedRay::new", "sheared_ray"));
+    assert!(!same_name("Sky::radiance", "sky_radiance"));
 }

@@ -1,5 +1,5 @@
 //! The material record: one `#[repr(C)]` struct for every BSDF kind, which the CPU reads
-//! as it is and the GPU reads as the same bytes (`Material` in `shaders/types.wgsl`).
+//! as it is and the GPU reads as the same bytes (`Material` in `shaders/material.wgsl`).
 //! Material names stay in the [`Scene`](super::Scene), beside the table.
 
 use bytemuck::{Pod, Zeroable};
@@ -47,7 +47,7 @@ pub const NO_TEXTURE: u32 = u32::MAX;
 /// A validated material (48 bytes). Parameters that its kind does not use keep neutral
 /// values. Each parameter that a texture may modulate has a texture slot: the index of
 /// that texture in the scene's texture table, or [`NO_TEXTURE`].
-/// mirror: shaders/types.wgsl `Material`
+/// mirror: shaders/material.wgsl `Material`
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Material {
@@ -92,7 +92,7 @@ impl Material {
         }
     }
 
-    /// mirror: shaders/bsdf.wgsl `is_emissive`
+    /// mirror: shaders/material.wgsl `is_emissive`
     pub fn is_emissive(&self) -> bool {
         self.emission.max_element() > 0.0
     }

@@ -102,6 +102,8 @@ macro_rules! shader {
 /// The shared library, in dependency order (struct types and bindings first).
 const LIBRARY: &[Source] = &[
     shader!("types.wgsl"),
+    shader!("math.wgsl"),
+    shader!("material.wgsl"),
     shader!("bindings.wgsl"),
     shader!("rng.wgsl"),
     shader!("sampling.wgsl"),
