@@ -1,6 +1,7 @@
 //! Scenes for the tests: built in code (boxes, spheres, one triangle per material, a closed
 //! mesh with rays that probe its seams) or the built-in Cornell box, and render settings.
 
+use super::rand::SplitMix;
 use glam::Vec3;
 use meshtrace::bvh::BuildParams;
 use meshtrace::render::RenderScene;
@@ -161,14 +162,8 @@ pub fn closed_mesh_probe() -> ClosedMeshProbe {
             targets.push(0.5 * (positions[a] + positions[b]));
         }
     }
-    let mut state = 0x9e3779b9u32;
-    let mut next = || {
-        state ^= state << 13;
-        state ^= state >> 17;
-        state ^= state << 5;
-        state as f32 / u32::MAX as f32 - 0.5
-    };
-    targets.extend((0..20_000).map(|_| offset + Vec3::new(next(), next(), next())));
+    let mut rng = SplitMix::new(0x9e37_79b9);
+    targets.extend((0..20_000).map(|_| offset + rng.vec3(-0.5, 0.5)));
     let rays = [offset, offset + Vec3::new(0.1, -0.2, 0.05)]
         .iter()
         .flat_map(|&o| targets.iter().map(move |&t| (o, t - o)))
