@@ -427,7 +427,7 @@ fn traversal_rays(rs: &RenderScene, r: &mut SplitMix, n: usize) -> Vec<Case> {
 }
 
 /// The GPU twin of tests/properties.rs `no_ray_escapes_a_closed_mesh`: every ray of
-/// [`common::closed_mesh_probe`] hits the mesh (closest and any hit), however the driver
+/// [`common::scenes::closed_mesh_probe`] hits the mesh (closest and any hit), however the driver
 /// contracts the arithmetic.
 #[test]
 fn no_ray_escapes_a_closed_mesh() {

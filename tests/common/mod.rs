@@ -20,11 +20,6 @@ pub mod rand;
 pub mod scenes;
 pub mod stats;
 
-// The helpers' former paths, until every caller names the module.
-pub use fs::shared_mesh;
-pub use scenes::{add_box, closed_mesh_probe, scene};
-pub use stats::mean_and_stderr;
-
 use meshtrace::film::Film;
 use meshtrace::render::gpu::{GpuContext, GpuError, GpuRenderer};
 use meshtrace::render::{RenderJob, RenderScene, cpu};
