@@ -9,12 +9,13 @@
 
 mod common;
 
-use common::{add_box, mean_and_stderr, scene};
+use common::scenes::{add_box, scene, square};
+use common::stats::mean_and_stderr;
 use glam::Vec3;
 use meshtrace::bvh::BuildParams;
 use meshtrace::film::Film;
 use meshtrace::render::{RenderJob, RenderScene};
-use meshtrace::scene::{Camera, Material, Mesh, RenderSettings, Scene, Sky};
+use meshtrace::scene::{Camera, Material, Mesh, Scene, Sky};
 
 fn render_both(name: &str, scene: &Scene) -> Vec<(&'static str, Film)> {
     let rs = RenderScene::new(scene, &BuildParams::default()).unwrap();
@@ -24,16 +25,6 @@ fn render_both(name: &str, scene: &Scene) -> Vec<(&'static str, Film)> {
         out.push(("gpu", common::gpu_render(&ctx, &rs, &job)));
     }
     out
-}
-
-fn settings(width: u32, spp: u32, max_depth: u32) -> RenderSettings {
-    RenderSettings {
-        width,
-        height: width,
-        spp,
-        max_depth,
-        seed: 7,
-    }
 }
 
 /// Asserts every channel's image mean is `expect` within 5 standard errors, and that the
@@ -87,7 +78,7 @@ fn white_furnace_returns_the_sky_radiance() {
         vec![Material::diffuse(Vec3::ONE)],
         camera,
         Sky::Constant(sky),
-        settings(48, 64, 1000),
+        square(48, 64, 1000, 7),
     );
     for (device, film) in render_both("white_furnace", &s) {
         assert_mean("white furnace", device, &film, sky);
@@ -125,7 +116,7 @@ fn emissive_enclosure_returns_le_over_one_minus_albedo() {
         vec![wall],
         camera,
         Sky::Constant(Vec3::ZERO),
-        settings(48, 64, 64),
+        square(48, 64, 64, 7),
     );
     for (device, film) in render_both("emissive_enclosure", &s) {
         assert_mean("emissive enclosure", device, &film, expect);
@@ -179,7 +170,7 @@ fn emitter_seen_directly_returns_its_radiance() {
             vec![light],
             camera,
             Sky::Constant(Vec3::ZERO),
-            settings(16, 4, max_depth),
+            square(16, 4, max_depth, 7),
         );
         let expect = if from_behind { Vec3::ZERO } else { le };
         for (device, film) in render_both("direct_emitter", &s) {

@@ -23,23 +23,25 @@
 //! - `gpu_*`: the same pdf-consistency, furnace and chi-square checks on the WGSL kernels,
 //!   skipped without a GPU (see `common::gpu`).
 //!
-//! Every random number is `meshtrace::render::rng::Rng`, so each run sees the same numbers.
+//! The chi-square test itself is `common::chi2`, for every material's tests to share. Every
+//! random number is `common::rand::hashed_u3` (the renderer's own hash) of a stream per
+//! use, so each run sees the same numbers.
 //! Run with `--nocapture` to see the measured p-values, albedos and errors.
 
 mod common;
 
-use glam::{DVec3, Vec2, Vec3};
-use meshtrace::bvh::BuildParams;
-use meshtrace::render::RenderScene;
+use common::chi2::{Binning, chi2_of, chi2_survival, ln_gamma, show_chi2, sidak_level};
+use common::kernels::{gpu_bsdf_evals, gpu_bsdf_samples};
+use common::materials::{ggx_tolerance, material_name, mirror, shape_wo, spherical};
+use common::rand::{hashed_u3, stream};
+use common::scenes::material_table;
+use common::stats::{Worst, mean_and_stderr, rel, rel3};
+use glam::{Vec2, Vec3};
 use meshtrace::render::bsdf::{
     bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample, fresnel_dielectric, ggx_alpha,
 };
-use meshtrace::render::gpu::kernels::run_test_kernel;
-use meshtrace::render::rng::Rng;
 use meshtrace::render::sampling::sample_uniform_sphere;
-use meshtrace::scene::{
-    Camera, Material, MaterialKind, Mesh, NO_NORMAL, RenderSettings, Sky, Triangle,
-};
+use meshtrace::scene::{Material, MaterialKind};
 use std::f64::consts::PI;
 
 // ---------------------------------------------------------------------------------------
@@ -72,15 +74,6 @@ fn dielectric(ior: f32) -> Material {
     }
 }
 
-/// A material's name in messages, and the label of its random streams.
-fn material_name(m: &Material) -> String {
-    match m.kind {
-        MaterialKind::ROUGH_CONDUCTOR => format!("rough_conductor r={}", m.roughness),
-        MaterialKind::DIELECTRIC => format!("dielectric ior={}", m.ior),
-        kind => kind.name().to_string(),
-    }
-}
-
 fn all_materials() -> Vec<Material> {
     let mut m = vec![diffuse(), conductor()];
     m.extend(ROUGHNESSES.map(rough));
@@ -95,19 +88,11 @@ fn non_delta_materials() -> Vec<Material> {
         .collect()
 }
 
-/// A stream id per use, so that no two tests share random numbers.
-fn stream(label: &str, k: u32) -> u32 {
-    let mut h = 0x811c_9dc5u32;
-    for b in label.bytes() {
-        h = (h ^ b as u32).wrapping_mul(0x0100_0193);
-    }
-    h ^ k.wrapping_mul(0x9e37_79b9)
-}
-
-/// The `i`-th triple of uniform numbers in [0, 1) of stream `s`.
+/// The `i`-th triple of uniform numbers in [0, 1) of stream `s` (a [`stream`] per use, so
+/// that no two tests share random numbers; a material's streams are labelled with its
+/// [`material_name`]).
 fn u3(s: u32, i: u32) -> [f32; 3] {
-    let r = Rng::new(i, s, SEED);
-    [r.rng_1d(0, 0), r.rng_1d(0, 1), r.rng_1d(0, 2)]
+    hashed_u3(SEED, s, i)
 }
 
 /// A uniform random unit vector.
@@ -119,102 +104,31 @@ fn random_dir(s: u32, i: u32) -> Vec3 {
 /// A `wo` for `m`: uniform over the sphere for the dielectric, over the upper hemisphere
 /// for the two-sided kinds; one in ten grazing (|wo.z| shrunk a hundredfold).
 fn random_wo(m: &Material, s: u32, i: u32) -> Vec3 {
-    let mut w = random_dir(s, i);
-    if u3(s ^ 0x5555_5555, i)[0] < 0.1 {
-        w.z *= 0.01;
-        w = w.normalize();
-    }
-    if m.kind != MaterialKind::DIELECTRIC {
-        w.z = w.z.abs();
-    }
-    w
-}
-
-/// The unit vector at polar angle `theta` and azimuth `phi` (degrees) about +Z.
-fn spherical(theta_deg: f64, phi_deg: f64) -> Vec3 {
-    let (t, p) = (theta_deg.to_radians(), phi_deg.to_radians());
-    DVec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos())
-        .as_vec3()
-        .normalize()
-}
-
-fn mirror(w: Vec3) -> Vec3 {
-    Vec3::new(-w.x, -w.y, w.z)
+    let w = random_dir(s, i);
+    let grazing = u3(s ^ 0x5555_5555, i)[0] < 0.1;
+    // The dielectric keeps the side drawn.
+    shape_wo(
+        w,
+        grazing,
+        m.kind == MaterialKind::DIELECTRIC && w.z.is_sign_negative(),
+    )
 }
 
 fn sample(m: &Material, wo: Vec3, u: [f32; 3]) -> Option<meshtrace::render::bsdf::BsdfSample> {
     bsdf_sample(m, wo, u[0], Vec2::new(u[1], u[2]))
 }
 
-/// `|a - b| / max(|a|, |b|, floor)`; 0 for equal values, infinite for non-finite ones.
-fn rel(a: f32, b: f32, floor: f32) -> f64 {
-    if a == b {
-        return 0.0;
-    }
-    if !(a.is_finite() && b.is_finite()) {
-        return f64::INFINITY;
-    }
-    (a as f64 - b as f64).abs() / a.abs().max(b.abs()).max(floor) as f64
-}
-
-fn rel3(a: Vec3, b: Vec3, floor: f32) -> f64 {
-    (0..3).map(|i| rel(a[i], b[i], floor)).fold(0.0, f64::max)
-}
-
 fn non_negative_finite(v: Vec3) -> bool {
     v.is_finite() && v.min_element() >= 0.0
 }
 
-/// The relative tolerance for comparing GGX quantities computed along different float32
-/// paths (the sampled half vector against the one rebuilt from wi): `base`, plus four
-/// rounding errors of h.z amplified by |d ln D / d ln h.z| = 4 h.z^2 (1 - a^2) /
-/// (h.z^2 (a^2 - 1) + 1), which is ~4 / a^2 at the peak (4e4 at roughness 0.1).
-fn ggx_tolerance(m: &Material, wo: Vec3, wi: Vec3, base: f64) -> f64 {
-    if m.kind != MaterialKind::ROUGH_CONDUCTOR {
-        return base;
-    }
-    let h = (wo.as_dvec3() + wi.as_dvec3()).normalize();
-    let a2 = (ggx_alpha(m.roughness) as f64).powi(2);
-    let cond = 4.0 * h.z * h.z * (1.0 - a2) / (h.z * h.z * (a2 - 1.0) + 1.0);
-    base + cond * 4.0 * f32::EPSILON as f64
-}
+/// The relative tolerance of pdfs and weights computed along different float32 paths (the
+/// sampled half vector against the one rebuilt from wi): 1e-4, plus four float32 rounding
+/// errors of h.z amplified by GGX's condition number (4e4 at roughness 0.1).
+const BASE_TOLERANCE: f64 = 1e-4;
 
-/// The largest value of an error seen, and where.
-struct Worst {
-    what: String,
-    max: f64,
-    at: String,
-}
-
-impl Worst {
-    fn new(what: impl Into<String>) -> Self {
-        Self {
-            what: what.into(),
-            max: 0.0,
-            at: String::new(),
-        }
-    }
-
-    fn add(&mut self, err: f64, at: impl FnOnce() -> String) {
-        let err = if err.is_nan() { f64::INFINITY } else { err };
-        if err > self.max {
-            self.max = err;
-            self.at = at();
-        }
-    }
-
-    /// Prints the maximum and fails if it exceeds `limit` (errors here are pre-divided by
-    /// their tolerance where that varies, so `limit` is then 1).
-    fn check(&self, limit: f64) {
-        eprintln!("{}: max {:.3e} (limit {limit:.0e})", self.what, self.max);
-        assert!(
-            self.max <= limit,
-            "{}: {:.3e} > {limit:.0e} at {}",
-            self.what,
-            self.max,
-            self.at
-        );
-    }
+fn tolerance(m: &Material, wo: Vec3, wi: Vec3) -> f64 {
+    ggx_tolerance(m, wo, wi, BASE_TOLERANCE, f32::EPSILON as f64)
 }
 
 // ---------------------------------------------------------------------------------------
@@ -269,10 +183,10 @@ fn non_delta_bsdfs_are_reciprocal() {
     let n = 100_000;
     for (k, m) in non_delta_materials().iter().enumerate() {
         let s = stream("reciprocity", k as u32);
-        let mut worst = Worst::new(format!(
-            "reciprocity: {}: |f(wo,wi) - f(wi,wo)| / f",
-            material_name(m)
-        ));
+        let mut worst = Worst::new(
+            format!("{}: |f(wo,wi) - f(wi,wo)| / f", material_name(m)),
+            1e-5,
+        );
         let mut tested = 0;
         for i in 0..n {
             let wo = random_wo(m, s, i);
@@ -297,7 +211,7 @@ fn non_delta_bsdfs_are_reciprocal() {
             "{}: only {tested} nonzero pairs",
             material_name(m)
         );
-        worst.check(1e-5);
+        worst.check("reciprocity");
     }
 }
 
@@ -306,14 +220,17 @@ fn sampled_pdf_and_weight_match_eval() {
     let n = 100_000;
     for (k, m) in all_materials().iter().enumerate() {
         let s = stream("pdf consistency", k as u32);
-        let mut pdf_err = Worst::new(format!(
-            "sampled pdf vs bsdf_pdf: {}: relative error / tolerance",
-            material_name(m)
-        ));
-        let mut weight_err = Worst::new(format!(
-            "sampled weight vs eval / pdf: {}: relative error / tolerance",
-            material_name(m)
-        ));
+        let mut pdf_err = Worst::new(
+            format!("{}: sampled pdf vs bsdf_pdf (relative)", material_name(m)),
+            BASE_TOLERANCE,
+        );
+        let mut weight_err = Worst::new(
+            format!(
+                "{}: sampled weight vs eval / pdf (relative)",
+                material_name(m)
+            ),
+            BASE_TOLERANCE,
+        );
         let mut raw_pdf = 0.0f64;
         let mut valid = 0;
         for i in 0..n {
@@ -346,12 +263,12 @@ fn sampled_pdf_and_weight_match_eval() {
                     assert!(x.wi.z > 0.0, "{}", show());
                     let pdf = bsdf_pdf(m, wo, x.wi);
                     let f = bsdf_eval(m, wo, x.wi);
-                    let tol = ggx_tolerance(m, wo, x.wi, 1e-4);
+                    let tol = tolerance(m, wo, x.wi);
                     raw_pdf = raw_pdf.max(rel(pdf, x.pdf, 1e-6));
-                    pdf_err.add(rel(pdf, x.pdf, 1e-6) / tol, || {
+                    pdf_err.add_tol(rel(pdf, x.pdf, 1e-6), tol, || {
                         format!("{}: bsdf_pdf {pdf}", show())
                     });
-                    weight_err.add(rel3(x.weight, f / x.pdf, 1e-6) / tol, || {
+                    weight_err.add_tol(rel3(x.weight, f / x.pdf, 1e-6), tol, || {
                         format!("{}: eval {f}", show())
                     });
                 }
@@ -363,8 +280,8 @@ fn sampled_pdf_and_weight_match_eval() {
         );
         assert!(valid > n / 2, "{}: {valid} valid samples", material_name(m));
         if !bsdf_is_delta(m) {
-            pdf_err.check(1.0);
-            weight_err.check(1.0);
+            pdf_err.check("pdf consistency");
+            weight_err.check("pdf consistency");
         }
     }
 }
@@ -374,15 +291,11 @@ fn dielectric_refraction_is_reversible() {
     for ior in IORS {
         let m = dielectric(ior);
         let s = stream("reversible", ior.to_bits());
-        let mut dir_err = Worst::new(format!("reversibility: {}: |wo' - wo|", material_name(&m)));
-        let mut fresnel_err = Worst::new(format!(
-            "reversibility: {}: 1 - F both ways",
-            material_name(&m)
-        ));
-        let mut product_err = Worst::new(format!(
-            "reversibility: {}: |weight(wo->wi) weight(wi->wo) - 1|",
-            material_name(&m)
-        ));
+        let name = material_name(&m);
+        let mut dir_err = Worst::new(format!("{name}: |wo' - wo|"), 1e-4);
+        let mut fresnel_err = Worst::new(format!("{name}: 1 - F both ways (relative)"), 1e-3);
+        let mut product_err =
+            Worst::new(format!("{name}: |weight(wo->wi) weight(wi->wo) - 1|"), 1e-5);
         let mut refracted = 0;
         for i in 0..50_000 {
             let wo = random_wo(&m, s, i);
@@ -413,20 +326,19 @@ fn dielectric_refraction_is_reversible() {
             );
         }
         assert!(refracted > 20_000, "{refracted} refracted");
-        dir_err.check(1e-4);
-        fresnel_err.check(1e-3);
-        product_err.check(1e-5);
+        dir_err.check("reversibility");
+        fresnel_err.check("reversibility");
+        product_err.check("reversibility");
     }
 }
 
 // ---------------------------------------------------------------------------------------
 // The chi-square goodness-of-fit test.
 
-const COS_BINS: usize = 10;
-const PHI_BINS: usize = 20;
-const CELLS: usize = COS_BINS * PHI_BINS;
+// The test itself, `Binning`, `chi2_of` and the chi-square distribution, is
+// `common::chi2`.
+
 const CHI2_SAMPLES: u32 = 100_000;
-const MIN_EXPECTED: f64 = 5.0;
 /// The chi-square tests in this file: 3 wo x (diffuse + 4 rough conductors x 2 binnings)
 /// on the CPU, and 1 + 4 x 2 on the GPU.
 const CHI2_TESTS: i32 = 3 * (1 + 4 * 2) + (1 + 4 * 2);
@@ -437,307 +349,7 @@ const CHI2_TESTS: i32 = 3 * (1 + 4 * 2) + (1 + 4 * 2);
 /// and the same on the CPU from the same numbers; other streams and 1M samples give
 /// uniformly spread p-values.)
 fn significance() -> f64 {
-    1.0 - 0.99f64.powf(1.0 / CHI2_TESTS as f64)
-}
-
-/// Cells over (cos theta', phi') about the axis `n` of the frame (t, b, n): COS_BINS equal
-/// steps of cos theta' in [cos_min, 1] (equal solid angles) by PHI_BINS of phi'. Directions
-/// with cos theta' < cos_min, and refused samples, fall in one extra "outside" category.
-#[derive(Clone, Debug)]
-struct Binning {
-    t: DVec3,
-    b: DVec3,
-    n: DVec3,
-    cos_min: f64,
-    what: String,
-}
-
-impl Binning {
-    /// The upper hemisphere of the local frame.
-    fn local() -> Self {
-        Self {
-            t: DVec3::X,
-            b: DVec3::Y,
-            n: DVec3::Z,
-            cos_min: 0.0,
-            what: "local (cos theta in [0, 1], phi)".into(),
-        }
-    }
-
-    /// A cap of half-angle `theta_max` about `axis`.
-    fn around(axis: Vec3, theta_max: f64) -> Self {
-        let n = axis.as_dvec3().normalize();
-        let (t, b) = n.any_orthonormal_pair();
-        Self {
-            t,
-            b,
-            n,
-            cos_min: theta_max.cos(),
-            what: format!(
-                "about the mirror direction, theta' < {:.1} deg",
-                theta_max.to_degrees()
-            ),
-        }
-    }
-
-    /// The cap about the mirror direction of `wo` for a GGX lobe of `alpha`: 10 alpha, which
-    /// holds most of the lobe (its reflected directions spread about 2 alpha), at most pi/2.
-    fn lobe(wo: Vec3, alpha: f32) -> Self {
-        Self::around(mirror(wo), (10.0 * alpha as f64).min(PI / 2.0))
-    }
-
-    fn cos_step(&self) -> f64 {
-        (1.0 - self.cos_min) / COS_BINS as f64
-    }
-
-    fn direction(&self, c: f64, phi: f64) -> DVec3 {
-        let s = (1.0 - c * c).max(0.0).sqrt();
-        s * phi.cos() * self.t + s * phi.sin() * self.b + c * self.n
-    }
-
-    fn cell(&self, w: Vec3) -> Option<usize> {
-        let w = w.as_dvec3();
-        let c = w.dot(self.n);
-        if c.is_nan() || c < self.cos_min {
-            return None;
-        }
-        let ci = (((c - self.cos_min) / self.cos_step()) as usize).min(COS_BINS - 1);
-        let mut phi = w.dot(self.b).atan2(w.dot(self.t));
-        if phi < 0.0 {
-            phi += 2.0 * PI;
-        }
-        let pj = ((phi / (2.0 * PI) * PHI_BINS as f64) as usize).min(PHI_BINS - 1);
-        Some(ci * PHI_BINS + pj)
-    }
-
-    /// Expected counts of `n` samples of `pdf` per cell, and the "outside" remainder
-    /// (n minus their sum, at least 0). The solid angle element is d(cos theta) d(phi), and
-    /// each cell starts as 16 x 16 midpoint sub-samples (4 x 4 rectangles, each a 4 x 4
-    /// midpoint rule); a rectangle whose rule disagrees with the sum of its four quarters'
-    /// by more than its share of 1% of the cell count's standard deviation is split, down
-    /// to 1/65536 of a cell side, so narrow peaks and the horizon are resolved. Returns the
-    /// disagreement left where the depth limit stopped refinement, in standard deviations.
-    fn expected(&self, pdf: &dyn Fn(Vec3) -> f64, n: f64) -> (Vec<f64>, f64) {
-        let dc = self.cos_step();
-        let dphi = 2.0 * PI / PHI_BINS as f64;
-        let mut worst = 0.0f64;
-        let mut e: Vec<f64> = (0..CELLS)
-            .map(|cell| {
-                let c0 = self.cos_min + (cell / PHI_BINS) as f64 * dc;
-                let p0 = (cell % PHI_BINS) as f64 * dphi;
-                let rects: Vec<Rect> = (0..16)
-                    .map(|k| Rect {
-                        c0: c0 + (k / 4) as f64 * dc / 4.0,
-                        p0: p0 + (k % 4) as f64 * dphi / 4.0,
-                        dc: dc / 4.0,
-                        dp: dphi / 4.0,
-                    })
-                    .collect();
-                let coarse: Vec<f64> = rects.iter().map(|r| self.rule(pdf, r)).collect();
-                let estimate = coarse.iter().sum::<f64>() * n;
-                let tol = 0.01 * estimate.max(1.0).sqrt() / n / 16.0;
-                let mut left = 0.0;
-                let p: f64 = rects
-                    .iter()
-                    .zip(&coarse)
-                    .map(|(r, &whole)| self.adaptive(pdf, r, whole, tol, 0, &mut left))
-                    .sum();
-                worst = worst.max(left * n / (p * n).max(1.0).sqrt());
-                p * n
-            })
-            .collect();
-        let total: f64 = e.iter().sum();
-        e.push((n - total).max(0.0));
-        (e, worst)
-    }
-
-    /// The 4 x 4 midpoint rule of `pdf` over a rectangle of (cos theta', phi').
-    fn rule(&self, pdf: &dyn Fn(Vec3) -> f64, r: &Rect) -> f64 {
-        let mut sum = 0.0;
-        for a in 0..4 {
-            for b in 0..4 {
-                let c = r.c0 + (a as f64 + 0.5) * r.dc / 4.0;
-                let phi = r.p0 + (b as f64 + 0.5) * r.dp / 4.0;
-                sum += pdf(self.direction(c, phi).as_vec3().normalize());
-            }
-        }
-        sum * r.dc * r.dp / 16.0
-    }
-
-    /// Adaptive refinement of `whole`, the rule over `r`, by quartering.
-    fn adaptive(
-        &self,
-        pdf: &dyn Fn(Vec3) -> f64,
-        r: &Rect,
-        whole: f64,
-        tol: f64,
-        depth: u32,
-        left: &mut f64,
-    ) -> f64 {
-        let kids = r.quarters();
-        let parts = kids.each_ref().map(|k| self.rule(pdf, k));
-        let sum: f64 = parts.iter().sum();
-        let diff = (sum - whole).abs();
-        if diff <= tol {
-            return sum;
-        }
-        if depth >= 14 {
-            *left += diff;
-            return sum;
-        }
-        kids.iter()
-            .zip(parts)
-            .map(|(k, p)| self.adaptive(pdf, k, p, tol / 2.0, depth + 1, left))
-            .sum()
-    }
-}
-
-/// A rectangle of (cos theta', phi') from (c0, p0), of sides (dc, dp).
-#[derive(Clone, Copy, Debug)]
-struct Rect {
-    c0: f64,
-    p0: f64,
-    dc: f64,
-    dp: f64,
-}
-
-impl Rect {
-    fn quarters(&self) -> [Rect; 4] {
-        let (dc, dp) = (self.dc / 2.0, self.dp / 2.0);
-        [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)].map(|(i, j)| Rect {
-            c0: self.c0 + i * dc,
-            p0: self.p0 + j * dp,
-            dc,
-            dp,
-        })
-    }
-}
-
-/// The outcome of one chi-square test.
-#[derive(Debug)]
-struct Chi2 {
-    chi2: f64,
-    dof: usize,
-    p: f64,
-    pooled: usize,
-}
-
-/// Pearson's chi-square statistic of `observed` against `expected` counts, pooling the
-/// categories with expected counts below MIN_EXPECTED (smallest first, until the pool
-/// reaches it), as Mitsuba's `ChiSquareTest` does. Samples in a category that should be
-/// empty are an error of their own.
-fn chi2_test(observed: &[f64], expected: &[f64], n: f64) -> Result<Chi2, String> {
-    let mut order: Vec<usize> = (0..expected.len()).collect();
-    order.sort_by(|&a, &b| expected[a].total_cmp(&expected[b]));
-    let (mut pool_o, mut pool_e, mut pooled) = (0.0, 0.0, 0);
-    let (mut chi2, mut dof) = (0.0, 0usize);
-    for i in order {
-        let (o, e) = (observed[i], expected[i]);
-        if e < 1e-9 * n && o > 1e-5 * n {
-            return Err(format!(
-                "{o} samples in category {i}, whose expected count is {e:.3e}"
-            ));
-        }
-        if e < MIN_EXPECTED || (pool_e > 0.0 && pool_e < MIN_EXPECTED) {
-            pool_o += o;
-            pool_e += e;
-            pooled += 1;
-        } else {
-            chi2 += (o - e) * (o - e) / e;
-            dof += 1;
-        }
-    }
-    if pool_e > 0.0 {
-        chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
-        dof += 1;
-    }
-    if dof < 2 {
-        return Err(format!("only {dof} categories after pooling"));
-    }
-    let dof = dof - 1;
-    Ok(Chi2 {
-        chi2,
-        dof,
-        p: chi2_survival(chi2, dof as f64),
-        pooled,
-    })
-}
-
-/// ln Gamma(x) for x > 0 (Lanczos, g = 7, 9 terms; ~1e-15 relative).
-fn ln_gamma(x: f64) -> f64 {
-    const C: [f64; 9] = [
-        0.999_999_999_999_809_9,
-        676.520_368_121_885_1,
-        -1_259.139_216_722_402_8,
-        771.323_428_777_653_1,
-        -176.615_029_162_140_6,
-        12.507_343_278_686_905,
-        -0.138_571_095_265_720_12,
-        9.984_369_578_019_572e-6,
-        1.505_632_735_149_311_6e-7,
-    ];
-    if x < 0.5 {
-        // Reflection.
-        return (PI / (PI * x).sin()).ln() - ln_gamma(1.0 - x);
-    }
-    let x = x - 1.0;
-    let t = x + 7.5;
-    let mut a = C[0];
-    for (i, &c) in C.iter().enumerate().skip(1) {
-        a += c / (x + i as f64);
-    }
-    0.5 * (2.0 * PI).ln() + (x + 0.5) * t.ln() - t + a.ln()
-}
-
-/// The regularised upper incomplete gamma function Q(a, x): by its series for x < a + 1,
-/// else by its continued fraction (Lentz), as in Numerical Recipes' `gammq`.
-fn gamma_q(a: f64, x: f64) -> f64 {
-    if x <= 0.0 {
-        return 1.0;
-    }
-    let front = (-x + a * x.ln() - ln_gamma(a)).exp();
-    if x < a + 1.0 {
-        let (mut ap, mut term, mut sum) = (a, 1.0 / a, 1.0 / a);
-        for _ in 0..10_000 {
-            ap += 1.0;
-            term *= x / ap;
-            sum += term;
-            if term.abs() < sum.abs() * 1e-15 {
-                break;
-            }
-        }
-        (1.0 - sum * front).max(0.0)
-    } else {
-        let tiny = 1e-300;
-        let mut b = x + 1.0 - a;
-        let mut c = 1.0 / tiny;
-        let mut d = 1.0 / b;
-        let mut h = d;
-        for i in 1..10_000 {
-            let an = -(i as f64) * (i as f64 - a);
-            b += 2.0;
-            d = an * d + b;
-            if d.abs() < tiny {
-                d = tiny;
-            }
-            c = b + an / c;
-            if c.abs() < tiny {
-                c = tiny;
-            }
-            d = 1.0 / d;
-            let delta = d * c;
-            h *= delta;
-            if (delta - 1.0).abs() < 1e-15 {
-                break;
-            }
-        }
-        front * h
-    }
-}
-
-/// P(X >= chi2) for X chi-square distributed with `dof` degrees of freedom.
-fn chi2_survival(chi2: f64, dof: f64) -> f64 {
-    gamma_q(0.5 * dof, 0.5 * chi2)
+    sidak_level(0.99, CHI2_TESTS)
 }
 
 #[test]
@@ -784,31 +396,6 @@ fn binnings(m: &Material, wo: Vec3) -> Vec<Binning> {
         b.push(Binning::lobe(wo, ggx_alpha(m.roughness)));
     }
     b
-}
-
-/// Chi-square of the directions `wis` (None: refused) drawn for `wo`, against `pdf`.
-fn chi2_of(
-    wis: &[Option<Vec3>],
-    bin: &Binning,
-    pdf: &dyn Fn(Vec3) -> f64,
-) -> (Result<Chi2, String>, f64) {
-    let n = wis.len() as f64;
-    let mut observed = vec![0.0; CELLS + 1];
-    for wi in wis {
-        observed[wi.and_then(|w| bin.cell(w)).unwrap_or(CELLS)] += 1.0;
-    }
-    let (expected, integration) = bin.expected(pdf, n);
-    (chi2_test(&observed, &expected, n), integration)
-}
-
-fn show_chi2(r: &Result<Chi2, String>) -> String {
-    match r {
-        Ok(c) => format!(
-            "chi2 {:.1}, dof {}, p {:.4} ({} pooled)",
-            c.chi2, c.dof, c.p, c.pooled
-        ),
-        Err(e) => e.clone(),
-    }
 }
 
 /// CHI2_SAMPLES CPU samples of `m` for `wo`, from stream `s`.
@@ -914,14 +501,6 @@ fn radiance_scaling(wo: Vec3, wi: Vec3, eta: f32) -> f32 {
     }
 }
 
-/// The directional albedo of a weight sequence: mean and standard error of the mean.
-fn mean_se(xs: &[f64]) -> (f64, f64) {
-    let n = xs.len() as f64;
-    let mean = xs.iter().sum::<f64>() / n;
-    let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (mean, (var / n).sqrt())
-}
-
 /// The directional albedo by quadrature of `bsdf_eval` over the sphere, in polar
 /// coordinates (theta', phi') about the mirror direction with theta' = pi s^2, so that
 /// narrow lobes get many nodes: 2000 x 512 midpoint nodes.
@@ -985,8 +564,8 @@ fn furnace_of(wo: Vec3, samples: &[Option<(Vec3, Vec3, f32)>]) -> Furnace {
         .filter(|s| s.is_some_and(|(wi, ..)| wi.z * wo.z > 0.0))
         .count() as f64
         / samples.len() as f64;
-    let (albedo, se) = mean_se(&weights);
-    let (unscaled, unscaled_se) = mean_se(&unscaled);
+    let (albedo, se) = mean_and_stderr(&weights);
+    let (unscaled, unscaled_se) = mean_and_stderr(&unscaled);
     Furnace {
         albedo,
         se,
@@ -1097,129 +676,6 @@ fn white_furnace() {
 // ---------------------------------------------------------------------------------------
 // The WGSL kernels.
 
-/// A scene whose material table is `all_materials()` (one small triangle each) and whose
-/// sky is white, for the test kernels to read materials from.
-fn gpu_scene() -> (RenderScene, RenderSettings) {
-    let materials = all_materials();
-    let mut mesh = Mesh::default();
-    for i in 0..materials.len() as u32 {
-        let base = mesh.positions.len() as u32;
-        let o = Vec3::new(i as f32, 0.0, 0.0);
-        mesh.positions.extend([
-            o,
-            o + Vec3::new(0.5, 0.0, 0.0),
-            o + Vec3::new(0.0, 0.5, 0.0),
-        ]);
-        mesh.triangles.push(Triangle {
-            p: [base, base + 1, base + 2],
-            n: [NO_NORMAL; 3],
-            material: i,
-        });
-    }
-    let camera = Camera::new(
-        Vec3::new(3.0, 0.0, 10.0),
-        Vec3::new(3.0, 0.0, 0.0),
-        Vec3::Y,
-        40.0,
-        0.0,
-        None,
-    )
-    .unwrap();
-    let settings = RenderSettings {
-        width: 16,
-        height: 16,
-        spp: 1,
-        max_depth: 4,
-        seed: 0,
-    };
-    let scene = common::scene(mesh, materials, camera, Sky::Constant(Vec3::ONE), settings);
-    (
-        RenderScene::new(&scene, &BuildParams::default()).expect("BVH"),
-        settings,
-    )
-}
-
-/// A GPU sample: wi, pdf, weight, valid, delta.
-#[derive(Clone, Copy, Debug)]
-struct GpuSample {
-    wi: Vec3,
-    pdf: f32,
-    weight: Vec3,
-    valid: bool,
-    delta: bool,
-}
-
-/// Runs `test_bsdf_sample` over (material index, wo, u) cases.
-fn gpu_sample(
-    ctx: &meshtrace::render::gpu::GpuContext,
-    rs: &RenderScene,
-    settings: &RenderSettings,
-    cases: &[(u32, Vec3, [f32; 3])],
-) -> Vec<GpuSample> {
-    let input: Vec<[u32; 4]> = cases
-        .iter()
-        .flat_map(|&(m, wo, u)| {
-            [
-                [wo.x.to_bits(), wo.y.to_bits(), wo.z.to_bits(), m],
-                [u[0].to_bits(), u[1].to_bits(), u[2].to_bits(), 0],
-            ]
-        })
-        .collect();
-    let out = run_test_kernel(ctx, rs, settings, "test_bsdf_sample", &input)
-        .unwrap_or_else(|e| panic!("test_bsdf_sample: {e}"));
-    assert_eq!(out.len(), input.len());
-    out.chunks(2)
-        .map(|o| GpuSample {
-            wi: Vec3::new(
-                f32::from_bits(o[0][0]),
-                f32::from_bits(o[0][1]),
-                f32::from_bits(o[0][2]),
-            ),
-            pdf: f32::from_bits(o[0][3]),
-            weight: Vec3::new(
-                f32::from_bits(o[1][0]),
-                f32::from_bits(o[1][1]),
-                f32::from_bits(o[1][2]),
-            ),
-            valid: o[1][3] & 1 != 0,
-            delta: o[1][3] & 2 != 0,
-        })
-        .collect()
-}
-
-/// Runs `test_bsdf_eval` over (material index, wo, wi) cases: (f |cos|, pdf) each.
-fn gpu_eval(
-    ctx: &meshtrace::render::gpu::GpuContext,
-    rs: &RenderScene,
-    settings: &RenderSettings,
-    cases: &[(u32, Vec3, Vec3)],
-) -> Vec<(Vec3, f32)> {
-    let input: Vec<[u32; 4]> = cases
-        .iter()
-        .flat_map(|&(m, wo, wi)| {
-            [
-                [wo.x.to_bits(), wo.y.to_bits(), wo.z.to_bits(), m],
-                [wi.x.to_bits(), wi.y.to_bits(), wi.z.to_bits(), 0],
-            ]
-        })
-        .collect();
-    let out = run_test_kernel(ctx, rs, settings, "test_bsdf_eval", &input)
-        .unwrap_or_else(|e| panic!("test_bsdf_eval: {e}"));
-    assert_eq!(out.len(), input.len());
-    out.chunks(2)
-        .map(|o| {
-            (
-                Vec3::new(
-                    f32::from_bits(o[0][0]),
-                    f32::from_bits(o[0][1]),
-                    f32::from_bits(o[0][2]),
-                ),
-                f32::from_bits(o[0][3]),
-            )
-        })
-        .collect()
-}
-
 /// GPU samples per material and furnace wo.
 const GPU_FURNACE_SAMPLES: u32 = 4_000;
 
@@ -1231,7 +687,7 @@ fn gpu_pdf_consistency_and_furnace() {
     let Some(ctx) = common::gpu("gpu_pdf_consistency_and_furnace") else {
         return;
     };
-    let (rs, settings) = gpu_scene();
+    let (rs, settings) = material_table(all_materials());
     let mats = all_materials();
     assert_eq!(
         rs.materials, mats,
@@ -1249,7 +705,7 @@ fn gpu_pdf_consistency_and_furnace() {
         }
     }
     let t0 = std::time::Instant::now();
-    let out = gpu_sample(&ctx, &rs, &settings, &cases);
+    let out = gpu_bsdf_samples(&ctx, &rs, &settings, &cases);
     // Evaluate every valid sample's direction.
     let eval_cases: Vec<(u32, Vec3, Vec3)> = cases
         .iter()
@@ -1257,7 +713,7 @@ fn gpu_pdf_consistency_and_furnace() {
         .filter(|(_, g)| g.valid)
         .map(|(&(m, wo, _), g)| (m, wo, g.wi))
         .collect();
-    let evals = gpu_eval(&ctx, &rs, &settings, &eval_cases);
+    let evals = gpu_bsdf_evals(&ctx, &rs, &settings, &eval_cases);
     eprintln!(
         "gpu: {} sample cases, {} eval cases in {:.2} s",
         cases.len(),
@@ -1268,14 +724,14 @@ fn gpu_pdf_consistency_and_furnace() {
         .iter()
         .map(|m| {
             [
-                Worst::new(format!(
-                    "gpu: {}: sampled pdf vs bsdf_pdf (relative / tolerance)",
-                    material_name(m)
-                )),
-                Worst::new(format!(
-                    "gpu: {}: weight vs eval / pdf (relative / tolerance)",
-                    material_name(m)
-                )),
+                Worst::new(
+                    format!("{}: sampled pdf vs bsdf_pdf (relative)", material_name(m)),
+                    BASE_TOLERANCE,
+                ),
+                Worst::new(
+                    format!("{}: weight vs eval / pdf (relative)", material_name(m)),
+                    BASE_TOLERANCE,
+                ),
             ]
         })
         .collect();
@@ -1308,14 +764,14 @@ fn gpu_pdf_consistency_and_furnace() {
             assert!(f == Vec3::ZERO && pdf == 0.0, "{}", show());
             continue;
         }
-        let tol = ggx_tolerance(mat, wo, g.wi, 1e-4);
-        errs[m as usize][0].add(rel(pdf, g.pdf, 1e-6) / tol, show);
-        errs[m as usize][1].add(rel3(g.weight, f / g.pdf, 1e-6) / tol, show);
+        let tol = tolerance(mat, wo, g.wi);
+        errs[m as usize][0].add_tol(rel(pdf, g.pdf, 1e-6), tol, show);
+        errs[m as usize][1].add_tol(rel3(g.weight, f / g.pdf, 1e-6), tol, show);
     }
     for (m, e) in mats.iter().zip(&errs) {
         if !bsdf_is_delta(m) {
-            e[0].check(1.0);
-            e[1].check(1.0);
+            e[0].check("gpu");
+            e[1].check("gpu");
         }
     }
     for (k, theta, wo, range) in groups {
@@ -1376,7 +832,7 @@ fn gpu_chi2() {
     let Some(ctx) = common::gpu("gpu_chi2") else {
         return;
     };
-    let (rs, settings) = gpu_scene();
+    let (rs, settings) = material_table(all_materials());
     let mats = all_materials();
     let wo = chi2_wos()[1].1;
     let tested: Vec<usize> = (0..mats.len())
@@ -1388,7 +844,7 @@ fn gpu_chi2() {
         cases.extend((0..CHI2_SAMPLES).map(|i| (k as u32, wo, u3(s, i))));
     }
     let t0 = std::time::Instant::now();
-    let out = gpu_sample(&ctx, &rs, &settings, &cases);
+    let out = gpu_bsdf_samples(&ctx, &rs, &settings, &cases);
     eprintln!(
         "gpu chi2: {} samples in {:.2} s",
         out.len(),

@@ -3,17 +3,17 @@
 
 mod common;
 
+use common::rand::hashed_unit;
 use glam::Vec3;
 use meshtrace::bvh::{BuildParams, Bvh, traverse_any, traverse_closest, validate};
 use meshtrace::geometry::{ShearedRay, T_INF, TriVerts, intersect_triangle};
 use meshtrace::math::{Aabb, Ray};
-use meshtrace::render::rng::pcg4d;
 use meshtrace::scene::{self, sphere::icosphere};
 use rayon::prelude::*;
 
 /// Deterministic uniform floats in [0, 1) for test case `i`, stream `k`.
 fn rand(i: u32, k: u32) -> f32 {
-    (pcg4d([i, k, 0x5eed, 1])[0] >> 8) as f32 / 16_777_216.0
+    hashed_unit(1, k, i, 0x5eed)
 }
 
 fn rand3(i: u32, k: u32) -> Vec3 {
@@ -166,7 +166,7 @@ fn sampled_splits_keep_the_tree_exact_and_cheap() {
 
 #[test]
 fn closest_hit_matches_brute_force_on_the_stanford_bunny() {
-    let Some(path) = common::shared_mesh("stanford-bunny.obj") else {
+    let Some(path) = common::fs::shared_mesh("stanford-bunny.obj") else {
         return;
     };
     let scene = scene::load_scene(&path).expect("the bunny loads");

@@ -4,50 +4,14 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use common::fs::{TempDir, data};
 use std::process::Command;
-
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(name: &str) -> Self {
-        let p = std::env::temp_dir().join(format!("meshtrace-cli-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&p);
-        std::fs::create_dir_all(&p).unwrap();
-        Self(p)
-    }
-    fn write(&self, name: &str, text: &str) -> PathBuf {
-        let p = self.0.join(name);
-        std::fs::write(&p, text).unwrap();
-        p
-    }
-    fn listing(&self) -> Vec<String> {
-        let mut v: Vec<String> = std::fs::read_dir(&self.0)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        v.sort();
-        v
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name)
-}
 
 /// Runs `meshtrace args...` in `dir`; returns its output.
 fn output(dir: &TempDir, args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_meshtrace"))
         .args(args)
-        .current_dir(&dir.0)
+        .current_dir(dir.path())
         .env("NODEVICE_SELECT", "1")
         .output()
         .unwrap()
@@ -63,12 +27,12 @@ fn run(dir: &TempDir, args: &[&str]) -> (i32, String) {
 /// Asserts a failed run: exit 1, one `error:` line containing every `needle`, no panic, and
 /// nothing left in the folder but the inputs.
 fn assert_fails(dir: &TempDir, args: &[&str], needles: &[&str]) {
-    let before = dir.listing();
+    let before = dir.entries();
     let (code, stderr) = run(dir, args);
     let ctx = format!(
         "meshtrace {args:?} in {}: exit {code}, stderr:\n{stderr}\nfiles: {:?}",
-        dir.0.display(),
-        dir.listing()
+        dir.path().display(),
+        dir.entries()
     );
     assert_eq!(code, 1, "{ctx}");
     assert!(!stderr.contains("panicked"), "{ctx}");
@@ -83,7 +47,7 @@ fn assert_fails(dir: &TempDir, args: &[&str], needles: &[&str]) {
         parts.windows(2).all(|w| w[0] != w[1]),
         "repeated cause: {ctx}"
     );
-    assert_eq!(dir.listing(), before, "{ctx}");
+    assert_eq!(dir.entries(), before, "{ctx}");
 }
 
 const CAMERA: &str = "[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\n";
@@ -261,7 +225,7 @@ fn warnings_do_not_stop_a_render() {
     );
     assert_eq!(code, 0, "{stderr}");
     assert!(stderr.contains("warning: dropped 2 degenerate"), "{stderr}");
-    assert_eq!(dir.listing(), vec!["out.png".to_string()]);
+    assert_eq!(dir.entries(), vec!["out.png".to_string()]);
 }
 
 #[test]
@@ -276,7 +240,7 @@ fn a_render_writes_exactly_its_output() {
     );
     assert_eq!(code, 0, "{stderr}");
     assert_eq!(stderr, "", "--quiet prints nothing");
-    assert_eq!(dir.listing(), vec!["x.exr".to_string()]);
+    assert_eq!(dir.entries(), vec!["x.exr".to_string()]);
     let (code, stderr) = run(
         &dir,
         &[
@@ -316,7 +280,7 @@ fn interruption_writes_the_partial_image_unless_told_not_to() {
         args.extend(flag);
         let child = Command::new(env!("CARGO_BIN_EXE_meshtrace"))
             .args(&args)
-            .current_dir(&dir.0)
+            .current_dir(dir.path())
             .stderr(std::process::Stdio::piped())
             .spawn()
             .unwrap();
@@ -334,7 +298,7 @@ fn interruption_writes_the_partial_image_unless_told_not_to() {
             "{stderr}"
         );
         assert_eq!(
-            dir.listing(),
+            dir.entries(),
             if expect_file {
                 vec!["part.png".to_string()]
             } else {
@@ -342,7 +306,7 @@ fn interruption_writes_the_partial_image_unless_told_not_to() {
             },
             "{stderr}"
         );
-        let _ = std::fs::remove_file(dir.0.join("part.png"));
+        let _ = std::fs::remove_file(dir.join("part.png"));
     }
 }
 

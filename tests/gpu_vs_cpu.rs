@@ -2,25 +2,13 @@
 
 mod common;
 
+use common::scenes::{cornell, square};
+use common::stats::mean_and_sd;
 use common::{cpu_render, gpu_render};
-use meshtrace::bvh::BuildParams;
 use meshtrace::film::Film;
+use meshtrace::render::RenderJob;
 use meshtrace::render::gpu::GpuRenderer;
-use meshtrace::render::{RenderJob, RenderScene};
-use meshtrace::scene::{RenderSettings, builtin};
-
-fn cornell(width: u32, spp: u32, seed: u32) -> (RenderScene, RenderSettings) {
-    let scene = builtin::load_builtin("cornell").unwrap();
-    let rs = RenderScene::new(&scene, &BuildParams::default()).unwrap();
-    let settings = RenderSettings {
-        width,
-        height: width,
-        spp,
-        max_depth: 8,
-        seed,
-    };
-    (rs, settings)
-}
+use meshtrace::scene::RenderSettings;
 
 /// The film's sums as bits, for exact comparisons.
 fn bits(film: &Film) -> Vec<u32> {
@@ -59,7 +47,8 @@ fn gpu_and_cpu_agree_within_noise() {
     let Some(ctx) = common::gpu("gpu_and_cpu_agree_within_noise") else {
         return;
     };
-    let (rs, s) = cornell(64, 32, 1);
+    let (rs, _) = cornell();
+    let s = square(64, 32, 8, 1);
     let gpu = channels(&gpu_render(&ctx, &rs, &RenderJob::new(s)));
     let cpu_a = channels(&cpu_render(
         &rs,
@@ -70,13 +59,8 @@ fn gpu_and_cpu_agree_within_noise() {
         &RenderJob::new(RenderSettings { seed: 3, ..s }),
     ));
     let n = gpu.len() as f64;
-    let stats = |x: &[f64]| {
-        let m = x.iter().sum::<f64>() / n;
-        let sd = (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
-        (m, sd)
-    };
     let d: Vec<f64> = gpu.iter().zip(&cpu_a).map(|(g, c)| g - c).collect();
-    let (mean_d, sd_d) = stats(&d);
+    let (mean_d, sd_d) = mean_and_sd(&d);
     assert!(
         mean_d.abs() < 5.0 * sd_d / n.sqrt(),
         "mean difference {mean_d} vs standard error {}",
@@ -88,8 +72,8 @@ fn gpu_and_cpu_agree_within_noise() {
         .zip(&cpu_a)
         .map(|(b, a)| (b - a).abs())
         .collect();
-    let (m_gc, sd_gc) = stats(&abs_gc);
-    let (m_cc, _) = stats(&abs_cc);
+    let (m_gc, sd_gc) = mean_and_sd(&abs_gc);
+    let (m_cc, _) = mean_and_sd(&abs_cc);
     let bound = m_cc + 5.0 * 2f64.sqrt() * sd_gc / n.sqrt();
     eprintln!("mean |G - C| = {m_gc:.5}, mean |C' - C| = {m_cc:.5}, bound {bound:.5}");
     assert!(
@@ -105,7 +89,8 @@ fn gpu_replays_the_cpu_paths() {
     let Some(ctx) = common::gpu("gpu_replays_the_cpu_paths") else {
         return;
     };
-    let (rs, s) = cornell(64, 8, 5);
+    let (rs, _) = cornell();
+    let s = square(64, 8, 8, 5);
     let job = RenderJob::new(s);
     let gpu = channels(&gpu_render(&ctx, &rs, &job));
     let cpu = channels(&cpu_render(&rs, &job));
@@ -120,7 +105,8 @@ fn gpu_renders_are_deterministic() {
     let Some(ctx) = common::gpu("gpu_renders_are_deterministic") else {
         return;
     };
-    let (rs, s) = cornell(48, 8, 9);
+    let (rs, _) = cornell();
+    let s = square(48, 8, 8, 9);
     let job = RenderJob::new(s);
     let a = gpu_render(&ctx, &rs, &job);
     let b = gpu_render(&ctx, &rs, &job);
@@ -137,7 +123,8 @@ fn a_renderer_session_renders_many_jobs() {
     let Some(ctx) = common::gpu("a_renderer_session_renders_many_jobs") else {
         return;
     };
-    let (rs, s) = cornell(48, 8, 4);
+    let (rs, _) = cornell();
+    let s = square(48, 8, 8, 4);
     let job = RenderJob::new(s);
     let fresh = gpu_render(&ctx, &rs, &job);
     assert!(
@@ -179,7 +166,8 @@ fn a_renderer_session_renders_many_jobs() {
 /// Renders of disjoint sample ranges merge into the full render, bit for bit on the CPU.
 #[test]
 fn sample_ranges_merge_into_the_full_render() {
-    let (rs, s) = cornell(32, 8, 4);
+    let (rs, _) = cornell();
+    let s = square(32, 8, 8, 4);
     let full = cpu_render(&rs, &RenderJob::new(s));
     let mut first = cpu_render(&rs, &RenderJob::new(s).with_samples(0..3));
     let second = cpu_render(&rs, &RenderJob::new(s).with_samples(3..8));

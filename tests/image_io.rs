@@ -1,41 +1,12 @@
 //! The film's image files: what each format keeps of the radiance, atomic writes, merging
 //! of sample ranges, and the sRGB transfer function.
 
+mod common;
+
+use common::fs::TempDir;
 use glam::Vec3;
 use meshtrace::film::{Film, FilmError, Format, linear_to_srgb8, read_linear, srgb8_to_linear};
-use std::path::{Path, PathBuf};
-
-/// A fresh, empty directory for one test; removed by `Drop`.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(name: &str) -> Self {
-        let dir =
-            std::env::temp_dir().join(format!("meshtrace-test-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        Self(dir)
-    }
-
-    fn path(&self) -> &Path {
-        &self.0
-    }
-
-    fn entries(&self) -> Vec<String> {
-        let mut names: Vec<String> = std::fs::read_dir(&self.0)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        names.sort();
-        names
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
+use std::path::Path;
 
 const VALUES: [f32; 11] = [0.0, 0.5, 1.0, 3.7, 1e-3, 0.18, 0.02, 2.0, 0.75, 10.0, 0.04];
 

@@ -21,18 +21,14 @@
 
 mod common;
 
+use common::fs::root;
 use glam::Vec3;
 use meshtrace::bvh::BuildParams;
 use meshtrace::film::{Film, read_linear};
 use meshtrace::render::{RenderJob, RenderScene};
 use meshtrace::scene::load_scene;
-use std::path::Path;
 
 const MAX_RATIO: f64 = 1.3;
-
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
 
 /// The text of tests/references/<scene>.json.
 fn reference_json(scene: &str) -> String {

@@ -1,16 +1,13 @@
 //! OBJ and MTL files as the scene format maps them (shared/specs/scene-format.md,
 //! "OBJ and MTL" and "A bare OBJ"): through `load_obj`, scene files and bare OBJs.
 
+mod common;
+
+use common::fs::{TempDir, data};
 use glam::Vec3;
 use meshtrace::scene::obj::{Fs, MeshPart, load_obj};
 use meshtrace::scene::{Material, MaterialKind, NO_NORMAL, SceneError, Sky, load_scene};
-use std::path::{Path, PathBuf};
-
-fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name)
-}
+use std::path::PathBuf;
 
 fn obj(name: &str) -> MeshPart {
     load_obj(&data(name), &Fs).unwrap_or_else(|e| panic!("{name}: {e}"))
@@ -484,11 +481,10 @@ fn scene_file_error_names_the_obj_and_its_line() {
 
 #[test]
 fn odd_obj_path_stays_on_one_line_with_its_line_number() {
-    let dir = temp_dir("obj-line-name");
+    let dir = TempDir::new("obj-line-name");
     let path = dir.join("two\nlines.obj");
     std::fs::copy(data("bad_vn.obj"), &path).unwrap();
     let result = load_obj(&path, &Fs);
-    std::fs::remove_dir_all(&dir).unwrap();
     let msg = result.unwrap_err().to_string();
     assert!(!msg.contains('\n'), "{msg}");
     assert!(msg.contains("two\\nlines.obj:5: "), "{msg}");
@@ -503,11 +499,9 @@ fn missing_obj_is_io_error() {
 
 #[test]
 fn obj_without_faces_is_an_error_for_a_bare_load() {
-    let dir = temp_dir("no-faces");
-    let path = dir.join("points.obj");
-    std::fs::write(&path, "v 0 0 0\nv 1 0 0\n").unwrap();
+    let dir = TempDir::new("no-faces");
+    let path = dir.write("points.obj", "v 0 0 0\nv 1 0 0\n");
     let result = load_scene(&path);
-    std::fs::remove_dir_all(&dir).unwrap();
     let msg = result.unwrap_err().to_string();
     assert!(
         msg.contains("points.obj") && msg.contains("no faces"),
@@ -556,12 +550,9 @@ fn bare_obj_frames_the_bounding_box() {
 
 #[test]
 fn suzanne() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes");
-    let path = dir.join("suzanne.obj");
-    if !path.exists() {
-        println!("skipped: ../shared/meshes absent");
+    let Some(path) = common::fs::shared_mesh("suzanne.obj") else {
         return;
-    }
+    };
     // Expected triangle count from the file itself: a fan gives n - 2 per n-gon.
     let text = std::fs::read_to_string(&path).unwrap();
     let arities: Vec<usize> = text
@@ -585,28 +576,20 @@ fn suzanne() {
     assert_eq!(expected, 2 * quads + tris);
 }
 
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("meshtrace-test-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 /// Loads `tests/data/{obj}`, copied to `m.obj`, through a scene file naming it, in a fresh
 /// folder `name`; returns the folder (removed again) and the result.
 fn load_through_scene(
     name: &str,
     obj: &str,
 ) -> (PathBuf, Result<meshtrace::scene::Scene, SceneError>) {
-    let dir = temp_dir(name);
+    let dir = TempDir::new(name);
     std::fs::copy(data(obj), dir.join("m.obj")).unwrap();
-    std::fs::write(
-        dir.join("s.toml"),
+    let scene = dir.write(
+        "s.toml",
         "[camera]\nposition = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\n[[objects]]\nmesh = \"m.obj\"\n",
-    )
-    .unwrap();
-    let result = load_scene(&dir.join("s.toml"));
-    std::fs::remove_dir_all(&dir).unwrap();
-    (dir, result)
+    );
+    let result = load_scene(&scene);
+    (dir.path().to_path_buf(), result)
 }
 
 #[test]
@@ -629,13 +612,12 @@ fn unknown_usemtl_is_a_warning_with_its_line() {
 /// Writes `files` (name, contents) into a fresh folder `name` and loads its `m.obj`;
 /// returns the folder (removed again) and the result.
 fn load_files(name: &str, files: &[(&str, &[u8])]) -> (PathBuf, Result<MeshPart, SceneError>) {
-    let dir = temp_dir(name);
+    let dir = TempDir::new(name);
     for (file, contents) in files {
-        std::fs::write(dir.join(file), contents).unwrap();
+        dir.write(file, contents);
     }
     let result = load_obj(&dir.join("m.obj"), &Fs);
-    std::fs::remove_dir_all(&dir).unwrap();
-    (dir, result)
+    (dir.path().to_path_buf(), result)
 }
 
 /// The name of each triangle's material (`None` for the default).
@@ -851,11 +833,8 @@ fn bare_obj_is_framed_by_the_vertices_its_faces_use() {
         })
         .collect();
     let padded = format!("v -100 -100 -100\n{shifted}v 100 100 100\n");
-    let dir = temp_dir("unused-vertices");
-    let path = dir.join("padded.obj");
-    std::fs::write(&path, padded).unwrap();
-    let padded = load_scene(&path);
-    std::fs::remove_dir_all(&dir).unwrap();
+    let dir = TempDir::new("unused-vertices");
+    let padded = load_scene(&dir.write("padded.obj", padded));
     let padded = padded.unwrap();
     let plain = load_scene(&data("box.obj")).unwrap();
     assert_eq!(padded.mesh.triangles.len(), 12);

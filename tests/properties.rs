@@ -659,11 +659,11 @@ fn moller_trumbore_hits(ray: &Ray, [v0, v1, v2]: [Vec3; 3]) -> bool {
     u >= 0.0 && v >= 0.0 && u + v <= 1.0 && e2.dot(q) * inv > 0.0
 }
 
-/// Rays from inside a closed mesh ([`common::closed_mesh_probe`]) all hit it: no ray slips
+/// Rays from inside a closed mesh ([`common::scenes::closed_mesh_probe`]) all hit it: no ray slips
 /// between two triangles that share an edge.
 #[test]
 fn no_ray_escapes_a_closed_mesh() {
-    let probe = common::closed_mesh_probe();
+    let probe = common::scenes::closed_mesh_probe();
     let tris: Vec<[Vec3; 3]> = probe
         .faces
         .iter()

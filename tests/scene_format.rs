@@ -2,21 +2,20 @@
 //! `load_scene`: exact values of a full scene, the defaults, and every error, each of
 //! which must be one line naming the file and the field or line at fault.
 
+mod common;
+
+use common::fs::{TempDir, data};
 use glam::Vec3;
 use meshtrace::scene::builtin::load_builtin;
 use meshtrace::scene::{
     Material, MaterialKind, NO_NORMAL, RenderSettings, Scene, SceneError, Sky, load_scene,
     parse_scene,
 };
-use std::path::{Path, PathBuf};
-
-fn data_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data")
-}
+use std::path::PathBuf;
 
 /// A path in the fixture directory (so relative mesh paths resolve there).
 fn scene_path(name: &str) -> PathBuf {
-    data_dir().join(format!("{name}.toml"))
+    data(&format!("{name}.toml"))
 }
 
 fn parse_ok(name: &str, text: &str) -> Scene {
@@ -102,7 +101,7 @@ fn assert_vec(actual: Vec3, expected: [f32; 3], tol: f32, what: &str) {
 // ---------------------------------------------------------------- a full scene
 
 fn full_scene() -> Scene {
-    let path = data_dir().join("full.toml");
+    let path = data("full.toml");
     let text = std::fs::read_to_string(&path).unwrap();
     parse_scene(&text, &path).unwrap_or_else(|e| panic!("full.toml: {e}"))
 }
@@ -111,10 +110,7 @@ fn full_scene() -> Scene {
 fn full_scene_camera_settings_sky() {
     let s = full_scene();
     assert!(s.warnings.is_empty(), "warnings: {:?}", s.warnings);
-    assert_eq!(
-        s.path.as_deref(),
-        Some(data_dir().join("full.toml").as_path())
-    );
+    assert_eq!(s.path.as_deref(), Some(data("full.toml").as_path()));
     let c = &s.camera;
     assert_eq!(c.position, Vec3::new(1.0, 2.0, 3.0));
     assert_vec(c.forward, [0.0, 0.0, -1.0], 1e-6, "forward");
@@ -339,18 +335,15 @@ fn matrix_equals_equivalent_trs() {
 fn normals_follow_the_transform() {
     // A triangle in the XZ plane with normal +Y, non-uniformly scaled and rotated 90
     // degrees about Z: the normal must become -X (inverse transpose, renormalised).
-    let dir = std::env::temp_dir().join(format!("meshtrace-test-{}-normals", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(
-        dir.join("flat.obj"),
+    let dir = TempDir::new("normals");
+    dir.write(
+        "flat.obj",
         "v 0 0 0\nv 0 0 1\nv 1 0 0\nvn 0 1 0\nf 1//1 2//1 3//1\n",
-    )
-    .unwrap();
+    );
     let text = with_cam(
         "[[objects]]\nmesh = \"flat.obj\"\nscale = [3.0, 0.5, 2.0]\nrotate = [0.0, 0.0, 90.0]\n",
     );
     let result = parse_scene(&text, &dir.join("n.toml"));
-    std::fs::remove_dir_all(&dir).unwrap();
     let s = result.unwrap();
     let t = s.mesh.triangles[0];
     for k in 0..3 {
@@ -365,7 +358,7 @@ fn normals_follow_the_transform() {
 
 #[test]
 fn load_scene_reads_the_file() {
-    let path = data_dir().join("full.toml");
+    let path = data("full.toml");
     let a = load_scene(&path).unwrap();
     let b = full_scene();
     assert_eq!(a.camera, b.camera);
@@ -378,7 +371,7 @@ fn load_scene_reads_the_file() {
 
 #[test]
 fn load_scene_missing_file_names_it() {
-    let path = data_dir().join("no_such_scene.toml");
+    let path = data("no_such_scene.toml");
     let err = load_scene(&path).unwrap_err();
     let msg = err.to_string();
     assert!(matches!(err, SceneError::Io { ref path, .. } if path.ends_with("no_such_scene.toml")));
@@ -1019,10 +1012,7 @@ fn missing_mesh_file_is_an_io_error_naming_it() {
     let msg = err.to_string();
     match &err {
         SceneError::Io { path, source } => {
-            assert_eq!(
-                *path,
-                data_dir().join("no_such_mesh.obj").display().to_string()
-            );
+            assert_eq!(*path, data("no_such_mesh.obj").display().to_string());
             assert_eq!(source.kind(), std::io::ErrorKind::NotFound);
         }
         other => panic!("expected Io, got {other:?}"),
