@@ -92,11 +92,22 @@ fn gpu_replays_the_cpu_paths() {
     let (rs, _) = cornell();
     let s = square(64, 8, 8, 5);
     let job = RenderJob::new(s);
-    let gpu = channels(&gpu_render(&ctx, &rs, &job));
-    let cpu = channels(&cpu_render(&rs, &job));
-    let frac = fraction_close(&gpu, &cpu);
+    let (gpu_film, cpu_film) = (gpu_render(&ctx, &rs, &job), cpu_render(&rs, &job));
+    let frac = fraction_close(&channels(&gpu_film), &channels(&cpu_film));
     eprintln!("{:.4}% of pixel channels agree to 1e-3", 100.0 * frac);
     assert!(frac >= 0.99, "only {frac} of pixel channels agree");
+    // The same paths trace the same rays: the films' `rays` channels agree pixel for pixel
+    // but where rounding sent a path another way.
+    let rays = |f: &Film| f.channel(Film::RAYS).unwrap().data.clone();
+    let (g, c) = (rays(&gpu_film), rays(&cpu_film));
+    let same = g.iter().zip(&c).filter(|(a, b)| a == b).count() as f64 / g.len() as f64;
+    eprintln!(
+        "{:.4}% of pixels traced the same rays ({} GPU, {} CPU)",
+        100.0 * same,
+        gpu_film.rays(),
+        cpu_film.rays()
+    );
+    assert!(same >= 0.99, "only {same} of pixels traced the same rays");
 }
 
 /// Two GPU renders with the same seed on the same adapter are bit-identical.

@@ -5,7 +5,9 @@ mod common;
 
 use common::fs::TempDir;
 use glam::Vec3;
-use meshtrace::film::{Film, FilmError, Format, linear_to_srgb8, read_linear, srgb8_to_linear};
+use meshtrace::film::{
+    Accumulation, Film, FilmError, Format, linear_to_srgb8, read_linear, srgb8_to_linear,
+};
 use std::path::Path;
 
 const VALUES: [f32; 11] = [0.0, 0.5, 1.0, 3.7, 1e-3, 0.18, 0.02, 2.0, 0.75, 10.0, 0.04];
@@ -237,6 +239,83 @@ fn merge_of_sample_halves_equals_all_samples() {
     // and the mean is the mean of the samples
     let mean0: Vec3 = (0..n).map(|k| sample(0, k)).sum::<Vec3>() / n as f32;
     assert_eq!(all.mean()[0], mean0);
+}
+
+/// A two-pixel film holding one sample range of three channels, as a renderer would fill
+/// them: a value per sample (all samples), a value per sample that hit (pixel 0's samples
+/// hit when even; pixel 1's never), and the centre ray's value where the range holds
+/// sample 0.
+fn channel_film(range: std::ops::Range<u32>) -> Film {
+    let mut film = Film::new(2, 1);
+    film.add_channel("all", 1, Accumulation::AllSamples);
+    film.add_channel("hits", 3, Accumulation::HitSamples);
+    film.add_channel("centre", 1, Accumulation::PixelCentre);
+    for k in range.clone() {
+        film.channels[1].data[0][0] += k as f32;
+        film.channels[1].data[1][0] += 1.0;
+        if k % 2 == 0 {
+            let t = &mut film.channels[2].data[0];
+            *t = [t[0] + k as f32, t[1] + 1.0, t[2] + 2.0, t[3] + 1.0];
+        }
+    }
+    if range.start == 0 {
+        film.channels[3].data = vec![[7.0, 0.0, 0.0, 1.0], [9.0, 0.0, 0.0, 1.0]];
+    }
+    film.samples = range.len() as u32;
+    film
+}
+
+/// Each accumulation rule gives its own mean, and films of disjoint sample ranges merge
+/// into the film of all of them.
+#[test]
+fn channels_follow_their_accumulation_rules_and_merge() {
+    let all = channel_film(0..6);
+    let value = |film: &Film, name: &str| film.channel_values(film.channel(name).unwrap());
+    // Pixel 0: samples 0..6 sum to 15, a mean of 2.5; pixel 1 gives 1 each time.
+    assert_eq!(
+        value(&all, "all"),
+        [Some([2.5, 0.0, 0.0]), Some([1.0, 0.0, 0.0])]
+    );
+    // Pixel 0 hit with samples 0, 2, 4: a mean of 2 over the three; pixel 1 never hit.
+    assert_eq!(value(&all, "hits"), [Some([2.0, 1.0, 2.0]), None]);
+    assert_eq!(
+        value(&all, "centre"),
+        [Some([7.0, 0.0, 0.0]), Some([9.0, 0.0, 0.0])]
+    );
+    // The parts: the centre rays come with the part that holds sample 0, in either order.
+    for split in 1..6 {
+        let (a, b) = (channel_film(0..split), channel_film(split..6));
+        assert_eq!(value(&b, "centre"), [None, None]);
+        let mut ab = a.clone();
+        ab.merge(&b);
+        let mut ba = b.clone();
+        ba.merge(&a);
+        for merged in [ab, ba] {
+            assert_eq!(merged.samples, 6);
+            for name in ["all", "hits", "centre", Film::RAYS] {
+                assert_eq!(value(&merged, name), value(&all, name), "{name} at {split}");
+            }
+        }
+    }
+}
+
+#[test]
+fn rays_are_counted_per_pixel() {
+    let mut film = Film::new(2, 2);
+    assert_eq!(film.channels[0].name, Film::RAYS);
+    film.channels[0].data[1][0] = 5.0;
+    film.channels[0].data[3][0] = 7.0;
+    assert_eq!(film.rays(), 12);
+    assert_eq!(film.texels_per_pixel(), 2);
+}
+
+#[test]
+#[should_panic]
+fn merge_of_different_channels_panics() {
+    let mut a = Film::new(2, 2);
+    let mut b = Film::new(2, 2);
+    b.add_channel("depth", 1, Accumulation::HitSamples);
+    a.merge(&b);
 }
 
 #[test]
