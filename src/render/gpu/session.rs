@@ -108,20 +108,19 @@ impl GpuRenderer {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        if self.render.is_none() {
-            self.render = Some(Pipeline::new(
+        let render = match self.render.take() {
+            Some(render) => render,
+            None => Pipeline::new(
                 &self.ctx,
                 &self.tables.layout,
                 &shader::render_source(),
                 "render",
                 0,
                 1,
-            )?);
-        }
-        let Some(render) = &self.render else {
-            unreachable!("compiled above")
+            )?,
         };
         let io_group = render.io_group(&self.ctx, &[&buffer]);
+        self.render = Some(render);
         self.film = Some(DeviceFilm {
             template,
             buffer,
