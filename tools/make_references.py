@@ -38,6 +38,8 @@ MATERIAL_SCENES = {
     "sky_gradient": ("tests/scenes/sky_gradient.toml", 16384),
     "glass_dof": ("tests/scenes/glass_dof.toml", 16384),
     "box_area": ("tests/scenes/box_area.toml", 8192),
+    # image textures; cheap per sample (no spheres or glass), hence the higher count
+    "textured": ("tests/scenes/textured.toml", 32768),
 }
 
 

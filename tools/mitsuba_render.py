@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Render one of meshtrace's scene files (TOML, version 1) with Mitsuba 3.
+"""Render one of meshtrace's scene files (TOML, version 1 plus version 2's image textures)
+with Mitsuba 3.
 
 The scene is translated into the equivalent Mitsuba scene (see
 shared/specs/scene-format.md):
@@ -14,12 +15,31 @@ shared/specs/scene-format.md):
   * diffuse -> twosided(diffuse); conductor -> twosided(conductor, material none);
     rough_conductor -> twosided(roughconductor ggx, alpha = roughness^2, material none);
     dielectric -> dielectric(int_ior = ior, ext_ior = 1); emission -> `area` emitter;
+  * textures (`albedo`/`emission = { texture, scale, strength }`, MTL map_Kd / map_Ke):
+    a `bitmap` texture (bilinear, repeat, raw) of the image decoded here to linear RGB
+    (8-bit/16-bit formats through the sRGB curve, HDR/EXR as they are), multiplied by
+    the constant factor (Kd, Ke or 1; times `strength` for emission), rows reversed
+    (see "UV orientation" below), with to_uv = scale(su, sv); roughness textures are
+    refused (see texture_value); only meshes with OBJ `vt` may use textures;
   * sky colour -> `constant`; sky gradient -> `envmap` of a lat-long bitmap whose rows
     hold lerp(horizon, zenith, 0.5 * (dir.y + 1)) (depends on dir.y only, so Mitsuba's
     azimuth convention does not matter);
   * camera -> `perspective` (or `thinlens`), fov_axis "y", fov = vfov;
   * film `hdrfilm` rgb float32 with a **box** pixel filter, sampler `independent`,
     integrator `path` (max_depth from the file, rr_depth 5).
+
+UV orientation (checked with Mitsuba 3.9.1, llvm_ad_rgb, by tools/check_texture_uv.py):
+Mitsuba's `bitmap` puts uv (0, 0) at the image's top-left texel and its `obj` loader
+flips v by default (flip_tex_coords = true: uv = (u, 1 - v)), so by default an OBJ vt of
+(0, 0) shows the image's bottom-left texel, as the scene format says; but a to_uv scale
+then multiplies the flipped coordinate, sv * (1 - v), which equals the format's sv * v
+measured from the bottom only for integer sv. So the script loads every OBJ with
+flip_tex_coords = false (uv = vt as written) and reverses the image's rows itself, and
+to_uv = scale(su, sv) is then the format's lookup at (su u, sv v) from the bottom-left
+for every scale. check_texture_uv.py renders a textured emitting quad through this
+script's own functions with an orthographic camera and compares it with a numpy
+evaluation of the format's rule (bilinear, repeat, texel centres at half-integers,
+x = u width - 0.5), at scales (1, 1), (3, 3), (2, 1.5) and (0.7, 1.3).
 
 High sample counts are rendered in passes (at most --lanes samples in flight), each
 with its own seed, and averaged; this equals one render at the full count because the
@@ -126,6 +146,182 @@ def object_matrix(obj, where):
     return T @ rot(2, r[2]) @ rot(1, r[1]) @ rot(0, r[0]) @ S
 
 
+# ---------------------------------------------------------------- textures
+
+_warned = set()
+
+
+def warn(msg):
+    """Prints a warning on stderr once (the same MTL material may be met many times)."""
+    if msg not in _warned:
+        _warned.add(msg)
+        print("mitsuba_render: warning: %s" % msg, file=sys.stderr)
+
+
+class TexRef:
+    """A textured parameter: factor (RGB) x image lookup at (su u, sv v).
+    `path` is absolute; `where` names the parameter for errors."""
+    __slots__ = ("path", "scale", "factor", "where")
+
+    def __init__(self, path, scale, factor, where):
+        self.path, self.scale, self.factor, self.where = path, scale, factor, where
+
+
+# parameters that may hold a texture table in a TOML material (pbr's are not translated)
+TEXTURABLE = ("albedo", "emission", "roughness")
+
+ROUGHNESS_TEXTURE_REFUSED = (
+    "a roughness texture cannot be translated to Mitsuba: meshtrace's GGX alpha is "
+    "(roughness x texture)^2 per lookup, which a bilinear Mitsuba bitmap (of roughness "
+    "or of alpha) does not reproduce exactly")
+
+
+def toml_texture(v, base, where, emission):
+    """{ texture = "file", scale = [su, sv], strength = s (emission only) } -> TexRef."""
+    check_keys(v, {"texture", "scale", "strength"} if emission else {"texture", "scale"}, where)
+    if "texture" not in v:
+        raise SceneError("%s: a texture table needs `texture`" % where)
+    name = v["texture"]
+    if not isinstance(name, str) or not name:
+        raise SceneError("%s.texture must be a file name" % where)
+    path = os.path.join(base, name)
+    if not os.path.isfile(path):
+        raise SceneError("%s: texture file not found: %s" % (where, path))
+    sc = v.get("scale", [1.0, 1.0])
+    if not (isinstance(sc, list) and len(sc) == 2
+            and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in sc)):
+        raise SceneError("%s.scale must be a list of 2 numbers [su, sv]" % where)
+    strength = v.get("strength", 1.0)
+    if not isinstance(strength, (int, float)) or isinstance(strength, bool):
+        raise SceneError("%s.strength must be a number" % where)
+    return TexRef(path, (float(sc[0]), float(sc[1])), [float(strength)] * 3, where)
+
+
+def resolve_toml_material(mat, base, where):
+    """A copy of a TOML material with its texture tables replaced by TexRefs."""
+    out = dict(mat)
+    for key, val in mat.items():
+        if not isinstance(val, dict):
+            continue
+        w = "%s.%s" % (where, key)
+        if key not in TEXTURABLE:
+            raise SceneError("%s: a texture is not allowed here (or not translated)" % w)
+        if key == "roughness":
+            raise SceneError("%s: %s" % (w, ROUGHNESS_TEXTURE_REFUSED))
+        out[key] = toml_texture(val, base, w, emission=(key == "emission"))
+    return out
+
+
+def uses_texture(mat):
+    return any(isinstance(v, TexRef) for v in mat.values())
+
+
+def srgb_to_linear(x):
+    """The sRGB transfer function (IEC 61966-2-1), decoding."""
+    return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)
+
+
+_images = {}
+
+
+def load_texture(mi, path, where):
+    """An image as linear RGB float64, HxWx3, row 0 = the top of the image. Integer
+    formats (8-bit PNG, JPEG, BMP, TGA; also 16-bit PNG) are sRGB-decoded, float formats
+    (HDR, EXR) taken as they are; grey images become grey RGB; alpha is dropped."""
+    if path in _images:
+        return _images[path]
+    try:
+        bmp = mi.Bitmap(path)
+    except Exception as e:  # noqa: BLE001
+        raise SceneError("%s: cannot read texture %s: %s" % (where, path, e))
+    a = np.array(bmp)
+    if a.ndim == 2:
+        a = a[:, :, None]
+    if np.issubdtype(a.dtype, np.integer):
+        x = srgb_to_linear(a.astype(np.float64) / np.iinfo(a.dtype).max)
+    else:
+        x = a.astype(np.float64)
+    ch = a.shape[2]
+    if ch in (1, 2):      # Y, YA
+        x = np.repeat(x[:, :, :1], 3, axis=2)
+    elif ch >= 3:         # RGB, RGBA
+        x = x[:, :, :3]
+    else:
+        raise SceneError("%s: texture %s has no channels" % (where, path))
+    if x.shape[0] < 1 or x.shape[1] < 1:
+        raise SceneError("%s: texture %s is empty" % (where, path))
+    _images[path] = x
+    return x
+
+
+def bitmap_texture(mi, ref):
+    """Mitsuba `bitmap` texture of factor x image, lookup at (su u, sv v) with (0, 0) at
+    the image's bottom-left: rows reversed because meshes are loaded with
+    flip_tex_coords = false (see the module docstring, "UV orientation")."""
+    img = load_texture(mi, ref.path, ref.where) * np.array(ref.factor)[None, None, :]
+    img = np.ascontiguousarray(img[::-1], dtype=np.float32)
+    return {"type": "bitmap", "bitmap": mi.Bitmap(img, mi.Bitmap.PixelFormat.RGB),
+            "raw": True, "filter_type": "bilinear", "wrap_mode": "repeat",
+            "to_uv": mi.ScalarTransform3f().scale([ref.scale[0], ref.scale[1]])}
+
+
+def colour_value(mi, v, default, where):
+    """A Mitsuba spectrum/texture for an RGB (or grey) parameter or a TexRef."""
+    if v is None:
+        v = default
+    if isinstance(v, TexRef):
+        return bitmap_texture(mi, v)
+    return rgb_spec(vec3(v, where))
+
+
+# MTL texture statements: which ones translate, which warn, which are refused
+MTL_MAP_KEYS = {"map_Kd", "map_Ke", "map_Pr", "map_Pm", "map_Bump", "map_bump", "bump", "norm",
+                "map_d", "map_Ka", "map_Ks", "map_Ns", "map_Tr", "disp", "decal", "refl",
+                "map_Ps", "map_Pc", "map_Pcr", "map_aniso", "map_anisor", "map_Ni"}
+# option flags of MTL maps and how many arguments each takes (min, max)
+MTL_MAP_FLAGS = {"-s": (1, 3), "-o": (1, 3), "-t": (1, 3), "-mm": (1, 2), "-bm": (1, 1),
+                 "-boost": (1, 1), "-texres": (1, 1), "-blendu": (1, 1), "-blendv": (1, 1),
+                 "-cc": (1, 1), "-clamp": (1, 1), "-imfchan": (1, 1), "-type": (1, 1)}
+
+
+def _is_number(t):
+    try:
+        float(t)
+        return True
+    except ValueError:
+        return False
+
+
+def parse_map(rest, where):
+    """`[-flag args ...] file name` of an MTL map -> (file name, (su, sv)). `-s su [sv
+    [sw]]` sets the scale (missing ones 1); every other flag is ignored with a warning."""
+    tok = rest.split()
+    scale = (1.0, 1.0)
+    i = 0
+    while i < len(tok) and tok[i].startswith("-") and not _is_number(tok[i]):
+        flag = tok[i]
+        lo, hi = MTL_MAP_FLAGS.get(flag, (0, 3))
+        args = []
+        i += 1
+        numeric = flag in ("-s", "-o", "-t", "-mm", "-bm", "-boost", "-texres") or \
+            flag not in MTL_MAP_FLAGS
+        while len(args) < hi and i < len(tok) - 1 and (not numeric or _is_number(tok[i])):
+            args.append(tok[i])
+            i += 1
+        if len(args) < lo:
+            raise SceneError("%s: option %s needs %d argument(s)" % (where, flag, lo))
+        if flag == "-s":
+            s = [float(x) for x in args] + [1.0, 1.0]
+            scale = (s[0], s[1])
+        else:
+            warn("%s: option %s%s ignored" % (where, flag,
+                                              "" if flag in MTL_MAP_FLAGS else " (unknown)"))
+    name = " ".join(tok[i:])
+    if not name:
+        raise SceneError("%s: no file name" % where)
+    return name, scale
+
+
 def read_mtl(path):
     mats = {}
     cur = None
@@ -137,7 +333,9 @@ def read_mtl(path):
                     continue
                 if tok[0] == "newmtl":
                     cur = " ".join(tok[1:])
-                    mats[cur] = {}
+                    mats[cur] = {"_mtl": path}
+                elif cur is not None and tok[0] in MTL_MAP_KEYS and len(tok) >= 2:
+                    mats[cur][tok[0]] = line.strip().split(None, 1)[1]   # the raw rest
                 elif cur is not None and len(tok) >= 2:
                     vals = []
                     for x in tok[1:]:
@@ -152,8 +350,10 @@ def read_mtl(path):
     return mats
 
 
-def mtl_to_material(m):
-    """Our material table from MTL entries (scene-format.md, 'OBJ and MTL')."""
+def mtl_to_material(m, name="?"):
+    """Our material table from MTL entries (scene-format.md, 'OBJ and MTL' and 'MTL
+    texture maps'); textured parameters become TexRefs (factor Kd, or Ke where present
+    and else 1)."""
     def rgb(key, default):
         v = m.get(key)
         if v is None:
@@ -166,17 +366,58 @@ def mtl_to_material(m):
     pr = m.get("Pr", [0.0])[0]
     d = m.get("d", [1.0])[0]
     ni = m.get("Ni", [1.5])[0]
-    out = {"emission": ke}
+    mtl_path = m.get("_mtl", "?")
+    where = "%s: material '%s'" % (mtl_path, name)
+
+    def tex(key, factor):
+        """TexRef of map `key`, or None (absent, or file missing: warned)."""
+        if key not in m:
+            return None
+        w = "%s: %s" % (where, key)
+        fname, scale = parse_map(m[key], w)
+        path = os.path.join(os.path.dirname(mtl_path), fname)
+        if not os.path.isfile(path):
+            warn("%s: texture file not found: %s (the constant factor is used)" % (w, path))
+            return None
+        return TexRef(path, scale, [float(x) for x in factor], w)
+
+    for key in ("map_Pm", "map_Bump", "map_bump", "bump", "norm"):
+        if key in m:
+            raise SceneError("%s: %s is not translated to Mitsuba (%s)" % (
+                where, key, "metallic texture" if key == "map_Pm" else "normal map"))
+    for key in m:
+        if key in MTL_MAP_KEYS and key not in ("map_Kd", "map_Ke", "map_Pr"):
+            warn("%s: %s ignored" % (where, key))
+
+    # map_Ke multiplies Ke; without Ke the factor is 1 (scene-format.md)
+    ke_tex = tex("map_Ke", ke if "Ke" in m else [1.0, 1.0, 1.0])
+    out = {"emission": ke_tex if ke_tex is not None else
+           (ke if "map_Ke" not in m or "Ke" in m else [1.0, 1.0, 1.0])}
+    kd_tex = tex("map_Kd", kd)
     if illum == 7 or (illum != 3 and pm < 0.5 and d < 1.0 and ni > 1.0):
         out.update(type="dielectric", ior=ni if "Ni" in m else 1.5)
+        if "map_Kd" in m:
+            warn("%s: map_Kd ignored on a dielectric" % where)
+        if "map_Pr" in m:
+            warn("%s: map_Pr ignored on a dielectric" % where)
     elif illum == 3 or pm >= 0.5:
-        alb = rgb("Ks", kd) if "Ks" in m else kd
+        if "Ks" in m:
+            if "map_Kd" in m:
+                raise SceneError("%s: map_Kd on a conductor whose albedo is Ks is ambiguous; "
+                                 "not translated" % where)
+            alb = rgb("Ks", kd)
+        else:
+            alb = kd_tex if kd_tex is not None else kd
+        if "map_Pr" in m and tex("map_Pr", [pr] * 3) is not None:
+            raise SceneError("%s: map_Pr: %s" % (where, ROUGHNESS_TEXTURE_REFUSED))
         if pr > 0:
             out.update(type="rough_conductor", albedo=alb, roughness=pr)
         else:
             out.update(type="conductor", albedo=alb)
     else:
-        out.update(type="diffuse", albedo=kd)
+        out.update(type="diffuse", albedo=kd_tex if kd_tex is not None else kd)
+        if "map_Pr" in m:
+            warn("%s: map_Pr ignored on a diffuse material" % where)
     return out
 
 
@@ -184,10 +425,12 @@ DEFAULT_MATERIAL = {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}
 
 
 def split_obj(path, tmpdir, stem):
-    """Parse an OBJ; write one triangle OBJ per (material, has-normals) group.
-    Returns [(file, material_name or None, has_vn, mtl_materials)]."""
-    vs, vns = [], []
-    groups = {}          # (mtl name, has_vn) -> list of triangles [(vi, ni), ...]
+    """Parse an OBJ; write one triangle OBJ per (material, has-normals, has-UVs) group,
+    `vt` carried over as written (u, v; a missing v is 0; load it with
+    flip_tex_coords = false). Returns [(file, material_name or None, has_vn, has_vt,
+    mtl_materials)]."""
+    vs, vns, vts = [], [], []
+    groups = {}          # (mtl name, has_vn, has_vt) -> triangles [(vi, ti, ni), ...]
     mtl = {}
     cur = None
     base = os.path.dirname(path)
@@ -206,6 +449,8 @@ def split_obj(path, tmpdir, stem):
                 vs.append(tok[1:4])
             elif k == "vn":
                 vns.append(tok[1:4])
+            elif k == "vt":
+                vts.append((tok[1], tok[2] if len(tok) > 2 else "0"))
             elif k == "usemtl":
                 cur = " ".join(tok[1:]) if len(tok) > 1 else None
             elif k == "mtllib":
@@ -216,32 +461,50 @@ def split_obj(path, tmpdir, stem):
                 for c in tok[1:]:
                     parts = c.split("/")
                     vi = idx(parts[0], len(vs))
+                    ti = idx(parts[1], len(vts)) if len(parts) > 1 and parts[1] else None
                     ni = idx(parts[2], len(vns)) if len(parts) > 2 and parts[2] else None
-                    corners.append((vi, ni))
+                    for i, n, what in ((vi, len(vs), "v"), (ti, len(vts), "vt"),
+                                       (ni, len(vns), "vn")):
+                        if i is not None and not 0 <= i < n:
+                            raise SceneError("%s: face index out of range (%s): %s"
+                                             % (path, what, line.strip()))
+                    corners.append((vi, ti, ni))
                 if len(corners) < 3:
                     continue
-                has_vn = all(c[1] is not None for c in corners)
-                g = groups.setdefault((cur, has_vn), [])
+                has_vt = all(c[1] is not None for c in corners)
+                has_vn = all(c[2] is not None for c in corners)
+                g = groups.setdefault((cur, has_vn, has_vt), [])
                 for i in range(1, len(corners) - 1):
                     g.append((corners[0], corners[i], corners[i + 1]))
     out = []
-    for gi, ((mname, has_vn), tris) in enumerate(groups.items()):
+    for gi, ((mname, has_vn, has_vt), tris) in enumerate(groups.items()):
         fn = os.path.join(tmpdir, "%s_%d.obj" % (stem, gi))
         used_v = sorted({c[0] for t in tris for c in t})
         vmap = {v: i + 1 for i, v in enumerate(used_v)}
+        tmap, nmap = {}, {}
         with open(fn, "w") as fh:
             fh.write("".join("v %s %s %s\n" % tuple(vs[v]) for v in used_v))
+            if has_vt:
+                used_t = sorted({c[1] for t in tris for c in t})
+                tmap = {t: i + 1 for i, t in enumerate(used_t)}
+                fh.write("".join("vt %s %s\n" % vts[t] for t in used_t))
             if has_vn:
-                used_n = sorted({c[1] for t in tris for c in t})
+                used_n = sorted({c[2] for t in tris for c in t})
                 nmap = {n: i + 1 for i, n in enumerate(used_n)}
                 fh.write("".join("vn %s %s %s\n" % tuple(vns[n]) for n in used_n))
-                fh.write("".join("f %d//%d %d//%d %d//%d\n" % (
-                    vmap[a[0]], nmap[a[1]], vmap[b[0]], nmap[b[1]], vmap[c[0]], nmap[c[1]])
-                    for a, b, c in tris))
-            else:
-                fh.write("".join("f %d %d %d\n" % (vmap[a[0]], vmap[b[0]], vmap[c[0]])
-                                 for a, b, c in tris))
-        out.append((fn, mname, has_vn, mtl))
+
+            def corner(c):
+                s = str(vmap[c[0]])
+                if has_vt and has_vn:
+                    return "%s/%d/%d" % (s, tmap[c[1]], nmap[c[2]])
+                if has_vt:
+                    return "%s/%d" % (s, tmap[c[1]])
+                if has_vn:
+                    return "%s//%d" % (s, nmap[c[2]])
+                return s
+            fh.write("".join("f %s %s %s\n" % (corner(a), corner(b), corner(c))
+                             for a, b, c in tris))
+        out.append((fn, mname, has_vn, has_vt, mtl))
     return out
 
 
@@ -249,25 +512,29 @@ def rgb_spec(v):
     return {"type": "rgb", "value": [float(x) for x in v]}
 
 
-def mitsuba_bsdf(mat, where):
+def mitsuba_bsdf(mi, mat, where):
+    """Mitsuba BSDF of a material (TOML values, or TexRefs for textured parameters)."""
     t = mat.get("type", "diffuse")
     allowed = {"type", "emission"}
     if t == "diffuse":
         allowed |= {"albedo"}
-        b = {"type": "twosided", "bsdf": {"type": "diffuse",
-                                          "reflectance": rgb_spec(vec3(mat.get("albedo", 0.8), where))}}
+        b = {"type": "twosided", "bsdf": {
+            "type": "diffuse",
+            "reflectance": colour_value(mi, mat.get("albedo"), 0.8, where + ".albedo")}}
     elif t == "conductor":
         allowed |= {"albedo"}
         b = {"type": "twosided", "bsdf": {
             "type": "conductor", "material": "none",
-            "specular_reflectance": rgb_spec(vec3(mat.get("albedo", 1.0), where))}}
+            "specular_reflectance": colour_value(mi, mat.get("albedo"), 1.0, where + ".albedo")}}
     elif t == "rough_conductor":
         allowed |= {"albedo", "roughness"}
+        if isinstance(mat.get("roughness"), TexRef):
+            raise SceneError("%s.roughness: %s" % (where, ROUGHNESS_TEXTURE_REFUSED))
         r = float(mat.get("roughness", 0.5))
         b = {"type": "twosided", "bsdf": {
             "type": "roughconductor", "material": "none", "distribution": "ggx",
             "alpha": max(r * r, 1e-4), "sample_visible": True,
-            "specular_reflectance": rgb_spec(vec3(mat.get("albedo", 1.0), where))}}
+            "specular_reflectance": colour_value(mi, mat.get("albedo"), 1.0, where + ".albedo")}}
     elif t == "dielectric":
         allowed |= {"ior"}
         b = {"type": "dielectric", "int_ior": float(mat.get("ior", 1.5)), "ext_ior": 1.0}
@@ -277,8 +544,13 @@ def mitsuba_bsdf(mat, where):
     return b
 
 
-def emission_of(mat, where):
-    e = vec3(mat.get("emission", [0.0, 0.0, 0.0]), where + ".emission")
+def emission_of(mi, mat, where):
+    e = mat.get("emission", [0.0, 0.0, 0.0])
+    if isinstance(e, TexRef):
+        if max(e.factor) <= 0.0:
+            return None
+        return {"type": "area", "radiance": bitmap_texture(mi, e)}
+    e = vec3(e, where + ".emission")
     if max(e) <= 0.0:
         return None
     return {"type": "area", "radiance": rgb_spec(e)}
@@ -409,13 +681,15 @@ def build_scene_dict(mi, path, args, tmpdir):
             else:
                 scene["sky"] = gradient_envmap(mi, z, h)
 
-    materials = doc.get("materials", {})
-    for name, mat in materials.items():
-        mitsuba_bsdf(mat, "[materials.%s]" % name)  # validate early
+    materials = {}
+    for name, mat in doc.get("materials", {}).items():
+        where = "[materials.%s]" % name
+        materials[name] = resolve_toml_material(mat, base, where)
+        mitsuba_bsdf(mi, materials[name], where)  # validate early
 
     def shape_with(shape, mat, where):
-        shape["bsdf"] = mitsuba_bsdf(mat, where)
-        em = emission_of(mat, where)
+        shape["bsdf"] = mitsuba_bsdf(mi, mat, where)
+        em = emission_of(mi, mat, where)
         if em is not None:
             shape["emitter"] = em
         return shape
@@ -455,20 +729,27 @@ def build_scene_dict(mi, path, args, tmpdir):
                                      "with --spheres analytic" % where)
                 shape = {"type": "sphere", "to_world": mi.ScalarTransform4f(to_world.tolist())}
             mat = materials[mname] if mname is not None else DEFAULT_MATERIAL
+            if uses_texture(mat):
+                raise SceneError("%s: material '%s' uses a texture, but a sphere has no "
+                                 "UVs" % (where, mname))
             scene["shape_%d" % n_shapes] = shape_with(shape, mat, where)
             n_shapes += 1
             continue
         mesh_path = os.path.join(base, obj["mesh"])
         if not os.path.exists(mesh_path):
             raise SceneError("%s: mesh file not found: %s" % (where, mesh_path))
-        for fn, obj_mtl, has_vn, mtl in split_obj(mesh_path, tmpdir, "o%d" % oi):
+        for fn, obj_mtl, has_vn, has_vt, mtl in split_obj(mesh_path, tmpdir, "o%d" % oi):
             if mname is not None:
-                mat = materials[mname]
+                mat, mat_name = materials[mname], mname
             elif obj_mtl is not None and obj_mtl in mtl:
-                mat = mtl_to_material(mtl[obj_mtl])
+                mat, mat_name = mtl_to_material(mtl[obj_mtl], obj_mtl), obj_mtl
             else:
-                mat = DEFAULT_MATERIAL
+                mat, mat_name = DEFAULT_MATERIAL, None
+            if uses_texture(mat) and not has_vt:
+                raise SceneError("%s (%s): material '%s' uses a texture, but the mesh has "
+                                 "faces without UVs (vt)" % (where, obj["mesh"], mat_name))
             shape = {"type": "obj", "filename": fn, "face_normals": not has_vn,
+                     "flip_tex_coords": False,
                      "to_world": mi.ScalarTransform4f(M.tolist())}
             scene["shape_%d" % n_shapes] = shape_with(shape, mat, where)
             n_shapes += 1
@@ -525,7 +806,7 @@ def main():
     with tempfile.TemporaryDirectory(prefix="mitsuba_render_") as tmp:
         try:
             d, opts = build_scene_dict(mi, args.scene, args, tmp)
-        except (SceneError, KeyError, ValueError, TypeError) as e:
+        except (SceneError, KeyError, ValueError, TypeError, IndexError) as e:
             raise SystemExit("mitsuba_render: %s: %s" % (args.scene, e))
         scene = mi.load_dict(d)
     print("mitsuba_render: %s, %dx%d, %d spp, max_depth %d, seed %d, variant %s"
