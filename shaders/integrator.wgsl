@@ -9,6 +9,7 @@ struct SurfaceHit {
     material: u32,
     front_face: bool,
     tri: u32,
+    uv: vec2<f32>,
 }
 
 // mirror: src/render/integrator.rs `surface_at`
@@ -29,7 +30,7 @@ fn surface_at(ray: Ray, hit: Hit) -> SurfaceHit {
             ns = ng;
         }
     }
-    return SurfaceHit(ray.origin + hit.t * ray.dir, ng, ns, sh.material, dot(ray.dir, ng) < 0.0, hit.tri);
+    return SurfaceHit(ray.origin + hit.t * ray.dir, ng, ns, sh.material, dot(ray.dir, ng) < 0.0, hit.tri, triangle_uv(hit.tri, hit.u, hit.v));
 }
 
 // mirror: src/render/integrator.rs `offset_ray_origin`
@@ -73,7 +74,7 @@ fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
         return true;
     }
     let si = surface_at((*st).ray, hit);
-    let mat = load_material(si.material);
+    let mat = material_at(load_material(si.material), si.uv);
     if si.front_face && is_emissive(mat) {
         var w = 1.0;
         if !(*st).prev_delta {

@@ -52,6 +52,6 @@ fn sample_light(p: vec3<f32>, ng: vec3<f32>, rng: Rng, depth: u32) -> LightSampl
     if !(cos_l > 0.0 && dist > 0.0) {
         return none;
     }
-    let le = load_material(load_shading(light).material).emission;
+    let le = material_at(load_material(load_shading(light).material), triangle_uv(light, bary.x, bary.y)).emission;
     return LightSample(origin, wi, dist * (1.0 - 1e-4), le, light_pdf(light, dist, cos_l), true);
 }

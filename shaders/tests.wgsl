@@ -151,3 +151,15 @@ fn test_trace_path(@builtin(global_invocation_id) gid: vec3<u32>) {
     let l = trace_path(generate_camera_ray(k.x, k.y, rng), rng);
     case_out(i, u4(l), vec4<u32>(0u));
 }
+
+// in: (u, v, texture index, material index) | out: texture_lookup(texture, uv),
+// (material_at(material, uv).albedo, its roughness)
+@compute @workgroup_size(64)
+fn test_texture(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = case_index(gid);
+    if i >= case_count() { return; }
+    let k = case_in(i, 0u);
+    let uv = bitcast<vec2<f32>>(k.xy);
+    let m = material_at(load_material(k.w), uv);
+    case_out(i, u4(texture_lookup(k.z, uv)), u4(vec4<f32>(m.albedo, m.roughness)));
+}

@@ -22,6 +22,27 @@ struct TriShading {
     flags: u32,
 }
 
+// mirror: src/render/mod.rs `TriUvs` (32 bytes): texture coordinates, v running down.
+struct TriUvs {
+    uv0: vec2<f32>,
+    uv1: vec2<f32>,
+    uv2: vec2<f32>,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+// mirror: src/scene/texture.rs `Texture` (32 bytes): an image in the texel table, its
+// format (a TEX_* code), UV scale, and the channel a scalar parameter reads.
+struct Texture {
+    offset: u32,
+    width: u32,
+    height: u32,
+    format: u32,
+    scale: vec2<f32>,
+    channel: u32,
+    _pad: u32,
+}
+
 // mirror: src/render/gpu/params.rs `Params` (144 bytes): one dispatch's camera, sky and range.
 struct Params {
     cam_position: vec3<f32>,

@@ -11,7 +11,9 @@ use crate::render::integrator::offset_ray_origin;
 use crate::render::rng::Rng;
 use crate::render::sampling::{sample_cosine_hemisphere, sample_uniform_triangle};
 use crate::render::{RenderJob, RenderScene, SKY_EMITTER, cpu};
-use crate::scene::{Camera, Material, Mesh, NO_NORMAL, RenderSettings, Scene, Sky, Triangle};
+use crate::scene::{
+    Camera, Material, Mesh, NO_NORMAL, NO_UV, RenderSettings, Scene, Sky, Triangle,
+};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -305,6 +307,7 @@ pub fn terrain(n: u32) -> Scene {
                 mesh.triangles.push(Triangle {
                     p,
                     n: [NO_NORMAL; 3],
+                    t: [NO_UV; 3],
                     material: 0,
                 });
             }
@@ -318,6 +321,7 @@ pub fn terrain(n: u32) -> Scene {
         settings: RenderSettings::default(),
         materials: vec![Material::diffuse(Vec3::splat(0.7))],
         material_names: vec!["ground".into()],
+        textures: Default::default(),
         mesh,
         warnings: Vec::new(),
     }

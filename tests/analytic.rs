@@ -160,6 +160,7 @@ fn emitter_seen_directly_returns_its_radiance() {
                 m.triangles.push(meshtrace::scene::Triangle {
                     p: t.map(|k| base + k),
                     n: [meshtrace::scene::NO_NORMAL; 3],
+                    t: [meshtrace::scene::NO_UV; 3],
                     material: 0,
                 });
             }
@@ -181,5 +182,48 @@ fn emitter_seen_directly_returns_its_radiance() {
                 );
             }
         }
+    }
+}
+
+/// The emissive enclosure with its albedo from a texture: a uniform 8-bit grey image, so
+/// the albedo is the sRGB decoding of its value and the answer is still Le / (1 - albedo).
+/// (The scene is written as files, so the texture goes through the loader, the texel table
+/// and the lookup of each renderer.)
+#[test]
+fn textured_emissive_enclosure_returns_le_over_one_minus_albedo() {
+    let dir = common::fs::TempDir::new("textured-enclosure");
+    let grey = 128u8;
+    dir.write_png("grey.png", 3, 2, &[[grey, grey, grey, 255]; 6]);
+    // A cube seen from inside: every face wound to face inwards, one texture coordinate.
+    let mut obj = String::from("vt 0.3 0.7\n");
+    for i in 0..8 {
+        let c = |bit: i32| if i & bit == 0 { -1.0 } else { 1.0 };
+        obj += &format!("v {} {} {}\n", c(1), c(2), c(4));
+    }
+    for q in [
+        [1, 2, 4, 3],
+        [5, 7, 8, 6],
+        [1, 3, 7, 5],
+        [2, 6, 8, 4],
+        [1, 5, 6, 2],
+        [3, 4, 8, 7],
+    ] {
+        obj += &format!("f {}/1 {}/1 {}/1 {}/1\n", q[0], q[1], q[2], q[3]);
+    }
+    dir.write("cube.obj", obj);
+    let emission = Vec3::new(0.5, 0.75, 0.25);
+    let toml = format!(
+        "[camera]\nposition = [0.5, 0.5, 0.9]\nlook_at = [-0.3, -0.4, -1.0]\nvfov = 70.0\n\
+         [render]\nwidth = 48\nheight = 48\nspp = 64\nmax_depth = 64\nseed = 7\n\
+         [materials.wall]\ntype = \"diffuse\"\nalbedo = {{ texture = \"grey.png\" }}\n\
+         emission = [{}, {}, {}]\n\
+         [[objects]]\nmesh = \"cube.obj\"\nmaterial = \"wall\"\n",
+        emission.x, emission.y, emission.z
+    );
+    let s = meshtrace::scene::load_scene(&dir.write("scene.toml", toml)).unwrap();
+    let albedo = meshtrace::film::srgb8_to_linear(grey);
+    let expect = emission / (1.0 - albedo);
+    for (device, film) in render_both("textured_emissive_enclosure", &s) {
+        assert_mean("textured emissive enclosure", device, &film, expect);
     }
 }

@@ -151,7 +151,15 @@ fn structs_match_their_rust_twins() {
     let names: Vec<&str> = shader::host_structs().iter().map(|s| s.name).collect();
     assert_eq!(
         names,
-        ["BvhNode", "TriVerts", "TriShading", "Material", "Params"]
+        [
+            "BvhNode",
+            "TriVerts",
+            "TriShading",
+            "Material",
+            "TriUvs",
+            "Texture",
+            "Params"
+        ]
     );
     for (what, module) in modules() {
         eprintln!("checking {what}");

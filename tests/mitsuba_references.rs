@@ -157,3 +157,15 @@ fn cpu_matches_mitsuba_box_area() {
 fn gpu_matches_mitsuba_box_area() {
     check_gpu("box_area");
 }
+
+/// Image textures: an MTL `map_Kd` tiled by `-s`, TOML albedo textures (one with a
+/// non-integer scale) and an emission texture.
+#[test]
+fn cpu_matches_mitsuba_textured() {
+    check_cpu("textured");
+}
+
+#[test]
+fn gpu_matches_mitsuba_textured() {
+    check_gpu("textured");
+}

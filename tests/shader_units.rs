@@ -28,6 +28,7 @@ use meshtrace::render::sampling::{
     cosine_hemisphere_pdf, power_heuristic, sample_cdf, sample_concentric_disk,
     sample_cosine_hemisphere, sample_uniform_triangle,
 };
+use meshtrace::render::texture::{material_at, texture_lookup};
 use meshtrace::render::{RenderScene, TRI_SMOOTH};
 use meshtrace::scene::{
     Camera, Material, MaterialKind, Mesh, NO_NORMAL, RenderSettings, Sky, Triangle,
@@ -96,6 +97,7 @@ fn mesh_scene() -> (RenderScene, RenderSettings) {
         mesh.triangles.push(Triangle {
             p: [base, base + 1, base + 2],
             n: [NO_NORMAL; 3],
+            t: [meshtrace::scene::NO_UV; 3],
             material,
         });
     }
@@ -442,6 +444,7 @@ fn no_ray_escapes_a_closed_mesh() {
             .map(|&p| Triangle {
                 p,
                 n: [NO_NORMAL; 3],
+                t: [meshtrace::scene::NO_UV; 3],
                 material: 0,
             })
             .collect(),
@@ -1058,4 +1061,74 @@ fn trace_path_matches_on_mesh_scene() {
     let (radiance, rays) = replay_paths(&ctx, "mesh", &rs, &settings, 10_000, 11);
     assert!(radiance >= 0.99, "radiance agrees on only {radiance}");
     assert!(rays >= 0.99, "ray counts agree on only {rays}");
+}
+
+/// `texture_lookup` and `material_at` against their Rust twins over 12,000 random texture
+/// coordinates (far outside [0, 1] too, so wrapping is exercised), on an sRGB PNG, a linear
+/// PNG read as roughness and an EXR emission, each with its own UV scale.
+#[test]
+fn texture_lookup_matches() {
+    let Some(ctx) = common::gpu("texture_lookup_matches") else {
+        return;
+    };
+    let dir = common::fs::TempDir::new("texture-units");
+    let mut r = SplitMix::new(0x7e47_0002);
+    let ldr = |r: &mut SplitMix, n: usize| -> Vec<[u8; 4]> {
+        (0..n)
+            .map(|_| [0; 4].map(|_| (r.u32() >> 24) as u8))
+            .collect()
+    };
+    dir.write_png("albedo.png", 7, 5, &ldr(&mut r, 35));
+    dir.write_png("rough.png", 3, 9, &ldr(&mut r, 27));
+    let hdr: Vec<[f32; 4]> = (0..16)
+        .map(|_| [r.range(0.0, 5.0), r.range(0.0, 5.0), r.range(0.0, 5.0), 1.0])
+        .collect();
+    dir.write_exr("light.exr", 4, 4, &hdr);
+    dir.write(
+        "quad.obj",
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nf 1/1 2/2 3/3\n",
+    );
+    let toml = "[camera]\nposition = [0.0, 0.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\n\
+        [materials.a]\ntype = \"diffuse\"\nalbedo = { texture = \"albedo.png\", scale = [2.0, 3.5] }\n\
+        [materials.b]\ntype = \"rough_conductor\"\nalbedo = [0.9, 0.8, 0.7]\n\
+        roughness = { texture = \"rough.png\", scale = [-1.0, 0.75] }\n\
+        [materials.c]\ntype = \"diffuse\"\nemission = { texture = \"light.exr\", strength = 3.0 }\n\
+        [[objects]]\nmesh = \"quad.obj\"\nmaterial = \"a\"\n\
+        [[objects]]\nmesh = \"quad.obj\"\nmaterial = \"b\"\n\
+        [[objects]]\nmesh = \"quad.obj\"\nmaterial = \"c\"\n";
+    let scene = meshtrace::scene::load_scene(&dir.write("scene.toml", toml)).unwrap();
+    let rs = RenderScene::new(&scene, &BuildParams::default()).unwrap();
+    assert_eq!(rs.textures.len(), 3);
+    let settings = scene.settings;
+    let mut cases = Vec::new();
+    while cases.len() < 12_000 {
+        let uv = Vec2::new(r.range(-20.0, 20.0), r.range(-20.0, 20.0));
+        let (t, m) = (r.below(3) as u32, r.below(3) as u32);
+        cases.push([[b(uv.x), b(uv.y), t, m], [0; 4]]);
+    }
+    let out = run(&ctx, &rs, &settings, "test_texture", &cases);
+    let mut lookup = Worst::new("texture_lookup (relative, floor 1e-3)", 1e-4);
+    let mut material = Worst::new("material_at albedo, roughness (relative)", 1e-4);
+    for (c, o) in cases.iter().zip(&out) {
+        let [u, v, t, m] = c[0];
+        let uv = Vec2::new(f(u), f(v));
+        let cpu = texture_lookup(&rs, t, uv);
+        let gpu = glam::Vec4::new(f(o[0][0]), f(o[0][1]), f(o[0][2]), f(o[0][3]));
+        let show = || format!("texture {t} at {uv}: CPU {cpu}, GPU {gpu}");
+        lookup.add(
+            (0..4)
+                .map(|k| rel(cpu[k], gpu[k], 1e-3))
+                .fold(0.0, f64::max),
+            show,
+        );
+        let cm = material_at(&rs, &rs.materials[m as usize], uv);
+        let (ga, gr) = (v3(o[1]), f(o[1][3]));
+        let show = || format!("material {m} at {uv}: CPU {cm:?}, GPU {ga} {gr}");
+        material.add(
+            rel3(cm.albedo, ga, 1e-3).max(rel(cm.roughness, gr, 1e-3)),
+            show,
+        );
+    }
+    lookup.check("test_texture");
+    material.check("test_texture");
 }

@@ -7,12 +7,12 @@
 //! name), drawing every random number from the same counter-based [`Rng`], so a path traced
 //! on either device is the same path.
 
-use super::RenderScene;
-use super::TRI_SMOOTH;
 use super::bsdf::{bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample};
 use super::lights::{light_pdf, sample_light, sky_pdf, sky_radiance};
 use super::rng::{self, Rng};
 use super::sampling::power_heuristic;
+use super::texture::{material_at, triangle_uv};
+use super::{RenderScene, TRI_SMOOTH, TRI_UV};
 use crate::bvh::{Hit, traverse_any, traverse_closest};
 use crate::geometry::{self, T_INF};
 use crate::math::{Ray, onb_from_normal};
@@ -35,6 +35,8 @@ pub struct SurfaceHit {
     pub material: u32,
     pub front_face: bool,
     pub tri: u32,
+    /// Texture coordinates at the hit (zero on a triangle without them).
+    pub uv: Vec2,
 }
 
 /// mirror: shaders/integrator.wgsl `surface_at`
@@ -61,6 +63,11 @@ pub fn surface_at(scene: &RenderScene, ray: &Ray, hit: &Hit) -> SurfaceHit {
         material: sh.material,
         front_face: ray.dir.dot(ng) < 0.0,
         tri: hit.tri,
+        uv: if sh.flags & TRI_UV != 0 {
+            triangle_uv(scene, hit.tri, hit.u, hit.v)
+        } else {
+            Vec2::ZERO
+        },
     }
 }
 
@@ -127,7 +134,15 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
         return true;
     };
     let si = surface_at(scene, &st.ray, &hit);
-    let mat = &scene.materials[si.material as usize];
+    // A material without textures is used where it lies (no copy); the WGSL copies anyway.
+    let base = &scene.materials[si.material as usize];
+    let textured;
+    let mat = if base.has_texture() {
+        textured = material_at(scene, base, si.uv);
+        &textured
+    } else {
+        base
+    };
     if si.front_face && mat.is_emissive() {
         let w = if st.prev_delta {
             1.0

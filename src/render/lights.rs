@@ -6,9 +6,10 @@ use super::rng::{self, Rng};
 use super::sampling::{
     UNIFORM_SPHERE_PDF, sample_cdf, sample_uniform_sphere, sample_uniform_triangle,
 };
+use super::texture::{material_at, triangle_uv};
 use super::{RenderScene, SKY_EMITTER};
 use crate::geometry::{self, T_INF};
-use crate::scene::Sky;
+use crate::scene::{NO_TEXTURE, Sky};
 use glam::{Vec2, Vec3};
 
 /// Radiance arriving along `dir` from outside the scene.
@@ -29,6 +30,7 @@ pub fn sky_pdf(scene: &RenderScene) -> f32 {
 /// Probability density, in solid angle at the shading point, of light sampling choosing the
 /// point at distance `dist` on triangle `tri` whose cosine towards the shading point is `cos_l`.
 /// mirror: shaders/lights.wgsl `light_pdf`
+#[inline]
 pub fn light_pdf(scene: &RenderScene, tri: u32, dist: f32, cos_l: f32) -> f32 {
     let pmf = scene.shading[tri as usize].emitter_pmf;
     let area = geometry::triangle_area(&scene.tris[tri as usize]);
@@ -87,11 +89,17 @@ pub fn sample_light(
     if !(cos_l > 0.0 && dist > 0.0) {
         return None;
     }
+    let material = &scene.materials[scene.shading[light as usize].material as usize];
+    let le = if material.emission_texture != NO_TEXTURE {
+        material_at(scene, material, triangle_uv(scene, light, bary.x, bary.y)).emission
+    } else {
+        material.emission
+    };
     Some(LightSample {
         origin,
         wi,
         t_max: dist * (1.0 - 1e-4),
-        le: scene.materials[scene.shading[light as usize].material as usize].emission,
+        le,
         pdf: light_pdf(scene, light, dist, cos_l),
     })
 }

@@ -13,12 +13,16 @@ pub mod integrator;
 pub mod lights;
 pub mod rng;
 pub mod sampling;
+pub mod texture;
 
 use crate::bvh::{BuildParams, Bvh, BvhError};
 use crate::film::Film;
+use crate::film::srgb8_to_linear;
 use crate::geometry::{self, TriVerts};
 use crate::math::{Aabb, luminance};
-use crate::scene::{Camera, Material, NO_NORMAL, RenderSettings, Scene, Sky};
+use crate::scene::{
+    Camera, Material, NO_NORMAL, NO_TEXTURE, NO_UV, RenderSettings, Scene, Sky, Texture,
+};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use std::sync::Arc;
@@ -37,11 +41,25 @@ pub struct TriShading {
     /// Probability of choosing this triangle in next event estimation; 0 for non-emitters.
     pub emitter_pmf: f32,
     pub n2: [f32; 3],
-    /// Bit 0: the triangle has vertex normals (smooth shading).
+    /// [`TRI_SMOOTH`] and [`TRI_UV`] bits.
     pub flags: u32,
 }
 
+/// [`TriShading::flags`]: the triangle has vertex normals (smooth shading).
 pub const TRI_SMOOTH: u32 = 1;
+/// [`TriShading::flags`]: the triangle has texture coordinates in [`RenderScene::tri_uvs`].
+pub const TRI_UV: u32 = 2;
+
+/// Per-triangle texture coordinates in leaf order (32 bytes), v running down an image
+/// from its top edge. mirror: shaders/types.wgsl `TriUvs`
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TriUvs {
+    pub uv0: [f32; 2],
+    pub uv1: [f32; 2],
+    pub uv2: [f32; 2],
+    pub _pad: [u32; 2],
+}
 
 /// The entry of [`RenderScene::emitters`] that stands for the sky.
 /// The shaders get it from `render::gpu::shader::shared_constants`.
@@ -53,7 +71,15 @@ pub struct RenderScene {
     pub bvh: Bvh,
     pub tris: Vec<TriVerts>,
     pub shading: Vec<TriShading>,
+    /// Texture coordinates of every triangle, or empty when the scene has no textures.
+    pub tri_uvs: Vec<TriUvs>,
     pub materials: Vec<Material>,
+    /// The textures material slots index, and their texels.
+    pub textures: Vec<Texture>,
+    pub texels: Vec<u32>,
+    /// Texel values of 8-bit channels: entries 0–255 decode sRGB, 256–511 are linear
+    /// (`k / 255`). The shaders read the same table, so both renderers decode alike.
+    pub texel_lut: Vec<f32>,
     /// The lights next event estimation picks from: leaf-order indices of emissive
     /// triangles, then [`SKY_EMITTER`] if the sky is not black; and their inclusive CDF.
     pub emitters: Vec<u32>,
@@ -78,7 +104,8 @@ impl RenderScene {
             .map(|&i| TriVerts::new(corners[i as usize]))
             .collect();
         drop(corners);
-        let mut shading: Vec<TriShading> = bvh
+        let textured = !scene.textures.records.is_empty();
+        let shading: Vec<TriShading> = bvh
             .order
             .iter()
             .map(|&i| {
@@ -91,21 +118,81 @@ impl RenderScene {
                     let [a, b, c] = t.n.map(|k| mesh.normals[k as usize].to_array());
                     (s.n0, s.n1, s.n2, s.flags) = (a, b, c, TRI_SMOOTH);
                 }
+                if textured && t.t[0] != NO_UV {
+                    s.flags |= TRI_UV;
+                }
                 s
             })
             .collect();
+        // Only a scene with textures reads texture coordinates.
+        let tri_uvs: Vec<TriUvs> = if textured {
+            bvh.order
+                .iter()
+                .map(|&i| {
+                    let t = &mesh.triangles[i as usize];
+                    let uv = |k: usize| {
+                        if t.t[k] == NO_UV {
+                            [0.0; 2]
+                        } else {
+                            mesh.texcoords[t.t[k] as usize].to_array()
+                        }
+                    };
+                    TriUvs {
+                        uv0: uv(0),
+                        uv1: uv(1),
+                        uv2: uv(2),
+                        _pad: [0; 2],
+                    }
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let texel_lut = (0..=255u8)
+            .map(srgb8_to_linear)
+            .chain((0..=255u8).map(|k| k as f32 / 255.0))
+            .collect();
+        let mut rs = Self {
+            bvh,
+            tris,
+            shading,
+            tri_uvs,
+            materials: scene.materials.clone(),
+            textures: scene.textures.records.clone(),
+            texels: scene.textures.texels.clone(),
+            texel_lut,
+            emitters: Vec::new(),
+            emitter_cdf: Vec::new(),
+            sky_pmf: 0.0,
+            camera: scene.camera.clone(),
+            sky: scene.sky,
+        };
+        rs.build_emitters();
+        Ok(rs)
+    }
+
+    /// Chooses the lights next event estimation samples: emissive triangles by power
+    /// (area × emission luminance, times a texture's mean luminance), then the sky.
+    fn build_emitters(&mut self) {
         let (mut emitters, mut emitter_cdf) = (Vec::new(), Vec::new());
         let mut total = 0.0f64;
-        for (i, s) in shading.iter().enumerate() {
-            let m = &scene.materials[s.material as usize];
-            let power = geometry::triangle_area(&tris[i]) as f64 * luminance(m.emission) as f64;
+        let mean: Vec<f64> = (0..self.textures.len() as u32)
+            .map(|t| luminance(texture::texture_mean(self, t)) as f64)
+            .collect();
+        for (i, s) in self.shading.iter().enumerate() {
+            let m = &self.materials[s.material as usize];
+            let mut power =
+                geometry::triangle_area(&self.tris[i]) as f64 * luminance(m.emission) as f64;
+            if m.emission_texture != NO_TEXTURE {
+                power *= mean[m.emission_texture as usize];
+            }
             if power > 0.0 {
                 total += power;
                 emitters.push(i as u32);
                 emitter_cdf.push(total);
             }
         }
-        let sky_pmf = match (scene.sky.is_black(), emitters.is_empty()) {
+        let sky_pmf = match (self.sky.is_black(), emitters.is_empty()) {
             (true, _) => 0.0,
             (false, true) => 1.0,
             (false, false) => 0.5,
@@ -117,24 +204,14 @@ impl RenderScene {
             .collect();
         let mut prev = 0.0;
         for (k, &i) in emitters.iter().enumerate() {
-            shading[i as usize].emitter_pmf = emitter_cdf[k] - prev;
+            self.shading[i as usize].emitter_pmf = emitter_cdf[k] - prev;
             prev = emitter_cdf[k];
         }
         if sky_pmf > 0.0 {
             emitters.push(SKY_EMITTER);
             emitter_cdf.push(1.0);
         }
-        Ok(Self {
-            bvh,
-            tris,
-            shading,
-            materials: scene.materials.clone(),
-            emitters,
-            emitter_cdf,
-            sky_pmf,
-            camera: scene.camera.clone(),
-            sky: scene.sky,
-        })
+        (self.emitters, self.emitter_cdf, self.sky_pmf) = (emitters, emitter_cdf, sky_pmf);
     }
 }
 

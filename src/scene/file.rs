@@ -1,4 +1,4 @@
-//! The scene file as written: serde types for version 1 of `shared/specs/scene-format.md`.
+//! The scene file as written: serde types for the scene format (`docs/scene-format.md`).
 //!
 //! Only this module derives `Deserialize`. Unknown keys are errors, so a typo cannot
 //! silently render something else. Values are checked later, in `load`, where the
@@ -75,10 +75,36 @@ impl MaterialType {
 pub struct MaterialFile {
     #[serde(rename = "type")]
     pub kind: MaterialType,
-    pub albedo: Option<[f32; 3]>,
-    pub emission: Option<[f32; 3]>,
-    pub roughness: Option<f32>,
+    pub albedo: Option<ColorFile>,
+    pub emission: Option<ColorFile>,
+    pub roughness: Option<ScalarFile>,
     pub ior: Option<f32>,
+}
+
+/// A colour parameter: an RGB triple, or an image texture.
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+pub enum ColorFile {
+    Rgb([f32; 3]),
+    Texture(TextureFile),
+}
+
+/// A scalar parameter: a number, or an image texture (its first channel).
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+pub enum ScalarFile {
+    Value(f32),
+    Texture(TextureFile),
+}
+
+/// `{ texture = "file.png", scale = [su, sv], strength = s }`: an image file relative to
+/// the scene file, its UV tiling, and for emission a radiance scale.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TextureFile {
+    pub texture: String,
+    pub scale: Option<[f32; 2]>,
+    pub strength: Option<f32>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -1,12 +1,16 @@
 //! From a file to a [`Scene`]: parse, check every value, read the meshes, and build.
 //! Each error names the file and the line or field at fault.
 
-use super::file::{MaterialFile, MaterialType, ObjectFile, ScaleFile, SceneFile};
+use super::file::{
+    ColorFile, MaterialFile, MaterialType, ObjectFile, ScalarFile, ScaleFile, SceneFile,
+    TextureFile,
+};
 use super::obj::{FileSource, Fs, MeshPart, PartTriangle, load_obj};
 use super::sphere::{default_subdivisions, icosphere};
+use super::texture::{TextureError, TextureRef, Textures, Usage};
 use super::{
-    Camera, Material, MaterialKind, Mesh, NO_NORMAL, RenderSettings, Scene, SceneError, Sky,
-    Triangle,
+    Camera, Material, MaterialKind, Mesh, NO_NORMAL, NO_TEXTURE, NO_UV, RenderSettings, Scene,
+    SceneError, Sky, Triangle,
 };
 use crate::math::Aabb;
 use glam::{Mat3, Mat4, Vec3};
@@ -58,7 +62,7 @@ fn parse_scene_from(text: &str, path: &Path, files: &dyn FileSource) -> Result<S
     let sky = ctx.sky(&file)?;
     let mut builder = Builder::default();
     for (name, m) in &file.materials {
-        let mat = ctx.material(name, m)?;
+        let mat = ctx.material(name, m, &mut builder.textures)?;
         let index = builder.add_material(name, mat);
         builder.named.insert(name.clone(), index);
     }
@@ -81,7 +85,13 @@ fn load_bare_obj(path: &Path, files: &dyn FileSource) -> Result<Scene, SceneErro
             used[i as usize] = true;
         }
     }
-    builder.append_part(part, Mat4::IDENTITY, None);
+    let shown = super::shown(path);
+    let obj_error = |message: String| SceneError::Obj {
+        path: shown.clone(),
+        line: None,
+        message,
+    };
+    builder.append_part(part, Mat4::IDENTITY, None, files, &obj_error)?;
     let bounds = builder
         .mesh
         .positions
@@ -120,6 +130,7 @@ struct Builder {
     material_names: Vec<String>,
     named: HashMap<String, u32>,
     default_material: Option<u32>,
+    textures: Textures,
     degenerate: usize,
     warnings: Vec<String>,
 }
@@ -144,11 +155,42 @@ impl Builder {
     }
 
     /// Appends a mesh part transformed by `m`; `material` overrides the part's own
-    /// materials. Degenerate triangles are dropped (and counted).
-    fn append_part(&mut self, part: MeshPart, m: Mat4, material: Option<u32>) {
+    /// materials. The part's textures are read (a missing optional one is a warning, and
+    /// its slot falls back to the parameter's factor); a triangle without texture
+    /// coordinates whose material uses a texture is an error, made by `error`. Degenerate
+    /// triangles are dropped (and counted).
+    fn append_part(
+        &mut self,
+        part: MeshPart,
+        m: Mat4,
+        material: Option<u32>,
+        files: &dyn FileSource,
+        error: &dyn Fn(String) -> SceneError,
+    ) -> Result<(), SceneError> {
         self.warnings.extend(part.warnings);
+        let mut slots = Vec::with_capacity(part.textures.len());
+        for r in &part.textures {
+            slots.push(match self.textures.add(r, files) {
+                Ok(slot) => slot,
+                Err(TextureError::Missing(file)) => {
+                    self.warnings.push(format!(
+                        "texture {file} could not be read; its parameter falls back to its constant factor"
+                    ));
+                    NO_TEXTURE
+                }
+                Err(TextureError::Fatal(e)) => return Err(e),
+            });
+        }
+        let slot = |i: u32| {
+            if i == NO_TEXTURE {
+                i
+            } else {
+                slots[i as usize]
+            }
+        };
         let base_p = self.mesh.positions.len() as u32;
         let base_n = self.mesh.normals.len() as u32;
+        let base_t = self.mesh.texcoords.len() as u32;
         let normal_matrix = Mat3::from_mat4(m).inverse().transpose();
         self.mesh
             .positions
@@ -158,11 +200,20 @@ impl Builder {
                 .iter()
                 .map(|&n| (normal_matrix * n).normalize_or_zero()),
         );
+        self.mesh.texcoords.extend(&part.texcoords);
         let local: Vec<u32> = part
             .materials
             .into_iter()
             .zip(&part.material_names)
-            .map(|(mat, name)| self.add_material(name, mat))
+            .map(|(mat, name)| {
+                let mat = Material {
+                    albedo_texture: slot(mat.albedo_texture),
+                    emission_texture: slot(mat.emission_texture),
+                    roughness_texture: slot(mat.roughness_texture),
+                    ..mat
+                };
+                self.add_material(name, mat)
+            })
             .collect();
         for t in part.triangles {
             let material = match (material, t.material) {
@@ -170,6 +221,17 @@ impl Builder {
                 (None, Some(i)) => local[i as usize],
                 (None, None) => self.default_material(),
             };
+            let uv = if t.t[0] == NO_UV {
+                t.t
+            } else {
+                t.t.map(|i| i + base_t)
+            };
+            if uv[0] == NO_UV && self.materials[material as usize].has_texture() {
+                return Err(error(format!(
+                    "material `{}` uses a texture, but the mesh has faces without texture coordinates",
+                    self.material_names[material as usize].escape_debug()
+                )));
+            }
             let p = t.p.map(|i| i + base_p);
             let mut n = if t.n[0] == NO_NORMAL {
                 t.n
@@ -188,8 +250,14 @@ impl Builder {
             {
                 n = [NO_NORMAL; 3];
             }
-            self.mesh.triangles.push(Triangle { p, n, material });
+            self.mesh.triangles.push(Triangle {
+                p,
+                n,
+                t: uv,
+                material,
+            });
         }
+        Ok(())
     }
 
     fn finish(
@@ -216,6 +284,7 @@ impl Builder {
             settings,
             materials: self.materials,
             material_names: self.material_names,
+            textures: self.textures,
             mesh: self.mesh,
             warnings: self.warnings,
         }
@@ -350,7 +419,73 @@ impl Ctx<'_> {
         }
     }
 
-    fn material(&self, name: &str, m: &MaterialFile) -> Result<Material, SceneError> {
+    /// A colour parameter's factor and texture slot: an RGB triple and no texture, or
+    /// factor 1 (`strength` for emission) and the texture.
+    fn color_param(
+        &self,
+        field: &str,
+        c: &ColorFile,
+        emission: bool,
+        textures: &mut Textures,
+    ) -> Result<(Vec3, u32), SceneError> {
+        match c {
+            ColorFile::Rgb(rgb) => Ok((self.color(field, *rgb)?, NO_TEXTURE)),
+            ColorFile::Texture(t) => {
+                let strength = match (t.strength, emission) {
+                    (None, _) => 1.0,
+                    (Some(s), true) => {
+                        self.scalar(&format!("{field}.strength"), s, |s| s >= 0.0, "at least 0")?
+                    }
+                    (Some(_), false) => {
+                        return Err(self.invalid(
+                            format!("{field}.strength"),
+                            "only emission textures have a strength",
+                        ));
+                    }
+                };
+                let slot = self.texture(field, t, Usage::Colour, textures)?;
+                Ok((Vec3::splat(strength), slot))
+            }
+        }
+    }
+
+    /// Reads a texture a scene file names, relative to the scene file: an error names the
+    /// field and the image.
+    fn texture(
+        &self,
+        field: &str,
+        t: &TextureFile,
+        usage: Usage,
+        textures: &mut Textures,
+    ) -> Result<u32, SceneError> {
+        let scale = t.scale.unwrap_or([1.0, 1.0]);
+        if !scale.iter().all(|s| s.is_finite() && *s != 0.0) {
+            return Err(self.invalid(
+                format!("{field}.scale"),
+                format!("must be finite and non-zero, got {scale:?}"),
+            ));
+        }
+        let r = TextureRef {
+            path: self.dir.join(&t.texture),
+            usage,
+            scale,
+            optional: false,
+        };
+        textures.add(&r, self.files).map_err(|e| {
+            let message = match e {
+                TextureError::Fatal(e) => e.to_string(),
+                TextureError::Missing(file) => format!("cannot read {file}"),
+            };
+            self.invalid(format!("{field}.texture"), message)
+        })
+    }
+
+    fn material(
+        &self,
+        name: &str,
+        m: &MaterialFile,
+        textures: &mut Textures,
+    ) -> Result<Material, SceneError> {
         // A quoted TOML key may hold any character; keep messages on one line.
         let field = |key: &str| format!("materials.{}.{key}", name.escape_debug());
         let not_for = |key: &str| {
@@ -369,23 +504,30 @@ impl Ctx<'_> {
         if kind == MaterialKind::DIFFUSE {
             mat.albedo = Vec3::splat(0.8);
         }
-        if let Some(a) = m.albedo {
+        if let Some(a) = &m.albedo {
             if kind == MaterialKind::DIELECTRIC {
                 return Err(not_for("albedo"));
             }
-            mat.albedo = self.color(&field("albedo"), a)?;
+            (mat.albedo, mat.albedo_texture) =
+                self.color_param(&field("albedo"), a, false, textures)?;
         }
-        if let Some(e) = m.emission {
-            mat.emission = self.color(&field("emission"), e)?;
+        if let Some(e) = &m.emission {
+            (mat.emission, mat.emission_texture) =
+                self.color_param(&field("emission"), e, true, textures)?;
         }
-        match (kind, m.roughness) {
-            (MaterialKind::ROUGH_CONDUCTOR, Some(r)) => {
+        match (kind, &m.roughness) {
+            (MaterialKind::ROUGH_CONDUCTOR, Some(ScalarFile::Value(r))) => {
                 mat.roughness = self.scalar(
                     &field("roughness"),
-                    r,
+                    *r,
                     |r| (0.0..=1.0).contains(&r),
                     "in [0, 1]",
                 )?;
+            }
+            (MaterialKind::ROUGH_CONDUCTOR, Some(ScalarFile::Texture(t))) => {
+                let usage = Usage::Scalar { channel: 0 };
+                mat.roughness = 1.0;
+                mat.roughness_texture = self.texture(&field("roughness"), t, usage, textures)?;
             }
             (MaterialKind::ROUGH_CONDUCTOR, None) => {
                 return Err(self.invalid(field("roughness"), "is required for rough_conductor"));
@@ -415,10 +557,11 @@ impl Ctx<'_> {
             None => None,
         };
         let transform = self.transform(o, &field)?;
+        let object_error = |message: String| self.invalid(format!("objects[{i}]"), message);
         match (&o.mesh, &o.sphere) {
             (Some(mesh), None) => {
                 let part = load_obj(&self.dir.join(mesh), self.files)?;
-                builder.append_part(part, transform, material);
+                builder.append_part(part, transform, material, self.files, &object_error)?;
             }
             (None, Some(s)) => {
                 let center = self.vec3(&field("sphere.center"), s.center)?;
@@ -443,14 +586,13 @@ impl Ctx<'_> {
                         .map(|f| PartTriangle {
                             p: f,
                             n: f,
+                            t: [NO_UV; 3],
                             material: None,
                         })
                         .collect(),
-                    materials: Vec::new(),
-                    material_names: Vec::new(),
-                    warnings: Vec::new(),
+                    ..MeshPart::default()
                 };
-                builder.append_part(part, transform, material);
+                builder.append_part(part, transform, material, self.files, &object_error)?;
             }
             (Some(_), Some(_)) => {
                 return Err(self.invalid(

@@ -92,6 +92,17 @@ impl Material {
         }
     }
 
+    /// Whether any parameter reads a texture.
+    pub fn has_texture(&self) -> bool {
+        [
+            self.albedo_texture,
+            self.emission_texture,
+            self.roughness_texture,
+        ]
+        .iter()
+        .any(|&t| t != NO_TEXTURE)
+    }
+
     /// mirror: shaders/material.wgsl `is_emissive`
     pub fn is_emissive(&self) -> bool {
         self.emission.max_element() > 0.0

@@ -12,16 +12,21 @@ pub mod material;
 pub mod mtl;
 pub mod obj;
 pub mod sphere;
+pub mod texture;
 
 pub use camera::Camera;
 pub use load::{load_scene, load_scene_from, parse_scene};
 pub use material::{Material, MaterialKind, NO_TEXTURE};
+pub use texture::{Texture, TextureFormat, Textures};
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::path::PathBuf;
 
 /// Index value of a triangle corner that has no vertex normal.
 pub const NO_NORMAL: u32 = u32::MAX;
+
+/// Index value of a triangle corner that has no texture coordinate.
+pub const NO_UV: u32 = u32::MAX;
 
 /// One triangle of the scene mesh, by index into [`Mesh::positions`] and [`Mesh::normals`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -29,6 +34,8 @@ pub struct Triangle {
     pub p: [u32; 3],
     /// Vertex normal indices, or `[NO_NORMAL; 3]` for flat shading.
     pub n: [u32; 3],
+    /// Texture coordinate indices into [`Mesh::texcoords`], or `[NO_UV; 3]`.
+    pub t: [u32; 3],
     pub material: u32,
 }
 
@@ -37,6 +44,8 @@ pub struct Triangle {
 pub struct Mesh {
     pub positions: Vec<Vec3>,
     pub normals: Vec<Vec3>,
+    /// Texture coordinates, v running down an image from its top edge.
+    pub texcoords: Vec<Vec2>,
     pub triangles: Vec<Triangle>,
 }
 
@@ -101,6 +110,8 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// `material_names[i]` names `materials[i]` in messages (its scene-file or MTL name).
     pub material_names: Vec<String>,
+    /// The textures material slots index, with their texels.
+    pub textures: Textures,
     pub mesh: Mesh,
     /// Problems that did not stop loading (a missing MTL file, dropped degenerate triangles).
     pub warnings: Vec<String>,
@@ -134,6 +145,9 @@ pub enum SceneError {
         field: String,
         message: String,
     },
+    /// An image that cannot be read as a texture.
+    #[error("{path}: {message}")]
+    Image { path: String, message: String },
     /// A problem with an OBJ file or an MTL library it loads (`path` names the file at
     /// fault), at `line` when one line is at fault; whole-mesh problems have no line.
     #[error("{path}{}: {message}", at_line(*.line))]

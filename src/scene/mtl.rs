@@ -5,8 +5,10 @@
 //! the same: `Kd`, `Ks` and `Ke` take their first three numbers (`Ke` also a single grey
 //! value), `Ni`, `d` and `illum` their first, and `Pm` and `Pr` exactly one. Where tobj
 //! failed or panicked on a line (`Kd 0.5`, a word that is not a number, a `newmtl` without
-//! a name) the library is an error naming that line. Every other statement (`Ka`, `Ns`,
-//! `Tr`, texture maps, unknown keywords) is ignored: nothing reads it.
+//! a name) the library is an error naming that line. The texture maps `map_Kd`, `map_Ke`
+//! and `map_Pr` are read with their option flags (`-s` sets the UV scale; the others are
+//! ignored, with a warning), as is `map_d` (ignored, with a warning). Every other statement
+//! (`Ka`, `Ns`, `Tr`, unknown keywords) is ignored: nothing reads it.
 
 use super::obj::{BadLine, quoted, text_lines};
 use glam::Vec3;
@@ -32,14 +34,49 @@ pub struct MtlMaterial {
     pub metallic: Option<f32>,
     /// `Pr` (PBR extension: roughness).
     pub roughness: Option<f32>,
+    /// `map_Kd`, `map_Ke`, `map_Pr`.
+    pub map_diffuse: Option<MtlMap>,
+    pub map_emission: Option<MtlMap>,
+    pub map_roughness: Option<MtlMap>,
 }
 
+/// A texture map statement: its image (relative to the library) and UV scale.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MtlMap {
+    pub file: String,
+    /// From `-s su sv`; (1, 1) without it.
+    pub scale: [f32; 2],
+}
+
+/// The option flags of MTL texture maps and how many values each takes (`-o`, `-s`, `-t`
+/// take one to three numbers).
+const MAP_OPTIONS: [(&str, usize); 13] = [
+    ("-blendu", 1),
+    ("-blendv", 1),
+    ("-boost", 1),
+    ("-mm", 2),
+    ("-o", 3),
+    ("-s", 3),
+    ("-t", 3),
+    ("-texres", 1),
+    ("-clamp", 1),
+    ("-bm", 1),
+    ("-imfchan", 1),
+    ("-type", 1),
+    ("-cc", 1),
+];
+
+/// What was read from a library: its materials, and warnings with their lines.
+pub(super) type Library = (Vec<MtlMaterial>, Vec<(usize, String)>);
+
 /// Reads an MTL library: its materials in file order (a name defined twice is listed
-/// twice; whoever looks names up takes the last). Statements before the first `newmtl` are
-/// checked and belong to no material. Lines are split at `\n` like an OBJ's.
-pub(super) fn parse_mtl(bytes: &[u8]) -> Result<Vec<MtlMaterial>, BadLine> {
+/// twice; whoever looks names up takes the last), and warnings about what it ignores.
+/// Statements before the first `newmtl` are checked and belong to no material. Lines are
+/// split at `\n` like an OBJ's.
+pub(super) fn parse_mtl(bytes: &[u8]) -> Result<Library, BadLine> {
     let (text, not_utf8) = text_lines(bytes);
     let mut materials = Vec::new();
+    let mut warnings = Vec::new();
     let mut current: Option<MtlMaterial> = None;
     for (i, raw) in text.split('\n').enumerate() {
         let bad = |message: String| BadLine {
@@ -73,6 +110,20 @@ pub(super) fn parse_mtl(bytes: &[u8]) -> Result<Vec<MtlMaterial>, BadLine> {
             "d" => m.dissolve = Some(first_number(keyword, words).map_err(bad)?),
             "Pm" => m.metallic = Some(only_number(keyword, words).map_err(bad)?),
             "Pr" => m.roughness = Some(only_number(keyword, words).map_err(bad)?),
+            "map_Kd" | "map_Ke" | "map_Pr" => {
+                let rest = line[keyword.len()..].trim();
+                let map =
+                    texture_map(keyword, rest, &mut |w| warnings.push((i + 1, w))).map_err(bad)?;
+                match keyword {
+                    "map_Kd" => m.map_diffuse = Some(map),
+                    "map_Ke" => m.map_emission = Some(map),
+                    _ => m.map_roughness = Some(map),
+                }
+            }
+            "map_d" => warnings.push((
+                i + 1,
+                "`map_d` (an opacity map) is ignored: the surface is opaque".into(),
+            )),
             "illum" => {
                 let Some(word) = words.next() else {
                     return Err(bad(
@@ -94,7 +145,69 @@ pub(super) fn parse_mtl(bytes: &[u8]) -> Result<Vec<MtlMaterial>, BadLine> {
         return Err(bad);
     }
     materials.extend(current);
-    Ok(materials)
+    Ok((materials, warnings))
+}
+
+/// A texture map statement's options and file name (the rest of the line, which may hold
+/// spaces). `-s` sets the scale; other options are ignored with a warning.
+fn texture_map(keyword: &str, rest: &str, warn: &mut dyn FnMut(String)) -> Result<MtlMap, String> {
+    let mut scale = [1.0f32, 1.0];
+    let mut rest = rest;
+    while rest.starts_with('-') {
+        let (flag, after) = rest.split_once(char::is_whitespace).unwrap_or((rest, ""));
+        let Some(&(_, arity)) = MAP_OPTIONS.iter().find(|(f, _)| *f == flag) else {
+            return Err(format!(
+                "malformed `{keyword}`: unknown option {}",
+                quoted(flag)
+            ));
+        };
+        let mut after = after.trim_start();
+        let mut values = Vec::new();
+        let numeric = matches!(
+            flag,
+            "-o" | "-s" | "-t" | "-mm" | "-boost" | "-bm" | "-texres"
+        );
+        while values.len() < arity {
+            let (word, tail) = after.split_once(char::is_whitespace).unwrap_or((after, ""));
+            // `-o`, `-s` and `-t` take one to three numbers; the file name follows.
+            if word.is_empty() || (numeric && word.parse::<f32>().is_err()) {
+                break;
+            }
+            values.push(word);
+            after = tail.trim_start();
+        }
+        let needed = if matches!(flag, "-o" | "-s" | "-t") {
+            1
+        } else {
+            arity
+        };
+        if values.len() < needed {
+            return Err(format!(
+                "malformed `{keyword}`: option {flag} needs {needed} value{}",
+                if needed == 1 { "" } else { "s" }
+            ));
+        }
+        if flag == "-s" {
+            let su: f32 = values[0].parse().unwrap_or(1.0);
+            let sv: f32 = values.get(1).map_or(Ok(1.0), |v| v.parse()).unwrap_or(1.0);
+            if !(su.is_finite() && sv.is_finite() && su != 0.0 && sv != 0.0) {
+                return Err(format!(
+                    "malformed `{keyword}`: -s needs finite non-zero scales, got {su} {sv}"
+                ));
+            }
+            scale = [su, sv];
+        } else {
+            warn(format!("option {flag} of `{keyword}` is ignored"));
+        }
+        rest = after;
+    }
+    if rest.is_empty() {
+        return Err(format!("malformed `{keyword}`: names no image file"));
+    }
+    Ok(MtlMap {
+        file: rest.to_string(),
+        scale,
+    })
 }
 
 /// A colour statement's first three numbers (further words are ignored, as tobj did); with

@@ -8,9 +8,10 @@
 //! of every error, and a face only partly given `vn` indices is flat-shaded rather than
 //! borrowing a neighbour's normal.
 
-use super::mtl::{MtlMaterial, parse_mtl};
-use super::{Material, MaterialKind, NO_NORMAL, SceneError};
-use glam::Vec3;
+use super::mtl::{MtlMap, MtlMaterial, parse_mtl};
+use super::texture::{TextureRef, Usage};
+use super::{Material, MaterialKind, NO_NORMAL, NO_UV, SceneError};
+use glam::{Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -38,6 +39,9 @@ pub struct MeshPart {
     pub positions: Vec<Vec3>,
     /// Every vertex normal the part defines (for an OBJ, every `vn` line in file order).
     pub normals: Vec<Vec3>,
+    /// Every texture coordinate the part defines, v running down the image from its top
+    /// edge (an OBJ `vt u v` is (u, −v): OBJ runs v up from the bottom edge).
+    pub texcoords: Vec<Vec2>,
     /// The triangles, in file order.
     pub triangles: Vec<PartTriangle>,
     /// The materials the triangles refer to: for an OBJ, every material of every library it
@@ -45,6 +49,8 @@ pub struct MeshPart {
     pub materials: Vec<Material>,
     /// The MTL name of each of `materials`.
     pub material_names: Vec<String>,
+    /// The textures the materials' texture slots index, before their images are read.
+    pub textures: Vec<TextureRef>,
     /// Problems that did not stop loading, each one line naming the file.
     pub warnings: Vec<String>,
 }
@@ -57,6 +63,9 @@ pub struct PartTriangle {
     /// Corner normals, indices into [`MeshPart::normals`], or `[NO_NORMAL; 3]` for a
     /// flat-shaded triangle.
     pub n: [u32; 3],
+    /// Corner texture coordinates, indices into [`MeshPart::texcoords`], or `[NO_UV; 3]`
+    /// when not every corner of the face has one.
+    pub t: [u32; 3],
     /// Index into [`MeshPart::materials`], or `None` for a face that names no material
     /// (or an unknown one): the scene's default material.
     pub material: Option<u32>,
@@ -90,9 +99,9 @@ const ELEMENTS: [(&str, &str); 3] = [
     ("normal", "normals"),
 ];
 
-/// One corner of the face being read: its position index and its normal index (or
-/// `NO_NORMAL`), 0-based.
-type Corner = (u32, u32);
+/// One corner of the face being read: its position, normal and texture coordinate
+/// indices, 0-based (`NO_NORMAL` for a missing normal or texture coordinate).
+type Corner = (u32, u32, u32);
 
 /// Parses an OBJ file's bytes; `shown` names it in messages and warnings, `dir` anchors its
 /// `mtllib` paths, which are read through `files`.
@@ -144,8 +153,8 @@ fn parse_obj(
                 defined[0] += 1;
             }
             Some("vt") => {
-                check_numbers(words, 2..=3, "texture coordinate (`vt`)", "u v or u v w")
-                    .map_err(bad)?;
+                let uv = parse_texcoord(words).map_err(bad)?;
+                part.texcoords.push(uv);
                 defined[1] += 1;
             }
             Some("vn") => {
@@ -163,6 +172,7 @@ fn parse_obj(
                 corners.clear();
                 let mut count = 0usize;
                 let mut all_normals = true;
+                let mut all_uvs = true;
                 for word in words {
                     count += 1;
                     let Some(corner) = parse_corner(word) else {
@@ -174,6 +184,7 @@ fn parse_obj(
                         )));
                     };
                     all_normals &= corner[2].is_some();
+                    all_uvs &= corner[1].is_some();
                     if !polygon {
                         continue;
                     }
@@ -210,7 +221,7 @@ fn parse_obj(
                         // below), so saturating loses nothing.
                         resolved[k] = u32::try_from(zero_based).unwrap_or(u32::MAX);
                     }
-                    corners.push((resolved[0], resolved[2]));
+                    corners.push((resolved[0], resolved[2], resolved[1]));
                 }
                 if face && count < 3 {
                     return Err(bad(format!(
@@ -233,6 +244,7 @@ fn parse_obj(
                             } else {
                                 [NO_NORMAL; 3]
                             },
+                            t: if all_uvs { [a.2, b.2, c.2] } else { [NO_UV; 3] },
                             material: current,
                         });
                     }
@@ -258,14 +270,21 @@ fn parse_obj(
                     failed_libraries.push(format!("{} (cannot open file)", super::shown(&lib)));
                     continue;
                 };
-                let materials = parse_mtl(&lib_bytes).map_err(|bad| SceneError::Obj {
-                    path: super::shown(&lib),
-                    line: Some(bad.line),
-                    message: bad.message,
-                })?;
+                let (materials, warnings) =
+                    parse_mtl(&lib_bytes).map_err(|bad| SceneError::Obj {
+                        path: super::shown(&lib),
+                        line: Some(bad.line),
+                        message: bad.message,
+                    })?;
+                for (line, warning) in warnings {
+                    part.warnings
+                        .push(format!("{}:{line}: {warning}", super::shown(&lib)));
+                }
+                let lib_dir = lib.parent().unwrap_or(Path::new(""));
                 for m in materials {
                     by_name.insert(m.name.clone(), part.materials.len() as u32);
-                    part.materials.push(map_mtl(&m));
+                    part.materials
+                        .push(map_mtl(&m, lib_dir, &mut part.textures));
                     part.material_names.push(m.name.clone());
                 }
             }
@@ -294,12 +313,19 @@ fn parse_obj(
             ),
         }));
     }
-    // Indices are `u32`, and `NO_NORMAL` is `u32::MAX`.
-    if part.positions.len() >= u32::MAX as usize || part.normals.len() >= u32::MAX as usize {
+    // Indices are `u32`, and `NO_NORMAL` and `NO_UV` are `u32::MAX`.
+    if [
+        part.positions.len(),
+        part.normals.len(),
+        part.texcoords.len(),
+    ]
+    .iter()
+    .any(|&n| n >= u32::MAX as usize)
+    {
         return Err(SceneError::Obj {
             path: shown.to_string(),
             line: None,
-            message: "more than 2^32 - 2 vertices or normals".into(),
+            message: "more than 2^32 - 2 vertices, normals or texture coordinates".into(),
         });
     }
     for lib in &failed_libraries {
@@ -446,18 +472,32 @@ fn parse_normal(words: std::str::SplitWhitespace) -> Result<Vec3, String> {
     Ok(Vec3::from(values))
 }
 
-/// Checks that a line's fields after its keyword are a count of numbers within `allowed`;
-/// `what` and `form` name the element and its fields in the message.
-fn check_numbers(
-    words: std::str::SplitWhitespace,
-    allowed: std::ops::RangeInclusive<usize>,
-    what: &str,
-    form: &str,
-) -> Result<(), String> {
-    check_numbers_into(words, &mut [], allowed, what, form).map(|_| ())
+/// A `vt` line's u and v (an optional w is checked and ignored), finite, in meshtrace's
+/// convention, where v runs down the image from its top edge: (u, −v). OBJ runs v up from
+/// the bottom edge; a lookup wraps −v to 1 − v, and negating rather than subtracting from
+/// 1 keeps a UV scale (`-s`, `scale`) tiling from the bottom edge, as in the file's own
+/// terms.
+fn parse_texcoord(words: std::str::SplitWhitespace) -> Result<Vec2, String> {
+    let mut values = [0f32; 2];
+    check_numbers_into(
+        words,
+        &mut values,
+        2..=3,
+        "texture coordinate (`vt`)",
+        "u v or u v w",
+    )?;
+    let [u, v] = values;
+    if !(u.is_finite() && v.is_finite()) {
+        return Err(format!(
+            "texture coordinate (`vt`) has a non-finite value: {u} {v}"
+        ));
+    }
+    Ok(Vec2::new(u, -v))
 }
 
-/// [`check_numbers`], keeping the first numbers in `values`; returns the count.
+/// Checks that a line's fields after its keyword are a count of numbers within `allowed`,
+/// keeping the first numbers in `values`; returns the count. `what` and `form` name the
+/// element and its fields in the message.
 fn check_numbers_into(
     words: std::str::SplitWhitespace,
     values: &mut [f32],
@@ -510,29 +550,61 @@ fn continuation_hint(word: &str) -> &'static str {
 }
 
 /// The MTL mapping of the scene format: Kd, Ke, illum 3 / Pm (conductors, rough with Pr),
-/// illum 7 / d < 1 with Ni > 1 (dielectric).
-pub fn map_mtl(m: &MtlMaterial) -> Material {
+/// illum 7 / d < 1 with Ni > 1 (dielectric); `map_Kd`, `map_Ke` and `map_Pr` (relative to
+/// `dir`, the library's folder) multiply their statement's value, or 1 where it is absent.
+/// The maps are appended to `textures`, which the material's slots index.
+pub fn map_mtl(m: &MtlMaterial, dir: &Path, textures: &mut Vec<TextureRef>) -> Material {
     let kd = m.diffuse.unwrap_or(Vec3::splat(0.8));
     let ks = m.specular;
     let illum = m.illumination_model;
     let metallic = illum == Some(3) || m.metallic.is_some_and(|pm| pm >= 0.5);
     let ior = m.optical_density.unwrap_or(1.0);
     let glass = illum == Some(7) || (m.dissolve.is_some_and(|d| d < 1.0) && ior > 1.0);
+    let mut slot = |map: &MtlMap, usage: Usage| {
+        textures.push(TextureRef {
+            path: dir.join(&map.file),
+            usage,
+            scale: map.scale,
+            optional: true,
+        });
+        textures.len() as u32 - 1
+    };
     let mut mat = Material::diffuse(kd);
+    // A map multiplies its statement's value, or 1 where the statement is absent.
+    let albedo_map = |mat: &mut Material, slot: &mut dyn FnMut(&MtlMap, Usage) -> u32| {
+        if let Some(map) = &m.map_diffuse {
+            mat.albedo = m.diffuse.unwrap_or(Vec3::ONE);
+            mat.albedo_texture = slot(map, Usage::Colour);
+        }
+    };
     if glass {
         mat.kind = MaterialKind::DIELECTRIC;
         mat.albedo = Vec3::ONE;
         mat.ior = if ior > 0.0 { ior } else { 1.5 };
     } else if metallic {
-        mat.albedo = ks.unwrap_or(kd);
-        match m.roughness {
-            Some(r) if r > 0.0 => {
+        match ks {
+            Some(ks) => mat.albedo = ks,
+            None => albedo_map(&mut mat, &mut slot),
+        }
+        match (m.roughness, &m.map_roughness) {
+            (r, Some(map)) => {
+                mat.kind = MaterialKind::ROUGH_CONDUCTOR;
+                mat.roughness = r.filter(|&r| r > 0.0).unwrap_or(1.0).min(1.0);
+                mat.roughness_texture = slot(map, Usage::Scalar { channel: 0 });
+            }
+            (Some(r), None) if r > 0.0 => {
                 mat.kind = MaterialKind::ROUGH_CONDUCTOR;
                 mat.roughness = r.min(1.0);
             }
             _ => mat.kind = MaterialKind::CONDUCTOR,
         }
+    } else {
+        albedo_map(&mut mat, &mut slot);
     }
     mat.emission = m.emission.unwrap_or(Vec3::ZERO).max(Vec3::ZERO);
+    if let Some(map) = &m.map_emission {
+        mat.emission = m.emission.unwrap_or(Vec3::ONE).max(Vec3::ZERO);
+        mat.emission_texture = slot(map, Usage::Colour);
+    }
     mat
 }

@@ -57,6 +57,28 @@ impl TempDir {
         p
     }
 
+    /// Writes an 8-bit RGBA PNG of `width` × `height` texels, row by row from the top.
+    pub fn write_png(&self, name: &str, width: u32, height: u32, texels: &[[u8; 4]]) -> PathBuf {
+        let p = self.0.join(name);
+        let data: Vec<u8> = texels.iter().flatten().copied().collect();
+        image::RgbaImage::from_raw(width, height, data)
+            .expect("width × height texels")
+            .save(&p)
+            .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        p
+    }
+
+    /// Writes a 32-bit float RGBA EXR of `width` × `height` texels, row by row from the top.
+    pub fn write_exr(&self, name: &str, width: u32, height: u32, texels: &[[f32; 4]]) -> PathBuf {
+        let p = self.0.join(name);
+        let data: Vec<f32> = texels.iter().flatten().copied().collect();
+        image::Rgba32FImage::from_raw(width, height, data)
+            .expect("width × height texels")
+            .save(&p)
+            .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        p
+    }
+
     /// The names in the directory, sorted.
     pub fn entries(&self) -> Vec<String> {
         let mut names: Vec<String> = std::fs::read_dir(&self.0)

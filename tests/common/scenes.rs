@@ -55,6 +55,7 @@ pub fn add_box(mesh: &mut Mesh, min: Vec3, max: Vec3, material: u32, inward: boo
             mesh.triangles.push(Triangle {
                 p,
                 n: [NO_NORMAL; 3],
+                t: [meshtrace::scene::NO_UV; 3],
                 material,
             });
         }
@@ -76,6 +77,7 @@ pub fn scene(
         settings,
         material_names: (0..materials.len()).map(|i| format!("m{i}")).collect(),
         materials,
+        textures: Default::default(),
         mesh,
         warnings: Vec::new(),
     }
@@ -94,6 +96,7 @@ pub fn add_sphere(mesh: &mut Mesh, centre: Vec3, radius: f32, level: u32, materi
         mesh.triangles.push(Triangle {
             p: t.map(|i| base_p + i),
             n: t.map(|i| base_n + i),
+            t: [meshtrace::scene::NO_UV; 3],
             material,
         });
     }
@@ -114,6 +117,7 @@ pub fn material_table(materials: Vec<Material>) -> (RenderScene, RenderSettings)
         mesh.triangles.push(Triangle {
             p: [base, base + 1, base + 2],
             n: [NO_NORMAL; 3],
+            t: [meshtrace::scene::NO_UV; 3],
             material: i,
         });
     }

@@ -5,7 +5,7 @@
 //! `tests/layout.rs` checks each against naga's layout of its WGSL twin in
 //! `shaders/types.wgsl`, so no third copy of a layout is kept by hand.
 
-use crate::scene::MaterialKind;
+use crate::scene::{MaterialKind, TextureFormat};
 use glam::Vec3;
 
 /// A Rust field type and the WGSL type it is uploaded as.
@@ -29,11 +29,19 @@ impl WgslType for Vec3 {
     const WGSL: &'static str = "vec3<f32>";
 }
 
+impl WgslType for [f32; 2] {
+    const WGSL: &'static str = "vec2<f32>";
+}
+
 impl WgslType for [f32; 4] {
     const WGSL: &'static str = "vec4<f32>";
 }
 
 impl WgslType for MaterialKind {
+    const WGSL: &'static str = "u32";
+}
+
+impl WgslType for TextureFormat {
     const WGSL: &'static str = "u32";
 }
 

@@ -12,8 +12,8 @@ use crate::geometry::{GAMMA_2, GAMMA_3, SLAB_SLACK, T_INF};
 use crate::render::integrator::RR_DEPTH;
 use crate::render::rng;
 use crate::render::sampling::UNIFORM_SPHERE_PDF;
-use crate::render::{SKY_EMITTER, TRI_SMOOTH};
-use crate::scene::{MaterialKind, NO_TEXTURE};
+use crate::render::{SKY_EMITTER, TRI_SMOOTH, TRI_UV};
+use crate::scene::{MaterialKind, NO_TEXTURE, TextureFormat};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4, PI};
 
 /// The value of a shared constant.
@@ -43,6 +43,7 @@ pub fn shared_constants() -> Vec<(String, Value)> {
         ("STACK_SIZE", U32(STACK_SIZE as u32)),
         ("RR_DEPTH", U32(RR_DEPTH)),
         ("TRI_SMOOTH", U32(TRI_SMOOTH)),
+        ("TRI_UV", U32(TRI_UV)),
         ("SKY_EMITTER", U32(SKY_EMITTER)),
         ("NO_TEXTURE", U32(NO_TEXTURE)),
         ("TABLE_WIDTH_LOG2", U32(TABLE_WIDTH.ilog2())),
@@ -60,6 +61,9 @@ pub fn shared_constants() -> Vec<(String, Value)> {
     .into();
     for (kind, name) in MaterialKind::ALL {
         list.push((format!("MAT_{}", name.to_uppercase()), U32(kind.0)));
+    }
+    for (format, name) in TextureFormat::ALL {
+        list.push((format!("TEX_{}", name.to_uppercase()), U32(format.0)));
     }
     list
 }
@@ -111,6 +115,7 @@ const LIBRARY: &[Source] = &[
     shader!("traverse.wgsl"),
     shader!("bsdf.wgsl"),
     shader!("camera.wgsl"),
+    shader!("texture.wgsl"),
     shader!("lights.wgsl"),
     shader!("integrator.wgsl"),
 ];

@@ -9,8 +9,8 @@ use super::params::Params;
 use super::{GpuContext, GpuError};
 use crate::bvh::BvhNode;
 use crate::geometry::TriVerts;
-use crate::render::{RenderScene, TriShading};
-use crate::scene::Material;
+use crate::render::{RenderScene, TriShading, TriUvs};
+use crate::scene::{Material, Texture};
 
 /// Texels per row of the table textures (the shaders get its log2 from `shader::shared_constants`).
 pub const TABLE_WIDTH: u32 = 1 << 12;
@@ -99,6 +99,51 @@ pub const TABLES: &[Table] = &[
         bytes: |s| bytemuck::cast_slice(&s.materials),
     },
     Table {
+        what: "texture coordinates",
+        texture: "tri_uvs_tex",
+        loader: "load_tri_uvs",
+        element: || {
+            Element::Struct(struct_layout!(TriUvs {
+                uv0,
+                uv1,
+                uv2,
+                _pad
+            }))
+        },
+        bytes: |s| bytemuck::cast_slice(&s.tri_uvs),
+    },
+    Table {
+        what: "textures",
+        texture: "textures_tex",
+        loader: "load_texture",
+        element: || {
+            Element::Struct(struct_layout!(Texture {
+                offset,
+                width,
+                height,
+                format,
+                scale,
+                channel,
+                _pad,
+            }))
+        },
+        bytes: |s| bytemuck::cast_slice(&s.textures),
+    },
+    Table {
+        what: "texels",
+        texture: "texels_tex",
+        loader: "load_texel",
+        element: || Element::U32,
+        bytes: |s| bytemuck::cast_slice(&s.texels),
+    },
+    Table {
+        what: "texel decoding table",
+        texture: "texel_lut_tex",
+        loader: "load_texel_lut",
+        element: || Element::F32,
+        bytes: |s| bytemuck::cast_slice(&s.texel_lut),
+    },
+    Table {
         what: "emitters",
         texture: "emitters_tex",
         loader: "load_emitter",
@@ -147,16 +192,16 @@ pub fn wgsl_tables() -> String {
 fn struct_loader(t: &Table, layout: &StructLayout) -> String {
     assert!(layout.size % 16 == 0, "{}: not whole texels", layout.name);
     let texels = layout.size / 16;
-    let mut members: Vec<&Member> = layout
-        .members
-        .iter()
-        .filter(|m| m.wgsl != "padding")
-        .collect();
+    let mut members: Vec<&Member> = layout.members.iter().collect();
     members.sort_by_key(|m| m.offset);
     let mut used = vec![false; texels];
     let args: Vec<String> = members
         .iter()
         .map(|m| {
+            if m.wgsl == "padding" {
+                // An array of padding words is that many `u32` members in WGSL.
+                return vec!["0u"; m.size / 4].join(", ");
+            }
             let (texel, first) = (m.offset / 16, m.offset % 16 / 4);
             let words = m.size / 4;
             assert!(

@@ -1,0 +1,72 @@
+// Texture lookups. mirror: src/render/texture.rs — every function has a Rust twin of the
+// same name.
+
+// mirror: src/render/texture.rs `texel`
+fn texel(t: Texture, x: u32, y: u32) -> vec4<f32> {
+    let i = y * t.width + x;
+    if t.format == TEX_RGBA32F {
+        let k = t.offset + 4u * i;
+        return vec4<f32>(
+            bitcast<f32>(load_texel(k)),
+            bitcast<f32>(load_texel(k + 1u)),
+            bitcast<f32>(load_texel(k + 2u)),
+            bitcast<f32>(load_texel(k + 3u)),
+        );
+    }
+    let w = load_texel(t.offset + i);
+    let colour = select(256u, 0u, t.format == TEX_RGBA8_SRGB);
+    return vec4<f32>(
+        load_texel_lut(colour + (w & 255u)),
+        load_texel_lut(colour + ((w >> 8u) & 255u)),
+        load_texel_lut(colour + ((w >> 16u) & 255u)),
+        load_texel_lut(256u + (w >> 24u)),
+    );
+}
+
+// mirror: src/render/texture.rs `texture_lookup`
+fn texture_lookup(index: u32, uv: vec2<f32>) -> vec4<f32> {
+    let t = load_texture(index);
+    let s = uv * t.scale;
+    let f = s - floor(s);
+    let x = f.x * f32(t.width) - 0.5;
+    let y = f.y * f32(t.height) - 0.5;
+    let x0 = floor(x);
+    let y0 = floor(y);
+    let fx = x - x0;
+    let fy = y - y0;
+    let w = i32(t.width);
+    let h = i32(t.height);
+    let xa = u32((i32(x0) + w) % w);
+    let ya = u32((i32(y0) + h) % h);
+    let xb = (xa + 1u) % t.width;
+    let yb = (ya + 1u) % t.height;
+    let top = texel(t, xa, ya) * (1.0 - fx) + texel(t, xb, ya) * fx;
+    let bottom = texel(t, xa, yb) * (1.0 - fx) + texel(t, xb, yb) * fx;
+    return top * (1.0 - fy) + bottom * fy;
+}
+
+// mirror: src/render/texture.rs `triangle_uv`
+fn triangle_uv(tri: u32, b1: f32, b2: f32) -> vec2<f32> {
+    if (load_shading(tri).flags & TRI_UV) == 0u {
+        return vec2<f32>(0.0);
+    }
+    let t = load_tri_uvs(tri);
+    return (1.0 - b1 - b2) * t.uv0 + b1 * t.uv1 + b2 * t.uv2;
+}
+
+// mirror: src/render/texture.rs `material_at`
+fn material_at(m: Material, uv: vec2<f32>) -> Material {
+    var out = m;
+    if m.albedo_texture != NO_TEXTURE {
+        out.albedo *= texture_lookup(m.albedo_texture, uv).xyz;
+    }
+    if m.emission_texture != NO_TEXTURE {
+        out.emission *= texture_lookup(m.emission_texture, uv).xyz;
+    }
+    if m.roughness_texture != NO_TEXTURE {
+        let channel = load_texture(m.roughness_texture).channel;
+        let r = texture_lookup(m.roughness_texture, uv)[channel];
+        out.roughness = clamp(out.roughness * r, 0.0, 1.0);
+    }
+    return out;
+}

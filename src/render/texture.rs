@@ -1,0 +1,105 @@
+//! Texture lookups, the same on both renderers: texels decoded through one table
+//! ([`RenderScene::texel_lut`]) for 8-bit images, bilinear filtering with repeat wrapping,
+//! and materials whose textured parameters are evaluated at a surface point. Every
+//! function has a WGSL twin of the same name in `shaders/texture.wgsl`.
+
+use super::{RenderScene, TRI_UV};
+use crate::scene::{Material, NO_TEXTURE, Texture, TextureFormat};
+use glam::{Vec2, Vec3, Vec4};
+
+/// Texel (`x`, `y`) of texture `t`, decoded to linear RGBA: 8-bit channels through the
+/// decoding table (sRGB for colour formats, alpha always linear), floats as stored.
+/// mirror: shaders/texture.wgsl `texel`
+pub fn texel(scene: &RenderScene, t: &Texture, x: u32, y: u32) -> Vec4 {
+    let i = (y * t.width + x) as usize;
+    let k = t.offset as usize;
+    if t.format == TextureFormat::RGBA32F {
+        let w = &scene.texels[k + 4 * i..k + 4 * i + 4];
+        return Vec4::new(
+            f32::from_bits(w[0]),
+            f32::from_bits(w[1]),
+            f32::from_bits(w[2]),
+            f32::from_bits(w[3]),
+        );
+    }
+    let w = scene.texels[k + i];
+    let colour = if t.format == TextureFormat::RGBA8_SRGB {
+        0
+    } else {
+        256
+    };
+    let lut = |byte: u32, base: u32| scene.texel_lut[(base + (byte & 255)) as usize];
+    Vec4::new(
+        lut(w, colour),
+        lut(w >> 8, colour),
+        lut(w >> 16, colour),
+        lut(w >> 24, 256),
+    )
+}
+
+/// Texture `index` at `uv` (v running down from the image's top edge), scaled by the
+/// texture's UV scale: bilinear between the four nearest texel centres, wrapping around
+/// the edges.
+/// mirror: shaders/texture.wgsl `texture_lookup`
+pub fn texture_lookup(scene: &RenderScene, index: u32, uv: Vec2) -> Vec4 {
+    let t = &scene.textures[index as usize];
+    let s = uv * Vec2::from(t.scale);
+    // The image repeats: only the fractional part matters, which also keeps the integer
+    // conversions below in range for any finite coordinate.
+    let f = s - s.floor();
+    let x = f.x * t.width as f32 - 0.5;
+    let y = f.y * t.height as f32 - 0.5;
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let (w, h) = (t.width as i32, t.height as i32);
+    let xa = ((x0 as i32 + w) % w) as u32;
+    let ya = ((y0 as i32 + h) % h) as u32;
+    let xb = (xa + 1) % t.width;
+    let yb = (ya + 1) % t.height;
+    let top = texel(scene, t, xa, ya) * (1.0 - fx) + texel(scene, t, xb, ya) * fx;
+    let bottom = texel(scene, t, xa, yb) * (1.0 - fx) + texel(scene, t, xb, yb) * fx;
+    top * (1.0 - fy) + bottom * fy
+}
+
+/// The texture coordinates of triangle `tri` at barycentrics (`b1`, `b2`) of its second
+/// and third corners; zero for a triangle without texture coordinates.
+/// mirror: shaders/texture.wgsl `triangle_uv`
+pub fn triangle_uv(scene: &RenderScene, tri: u32, b1: f32, b2: f32) -> Vec2 {
+    if scene.shading[tri as usize].flags & TRI_UV == 0 {
+        return Vec2::ZERO;
+    }
+    let t = &scene.tri_uvs[tri as usize];
+    (1.0 - b1 - b2) * Vec2::from(t.uv0) + b1 * Vec2::from(t.uv1) + b2 * Vec2::from(t.uv2)
+}
+
+/// `m` with every textured parameter multiplied by its texture at `uv`; a material
+/// without textures is returned as it is. Roughness stays within [0, 1].
+/// mirror: shaders/texture.wgsl `material_at`
+pub fn material_at(scene: &RenderScene, m: &Material, uv: Vec2) -> Material {
+    let mut out = *m;
+    if m.albedo_texture != NO_TEXTURE {
+        out.albedo *= texture_lookup(scene, m.albedo_texture, uv).truncate();
+    }
+    if m.emission_texture != NO_TEXTURE {
+        out.emission *= texture_lookup(scene, m.emission_texture, uv).truncate();
+    }
+    if m.roughness_texture != NO_TEXTURE {
+        let channel = scene.textures[m.roughness_texture as usize].channel as usize;
+        let r = texture_lookup(scene, m.roughness_texture, uv)[channel];
+        out.roughness = (out.roughness * r).clamp(0.0, 1.0);
+    }
+    out
+}
+
+/// The mean colour of texture `index` over its texels, for weighing textured emitters by
+/// power (host only).
+pub fn texture_mean(scene: &RenderScene, index: u32) -> Vec3 {
+    let t = &scene.textures[index as usize];
+    let mut sum = glam::DVec3::ZERO;
+    for y in 0..t.height {
+        for x in 0..t.width {
+            sum += texel(scene, t, x, y).truncate().as_dvec3();
+        }
+    }
+    (sum / (t.width as f64 * t.height as f64)).as_vec3()
+}

@@ -1,0 +1,268 @@
+//! Image textures: the record a material's texture slot points to ([`Texture`]), and the
+//! scene's texture table ([`Textures`]), which reads each image file once and packs its
+//! texels into one array of 32-bit words. 8-bit images stay 8-bit (one word a texel,
+//! RGBA); 16-bit and floating-point images (HDR, EXR) are stored as four `f32` words a
+//! texel. The lookup, the same on both renderers, is `render::texture`.
+
+use super::SceneError;
+use super::obj::FileSource;
+use bytemuck::{Pod, Zeroable};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// How a texture's texels are stored and decoded: a `u32` code, as the shaders compare it.
+#[repr(transparent)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Pod, Zeroable)]
+pub struct TextureFormat(pub u32);
+
+impl TextureFormat {
+    /// One word a texel, RGBA 8 bits each; colour channels sRGB-encoded.
+    pub const RGBA8_SRGB: Self = Self(0);
+    /// One word a texel, RGBA 8 bits each, linear.
+    pub const RGBA8_LINEAR: Self = Self(1);
+    /// Four words a texel, RGBA `f32`, linear.
+    pub const RGBA32F: Self = Self(2);
+
+    /// Every format with its name for the shaders' constants (`TEX_*`).
+    pub const ALL: [(Self, &'static str); 3] = [
+        (Self::RGBA8_SRGB, "rgba8_srgb"),
+        (Self::RGBA8_LINEAR, "rgba8_linear"),
+        (Self::RGBA32F, "rgba32f"),
+    ];
+
+    /// Words of the texel table per texel.
+    pub fn words_per_texel(self) -> usize {
+        if self == Self::RGBA32F { 4 } else { 1 }
+    }
+}
+
+/// One texture as a material slot reads it (32 bytes): an image in the texel table, how
+/// its texels decode, its UV tiling, and for a scalar parameter the channel it reads.
+/// mirror: shaders/types.wgsl `Texture`
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct Texture {
+    /// Index of the image's first word in the texel table.
+    pub offset: u32,
+    pub width: u32,
+    pub height: u32,
+    pub format: TextureFormat,
+    /// UV multipliers: (2, 2) repeats the image twice each way.
+    pub scale: [f32; 2],
+    /// The channel a scalar parameter reads (0 = red).
+    pub channel: u32,
+    pub _pad: u32,
+}
+
+/// How a parameter reads its texture.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Usage {
+    /// A colour (albedo, emission): 8-bit images are sRGB-decoded.
+    Colour,
+    /// A number read from one channel, linear.
+    Scalar { channel: u32 },
+}
+
+/// A texture a material asks for before its image is read: the file, its use, its UV
+/// scale, and whether a missing file falls back to the parameter's constant factor (MTL
+/// and glTF files) or is an error (scene files).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureRef {
+    pub path: PathBuf,
+    pub usage: Usage,
+    pub scale: [f32; 2],
+    pub optional: bool,
+}
+
+/// The scene's textures: the records material slots index, and the texel table their
+/// images are packed into.
+#[derive(Clone, Debug, Default)]
+pub struct Textures {
+    pub records: Vec<Texture>,
+    /// The file each record reads, for messages.
+    pub names: Vec<String>,
+    pub texels: Vec<u32>,
+    /// Images already packed, by file and whether their texels were sRGB-decoded on the
+    /// way in (16-bit images for colour): (offset, width, height).
+    packed: HashMap<(PathBuf, bool), (u32, u32, u32)>,
+    /// What each file read so far holds.
+    kinds: HashMap<PathBuf, Kind>,
+}
+
+/// Why a texture could not be added.
+pub enum TextureError {
+    /// The file could not be read and the reference allows falling back.
+    Missing(String),
+    Fatal(SceneError),
+}
+
+impl Textures {
+    /// The index of a record reading `r`'s image as `r` says, reading and packing the image
+    /// unless an earlier record already did. `r.path` is shown in messages.
+    pub fn add(&mut self, r: &TextureRef, files: &dyn FileSource) -> Result<u32, TextureError> {
+        let shown = super::shown(&r.path);
+        let (kind, (offset, width, height)) = match self.cached(r) {
+            Some(found) => found,
+            None => self.pack(r, &shown, files)?,
+        };
+        let format = match (kind, r.usage) {
+            (Kind::Ldr, Usage::Colour) => TextureFormat::RGBA8_SRGB,
+            (Kind::Ldr, Usage::Scalar { .. }) => TextureFormat::RGBA8_LINEAR,
+            _ => TextureFormat::RGBA32F,
+        };
+        let record = Texture {
+            offset,
+            width,
+            height,
+            format,
+            scale: r.scale,
+            channel: match r.usage {
+                Usage::Colour => 0,
+                Usage::Scalar { channel } => channel,
+            },
+            _pad: 0,
+        };
+        if let Some(i) = self.records.iter().position(|t| *t == record) {
+            return Ok(i as u32);
+        }
+        self.records.push(record);
+        self.names.push(shown);
+        Ok(self.records.len() as u32 - 1)
+    }
+
+    /// Where `r`'s texels already lie, if an earlier texture packed them.
+    fn cached(&self, r: &TextureRef) -> Option<(Kind, (u32, u32, u32))> {
+        let kind = *self.kinds.get(&r.path)?;
+        let found = *self
+            .packed
+            .get(&(r.path.clone(), decodes_srgb(kind, r.usage)))?;
+        Some((kind, found))
+    }
+
+    /// Reads, decodes and packs `r`'s image.
+    fn pack(
+        &mut self,
+        r: &TextureRef,
+        shown: &str,
+        files: &dyn FileSource,
+    ) -> Result<(Kind, (u32, u32, u32)), TextureError> {
+        let bytes = match files.read(&r.path) {
+            Ok(bytes) => bytes,
+            Err(e) if r.optional => return Err(TextureError::Missing(format!("{shown} ({e})"))),
+            Err(source) => {
+                return Err(TextureError::Fatal(SceneError::Io {
+                    path: shown.to_string(),
+                    source,
+                }));
+            }
+        };
+        let invalid = |message: String| {
+            TextureError::Fatal(SceneError::Image {
+                path: shown.to_string(),
+                message,
+            })
+        };
+        let (kind, image) = decode(&r.path, &bytes).map_err(invalid)?;
+        let decode_srgb = decodes_srgb(kind, r.usage);
+        let offset = u32::try_from(self.texels.len())
+            .map_err(|_| invalid("the scene's textures exceed 2^32 words (16 GiB)".into()))?;
+        let (width, height) = (image.width(), image.height());
+        match image {
+            Decoded::Ldr(img) => self
+                .texels
+                .extend(img.pixels().map(|p| u32::from_le_bytes(p.0))),
+            Decoded::Float(image) => {
+                for p in image.pixels() {
+                    let [r, g, b, a] = p.0;
+                    let c = |x: f32| if decode_srgb { srgb_to_linear(x) } else { x };
+                    self.texels.extend([c(r), c(g), c(b), a].map(f32::to_bits));
+                }
+            }
+        }
+        if self.texels.len() > u32::MAX as usize {
+            return Err(invalid(
+                "the scene's textures exceed 2^32 words (16 GiB)".into(),
+            ));
+        }
+        self.kinds.insert(r.path.clone(), kind);
+        self.packed
+            .insert((r.path.clone(), decode_srgb), (offset, width, height));
+        Ok((kind, (offset, width, height)))
+    }
+
+    /// Bytes of the texel table.
+    pub fn bytes(&self) -> usize {
+        self.texels.len() * 4
+    }
+}
+
+/// What an image file holds: 8-bit channels, or more precise ones that are sRGB-encoded
+/// (16-bit integer images) or linear (HDR, EXR).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    Ldr,
+    FloatSrgb,
+    FloatLinear,
+}
+
+/// Whether texels of `kind` are sRGB-decoded when packed for `usage` (8-bit ones are
+/// decoded at lookup, through the decoding table, instead).
+fn decodes_srgb(kind: Kind, usage: Usage) -> bool {
+    kind == Kind::FloatSrgb && usage == Usage::Colour
+}
+
+/// A decoded image: 8-bit RGBA, or `f32` RGBA.
+enum Decoded {
+    Ldr(image::RgbaImage),
+    Float(image::Rgba32FImage),
+}
+
+impl Decoded {
+    fn width(&self) -> u32 {
+        match self {
+            Decoded::Ldr(i) => i.width(),
+            Decoded::Float(i) => i.width(),
+        }
+    }
+
+    fn height(&self) -> u32 {
+        match self {
+            Decoded::Ldr(i) => i.height(),
+            Decoded::Float(i) => i.height(),
+        }
+    }
+}
+
+/// Decodes an image file's bytes, the format named by its extension (TGA has no magic
+/// number) or else guessed from its first bytes.
+fn decode(path: &Path, bytes: &[u8]) -> Result<(Kind, Decoded), String> {
+    let format = image::ImageFormat::from_path(path)
+        .or_else(|_| image::guess_format(bytes))
+        .map_err(|_| {
+            "not an image format meshtrace reads (PNG, JPEG, BMP, TGA, HDR, EXR)".to_string()
+        })?;
+    let image = image::load_from_memory_with_format(bytes, format)
+        .map_err(|e| format!("cannot decode the image: {e}"))?;
+    if image.width() == 0 || image.height() == 0 {
+        return Err("the image has no pixels".into());
+    }
+    use image::DynamicImage as D;
+    Ok(match image {
+        D::ImageLuma8(_) | D::ImageLumaA8(_) | D::ImageRgb8(_) | D::ImageRgba8(_) => {
+            (Kind::Ldr, Decoded::Ldr(image.to_rgba8()))
+        }
+        D::ImageRgb32F(_) | D::ImageRgba32F(_) => {
+            (Kind::FloatLinear, Decoded::Float(image.to_rgba32f()))
+        }
+        other => (Kind::FloatSrgb, Decoded::Float(other.to_rgba32f())),
+    })
+}
+
+/// The sRGB transfer function's inverse on a value in [0, 1].
+fn srgb_to_linear(s: f32) -> f32 {
+    if s <= 0.04045 {
+        s / 12.92
+    } else {
+        ((s + 0.055) / 1.055).powf(2.4)
+    }
+}

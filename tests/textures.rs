@@ -1,0 +1,357 @@
+//! Image textures end to end, through scene files written for each test: a textured
+//! emitter seen directly renders its texture's mean (sRGB-decoded), the image's corners land
+//! where the scene format says OBJ texture coordinates put them, and both renderers agree.
+
+mod common;
+
+use common::fs::TempDir;
+use common::rand::SplitMix;
+use meshtrace::bvh::BuildParams;
+use meshtrace::film::{Film, srgb8_to_linear};
+use meshtrace::render::{RenderJob, RenderScene};
+use meshtrace::scene::{Scene, load_scene};
+
+/// A quad over [-1, 1]² at z = 0 facing +Z, OBJ texture coordinate (0, 0) at its
+/// bottom-left corner and (1, 1) at its top-right.
+const QUAD: &str = "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n\
+vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n";
+
+/// A scene that sees exactly the quad (a square image, vfov 40 degrees at the distance
+/// where the quad fills it), an emitter of `emission` (a TOML value), at `size`² pixels.
+fn emitter_scene(dir: &TempDir, emission: &str, size: u32, spp: u32) -> Scene {
+    dir.write("quad.obj", QUAD);
+    let distance = 1.0 / 20f64.to_radians().tan();
+    let toml = format!(
+        "[camera]\nposition = [0.0, 0.0, {distance}]\nlook_at = [0.0, 0.0, 0.0]\nvfov = 40.0\n\
+         [render]\nwidth = {size}\nheight = {size}\nspp = {spp}\nmax_depth = 1\n\
+         [materials.light]\ntype = \"diffuse\"\nalbedo = [0.0, 0.0, 0.0]\nemission = {emission}\n\
+         [[objects]]\nmesh = \"quad.obj\"\nmaterial = \"light\"\n"
+    );
+    let path = dir.write("scene.toml", toml);
+    load_scene(&path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn render_both(name: &str, scene: &Scene) -> Vec<(&'static str, Film)> {
+    let rs = RenderScene::new(scene, &BuildParams::default()).unwrap();
+    let job = RenderJob::new(scene.settings);
+    let mut out = vec![("cpu", common::cpu_render(&rs, &job))];
+    if let Some(ctx) = common::gpu(name) {
+        out.push(("gpu", common::gpu_render(&ctx, &rs, &job)));
+    }
+    out
+}
+
+/// A bilinear, repeat-wrapped texture integrates to the mean of its texels, so an emitter
+/// that fills the view renders strength × that mean, the texels decoded from sRGB. (Read
+/// as linear, the mean would be about twice as large.)
+#[test]
+fn textured_emitter_renders_the_mean_of_its_texels() {
+    let dir = TempDir::new("textured-emitter");
+    let mut r = SplitMix::new(0x7e47_0001);
+    let texels: Vec<[u8; 4]> = (0..32)
+        .map(|_| [0; 4].map(|_| (r.u32() >> 24) as u8))
+        .collect();
+    dir.write_png("light.png", 8, 4, &texels);
+    let strength = 2.0;
+    let scene = emitter_scene(
+        &dir,
+        &format!("{{ texture = \"light.png\", strength = {strength} }}"),
+        64,
+        16,
+    );
+    let mut expect = [0.0f64; 3];
+    for t in &texels {
+        for c in 0..3 {
+            expect[c] += strength * srgb8_to_linear(t[c]) as f64 / texels.len() as f64;
+        }
+    }
+    for (device, film) in render_both("textured_emitter", &scene) {
+        let mean = film.mean();
+        for c in 0..3 {
+            let m = mean.iter().map(|p| p[c] as f64).sum::<f64>() / mean.len() as f64;
+            let err = (m - expect[c]).abs() / expect[c];
+            eprintln!(
+                "{device}: channel {c}: mean {m:.5}, expected {:.5}",
+                expect[c]
+            );
+            assert!(
+                err < 0.005,
+                "{device}: channel {c}: mean {m}, expected {}",
+                expect[c]
+            );
+        }
+    }
+}
+
+/// OBJ texture coordinate (0, 0) is the image's bottom-left corner: a 2×2 image of red
+/// (top-left), green (top-right), blue (bottom-left) and white (bottom-right) appears the
+/// right way up on a quad whose vt run as the quad's corners.
+#[test]
+fn obj_texture_coordinates_put_the_image_the_right_way_up() {
+    let dir = TempDir::new("texture-orientation");
+    let (red, green, blue, white) = (
+        [255, 0, 0, 255],
+        [0, 255, 0, 255],
+        [0, 0, 255, 255],
+        [255, 255, 255, 255],
+    );
+    dir.write_png("corners.png", 2, 2, &[red, green, blue, white]);
+    let scene = emitter_scene(&dir, "{ texture = \"corners.png\" }", 32, 16);
+    for (device, film) in render_both("texture_orientation", &scene) {
+        let mean = film.mean();
+        for ((x, y), colour) in [
+            ((8, 8), red),
+            ((24, 8), green),
+            ((8, 24), blue),
+            ((24, 24), white),
+        ] {
+            let p = mean[y * 32 + x];
+            for c in 0..3 {
+                let want = colour[c] as f32 / 255.0;
+                assert!(
+                    (p[c] - want).abs() < 0.1,
+                    "{device}: pixel ({x}, {y}) is {p}, expected {colour:?}"
+                );
+            }
+        }
+    }
+}
+
+/// A UV scale tiles the image in the file's own terms: OBJ's v counts up from the image's
+/// bottom edge, so with `scale = [1, 1.5]` the quad's middle (v = 0.5, scaled 0.75) shows
+/// the texel centre a quarter of the way down from the top edge: the top row. (Flipping v
+/// before scaling would show the bottom row there.)
+#[test]
+fn a_uv_scale_tiles_in_the_files_own_terms() {
+    let dir = TempDir::new("texture-scale");
+    let (red, green, blue, white) = (
+        [255, 0, 0, 255],
+        [0, 255, 0, 255],
+        [0, 0, 255, 255],
+        [255, 255, 255, 255],
+    );
+    dir.write_png("corners.png", 2, 2, &[red, green, blue, white]);
+    let scene = emitter_scene(
+        &dir,
+        "{ texture = \"corners.png\", scale = [1.0, 1.5] }",
+        32,
+        16,
+    );
+    for (device, film) in render_both("texture_scale", &scene) {
+        let mean = film.mean();
+        for ((x, y), colour) in [((8, 15), red), ((24, 16), green)] {
+            let p = mean[y * 32 + x];
+            for c in 0..3 {
+                let want = colour[c] as f32 / 255.0;
+                assert!(
+                    (p[c] - want).abs() < 0.15,
+                    "{device}: pixel ({x}, {y}) is {p}, expected {colour:?}"
+                );
+            }
+        }
+    }
+}
+
+/// A scene with `files` written to a fresh directory and `scene.toml` holding a camera and
+/// `rest`; the load's result.
+fn load_with(
+    name: &str,
+    rest: &str,
+    files: &[(&str, &[u8])],
+) -> (TempDir, Result<Scene, meshtrace::scene::SceneError>) {
+    let dir = TempDir::new(name);
+    for (file, bytes) in files {
+        dir.write(file, bytes);
+    }
+    let toml = format!("[camera]\nposition = [0.0, 0.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\n{rest}");
+    let result = load_scene(&dir.write("scene.toml", toml));
+    (dir, result)
+}
+
+/// A PNG file's bytes: `width` × `height` texels of one colour.
+fn png(width: u32, height: u32, colour: [u8; 4]) -> Vec<u8> {
+    let img = image::RgbaImage::from_pixel(width, height, image::Rgba(colour));
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut bytes, image::ImageFormat::Png).unwrap();
+    bytes.into_inner()
+}
+
+const TRI_UV: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n";
+const TRI_NO_UV: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+
+#[test]
+fn scene_file_textures_load_with_their_use_scale_and_strength() {
+    use meshtrace::scene::{NO_TEXTURE, TextureFormat};
+    let grey = png(4, 2, [128, 64, 32, 255]);
+    let (_dir, result) = load_with(
+        "texture-params",
+        "[materials.a]\ntype = \"rough_conductor\"\n\
+         albedo = { texture = \"c.png\", scale = [2.0, 0.5] }\n\
+         roughness = { texture = \"c.png\" }\n\
+         emission = { texture = \"c.png\", strength = 4.0 }\n\
+         [[objects]]\nmesh = \"t.obj\"\nmaterial = \"a\"\n",
+        &[("c.png", &grey), ("t.obj", TRI_UV.as_bytes())],
+    );
+    let s = result.unwrap();
+    let m = &s.materials[0];
+    let t = &s.textures.records;
+    assert_eq!(t.len(), 3, "{t:?}");
+    assert_eq!(s.textures.texels.len(), 8, "one image, read once, 8-bit");
+    let albedo = &t[m.albedo_texture as usize];
+    assert_eq!(
+        (albedo.format, albedo.scale, albedo.width, albedo.height),
+        (TextureFormat::RGBA8_SRGB, [2.0, 0.5], 4, 2)
+    );
+    let rough = &t[m.roughness_texture as usize];
+    assert_eq!(
+        (rough.format, rough.channel),
+        (TextureFormat::RGBA8_LINEAR, 0)
+    );
+    assert_eq!((m.albedo, m.roughness), (glam::Vec3::ONE, 1.0));
+    assert_eq!(m.emission, glam::Vec3::splat(4.0));
+    assert_ne!(m.emission_texture, NO_TEXTURE);
+    // The texel: R in the low byte.
+    assert_eq!(s.textures.texels[0], u32::from_le_bytes([128, 64, 32, 255]));
+}
+
+#[test]
+fn bad_texture_parameters_are_errors_naming_the_field() {
+    let grey = png(2, 2, [128; 4]);
+    let files: &[(&str, &[u8])] = &[
+        ("c.png", &grey),
+        ("junk.png", b"not an image"),
+        ("t.obj", TRI_UV.as_bytes()),
+    ];
+    let material = |param: &str| {
+        format!(
+            "[materials.m]\ntype = \"diffuse\"\n{param}\n[[objects]]\nmesh = \"t.obj\"\nmaterial = \"m\"\n"
+        )
+    };
+    for (param, needles) in [
+        (
+            "albedo = { texture = \"c.png\", strength = 2.0 }",
+            &["materials.m.albedo.strength", "only emission"][..],
+        ),
+        (
+            "albedo = { texture = \"c.png\", scale = [0.0, 1.0] }",
+            &["materials.m.albedo.scale", "non-zero"],
+        ),
+        (
+            "albedo = { texture = \"gone.png\" }",
+            &["materials.m.albedo.texture", "gone.png"],
+        ),
+        (
+            "albedo = { texture = \"junk.png\" }",
+            &["materials.m.albedo.texture", "junk.png", "cannot decode"],
+        ),
+        (
+            "albedo = { texture = \"c.png\", scael = [1.0, 1.0] }",
+            &["scene.toml:"],
+        ),
+    ] {
+        let (_dir, result) = load_with("bad-texture", &material(param), files);
+        let message = result.expect_err(param).to_string();
+        assert!(!message.contains('\n'), "{message}");
+        for needle in needles {
+            assert!(
+                message.contains(needle),
+                "{param}: {message:?} lacks {needle:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_texture_on_faces_without_texture_coordinates_is_an_error_naming_the_object() {
+    let grey = png(2, 2, [128; 4]);
+    let textured = "[materials.m]\ntype = \"diffuse\"\nalbedo = { texture = \"c.png\" }\n";
+    for (object, needle) in [
+        (
+            "[[objects]]\nmesh = \"t.obj\"\nmaterial = \"m\"\n",
+            "objects[0]",
+        ),
+        (
+            "[[objects]]\nsphere = { center = [0.0, 0.0, 0.0], radius = 1.0 }\nmaterial = \"m\"\n",
+            "objects[0]",
+        ),
+    ] {
+        let (_dir, result) = load_with(
+            "texture-no-uv",
+            &format!("{textured}{object}"),
+            &[("c.png", &grey), ("t.obj", TRI_NO_UV.as_bytes())],
+        );
+        let message = result.expect_err(object).to_string();
+        assert!(message.contains(needle), "{message}");
+        assert!(message.contains("texture coordinates"), "{message}");
+    }
+    // A bare OBJ whose MTL maps a texture onto faces without `vt`.
+    let dir = TempDir::new("texture-no-uv-obj");
+    dir.write("c.png", &grey);
+    dir.write("m.mtl", "newmtl t\nmap_Kd c.png\n");
+    let obj = dir.write("m.obj", format!("mtllib m.mtl\nusemtl t\n{TRI_NO_UV}"));
+    let message = load_scene(&obj).unwrap_err().to_string();
+    assert!(message.starts_with(&obj.display().to_string()), "{message}");
+    assert!(message.contains("texture coordinates"), "{message}");
+}
+
+#[test]
+fn mtl_texture_maps_load_with_their_options() {
+    use meshtrace::scene::{MaterialKind, NO_TEXTURE};
+    let grey = png(2, 2, [200; 4]);
+    let dir = TempDir::new("mtl-maps");
+    dir.write("c.png", &grey);
+    dir.write(
+        "m.mtl",
+        "newmtl wood\nKd 0.5 0.5 0.5\nmap_Kd -s 3 2 -o 0.5 0.5 -clamp on c.png\nmap_d c.png\n\
+         newmtl metal\nPm 1\nmap_Pr c.png\n\
+         newmtl lamp\nKe 2 2 2\nmap_Ke -s 4 c.png\n\
+         newmtl lost\nKd 0.25 0.5 0.75\nmap_Kd missing.png\n",
+    );
+    let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n\
+         usemtl wood\nf 1/1 2/2 3/3\nusemtl metal\nf 1/1 2/2 3/3\n\
+         usemtl lamp\nf 1/1 2/2 3/3\nusemtl lost\nf 1/1 2/2 3/3\n";
+    let s = load_scene(&dir.write("m.obj", obj)).unwrap();
+    let by = |name: &str| {
+        let i = s.material_names.iter().position(|n| n == name).unwrap();
+        s.materials[i]
+    };
+    let t = &s.textures.records;
+    let wood = by("wood");
+    assert_eq!(wood.albedo, glam::Vec3::splat(0.5), "map_Kd multiplies Kd");
+    assert_eq!(t[wood.albedo_texture as usize].scale, [3.0, 2.0]);
+    let metal = by("metal");
+    assert_eq!(metal.kind, MaterialKind::ROUGH_CONDUCTOR);
+    assert_eq!(metal.roughness, 1.0);
+    assert_ne!(metal.roughness_texture, NO_TEXTURE);
+    let lamp = by("lamp");
+    assert_eq!(lamp.emission, glam::Vec3::splat(2.0));
+    assert_eq!(t[lamp.emission_texture as usize].scale, [4.0, 1.0]);
+    let lost = by("lost");
+    assert_eq!(lost.albedo_texture, NO_TEXTURE, "a missing map falls back");
+    assert_eq!(lost.albedo, glam::Vec3::new(0.25, 0.5, 0.75));
+    let warned = |needles: &[&str]| {
+        s.warnings
+            .iter()
+            .any(|w| needles.iter().all(|n| w.contains(n)))
+    };
+    assert!(warned(&["m.mtl:3", "-o"]), "{:?}", s.warnings);
+    assert!(warned(&["m.mtl:3", "-clamp"]), "{:?}", s.warnings);
+    assert!(warned(&["m.mtl:4", "map_d"]), "{:?}", s.warnings);
+    assert!(warned(&["missing.png", "falls back"]), "{:?}", s.warnings);
+}
+
+#[test]
+fn a_malformed_map_option_is_an_error_naming_the_library_line() {
+    let dir = TempDir::new("mtl-map-option");
+    for (mtl, needle) in [
+        ("newmtl a\nmap_Kd -zz 1 c.png\n", "unknown option"),
+        ("newmtl a\nmap_Kd -s c.png\n", "-s needs"),
+        ("newmtl a\nmap_Kd -s 2 2\n", "names no image"),
+    ] {
+        dir.write("m.mtl", mtl);
+        let obj = dir.write("m.obj", format!("mtllib m.mtl\n{TRI_UV}"));
+        let message = load_scene(&obj).unwrap_err().to_string();
+        assert!(message.contains("m.mtl:2:"), "{mtl}: {message}");
+        assert!(message.contains(needle), "{mtl}: {message}");
+    }
+}
