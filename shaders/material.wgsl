@@ -2,17 +2,32 @@
 // every function have Rust twins of the same name; the MAT_* kind codes and NO_TEXTURE
 // are generated from the Rust constants.
 
-// mirror: src/scene/material.rs `Material` (48 bytes). Its kind is a MAT_* code; each
-// texture slot holds a texture's index, or NO_TEXTURE.
+// mirror: src/scene/material.rs `Material` (112 bytes). Its kind is a MAT_* code; each
+// texture slot holds a texture's index, or NO_TEXTURE; flags hold MAT_THIN_WALLED and
+// MAT_ALPHA_MASK.
 struct Material {
     albedo: vec3<f32>,
     kind: u32,
     emission: vec3<f32>,
     roughness: f32,
+    specular_color: vec3<f32>,
     ior: f32,
+    metallic: f32,
+    specular: f32,
+    transmission: f32,
+    flags: u32,
+    alpha: f32,
+    alpha_cutoff: f32,
+    normal_scale: f32,
     albedo_texture: u32,
     emission_texture: u32,
     roughness_texture: u32,
+    metallic_texture: u32,
+    transmission_texture: u32,
+    normal_texture: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 // mirror: src/scene/material.rs `Material::is_emissive`

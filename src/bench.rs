@@ -322,6 +322,7 @@ pub fn terrain(n: u32) -> Scene {
         materials: vec![Material::diffuse(Vec3::splat(0.7))],
         material_names: vec!["ground".into()],
         textures: Default::default(),
+        lights: Vec::new(),
         mesh,
         warnings: Vec::new(),
     }

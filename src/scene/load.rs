@@ -5,6 +5,7 @@ use super::file::{
     ColorFile, MaterialFile, MaterialType, ObjectFile, ScalarFile, ScaleFile, SceneFile,
     TextureFile,
 };
+use super::light::PunctualLight;
 use super::obj::{FileSource, Fs, MeshPart, PartTriangle, load_obj};
 use super::sphere::{default_subdivisions, icosphere};
 use super::texture::{TextureError, TextureRef, Textures, Usage};
@@ -131,6 +132,7 @@ struct Builder {
     named: HashMap<String, u32>,
     default_material: Option<u32>,
     textures: Textures,
+    lights: Vec<PunctualLight>,
     degenerate: usize,
     warnings: Vec<String>,
 }
@@ -285,6 +287,7 @@ impl Builder {
             materials: self.materials,
             material_names: self.material_names,
             textures: self.textures,
+            lights: self.lights,
             mesh: self.mesh,
             warnings: self.warnings,
         }

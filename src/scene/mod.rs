@@ -7,6 +7,7 @@
 pub mod builtin;
 pub mod camera;
 pub mod file;
+pub mod light;
 pub mod load;
 pub mod material;
 pub mod mtl;
@@ -15,6 +16,7 @@ pub mod sphere;
 pub mod texture;
 
 pub use camera::Camera;
+pub use light::PunctualLight;
 pub use load::{load_scene, load_scene_from, parse_scene};
 pub use material::{Material, MaterialKind, NO_TEXTURE};
 pub use texture::{Texture, TextureFormat, Textures};
@@ -112,6 +114,8 @@ pub struct Scene {
     pub material_names: Vec<String>,
     /// The textures material slots index, with their texels.
     pub textures: Textures,
+    /// Point, spot and directional lights.
+    pub lights: Vec<PunctualLight>,
     pub mesh: Mesh,
     /// Problems that did not stop loading (a missing MTL file, dropped degenerate triangles).
     pub warnings: Vec<String>,

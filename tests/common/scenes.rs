@@ -78,6 +78,7 @@ pub fn scene(
         material_names: (0..materials.len()).map(|i| format!("m{i}")).collect(),
         materials,
         textures: Default::default(),
+        lights: Vec::new(),
         mesh,
         warnings: Vec::new(),
     }

@@ -13,6 +13,7 @@ use crate::render::integrator::RR_DEPTH;
 use crate::render::rng;
 use crate::render::sampling::UNIFORM_SPHERE_PDF;
 use crate::render::{SKY_EMITTER, TRI_SMOOTH, TRI_UV};
+use crate::scene::material::{MAT_ALPHA_MASK, MAT_THIN_WALLED};
 use crate::scene::{MaterialKind, NO_TEXTURE, TextureFormat};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4, PI};
 
@@ -46,6 +47,8 @@ pub fn shared_constants() -> Vec<(String, Value)> {
         ("TRI_UV", U32(TRI_UV)),
         ("SKY_EMITTER", U32(SKY_EMITTER)),
         ("NO_TEXTURE", U32(NO_TEXTURE)),
+        ("MAT_THIN_WALLED", U32(MAT_THIN_WALLED)),
+        ("MAT_ALPHA_MASK", U32(MAT_ALPHA_MASK)),
         ("TABLE_WIDTH_LOG2", U32(TABLE_WIDTH.ilog2())),
         ("T_INF", F32(T_INF)),
         ("GAMMA_2", F32(GAMMA_2)),
