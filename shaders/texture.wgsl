@@ -26,7 +26,8 @@ fn texel(t: Texture, x: u32, y: u32) -> vec4<f32> {
 // mirror: src/render/texture.rs `texture_lookup`
 fn texture_lookup(index: u32, uv: vec2<f32>) -> vec4<f32> {
     let t = load_texture(index);
-    let s = uv * t.scale;
+    let m = t.uv_matrix;
+    let s = vec2<f32>(m.x * uv.x + m.y * uv.y + t.uv_offset.x, m.z * uv.x + m.w * uv.y + t.uv_offset.y);
     let f = s - floor(s);
     let x = f.x * f32(t.width) - 0.5;
     let y = f.y * f32(t.height) - 0.5;

@@ -31,14 +31,16 @@ struct TriUvs {
     _pad1: u32,
 }
 
-// mirror: src/scene/texture.rs `Texture` (32 bytes): an image in the texel table, its
-// format (a TEX_* code), UV scale, and the channel a scalar parameter reads.
+// mirror: src/scene/texture.rs `Texture` (48 bytes): an image in the texel table, its
+// format (a TEX_* code), the UV map uv_matrix (rows: xy, zw) · uv + uv_offset, and the
+// channel a scalar parameter reads.
 struct Texture {
     offset: u32,
     width: u32,
     height: u32,
     format: u32,
-    scale: vec2<f32>,
+    uv_matrix: vec4<f32>,
+    uv_offset: vec2<f32>,
     channel: u32,
     _pad: u32,
 }

@@ -199,8 +199,8 @@ fn scene_file_textures_load_with_their_use_scale_and_strength() {
     assert_eq!(s.textures.texels.len(), 8, "one image, read once, 8-bit");
     let albedo = &t[m.albedo_texture as usize];
     assert_eq!(
-        (albedo.format, albedo.scale, albedo.width, albedo.height),
-        (TextureFormat::RGBA8_SRGB, [2.0, 0.5], 4, 2)
+        (albedo.format, albedo.uv_matrix, albedo.width, albedo.height),
+        (TextureFormat::RGBA8_SRGB, [2.0, 0.0, 0.0, 0.5], 4, 2)
     );
     let rough = &t[m.roughness_texture as usize];
     assert_eq!(
@@ -318,14 +318,20 @@ fn mtl_texture_maps_load_with_their_options() {
     let t = &s.textures.records;
     let wood = by("wood");
     assert_eq!(wood.albedo, glam::Vec3::splat(0.5), "map_Kd multiplies Kd");
-    assert_eq!(t[wood.albedo_texture as usize].scale, [3.0, 2.0]);
+    assert_eq!(
+        t[wood.albedo_texture as usize].uv_matrix,
+        [3.0, 0.0, 0.0, 2.0]
+    );
     let metal = by("metal");
     assert_eq!(metal.kind, MaterialKind::ROUGH_CONDUCTOR);
     assert_eq!(metal.roughness, 1.0);
     assert_ne!(metal.roughness_texture, NO_TEXTURE);
     let lamp = by("lamp");
     assert_eq!(lamp.emission, glam::Vec3::splat(2.0));
-    assert_eq!(t[lamp.emission_texture as usize].scale, [4.0, 1.0]);
+    assert_eq!(
+        t[lamp.emission_texture as usize].uv_matrix,
+        [4.0, 0.0, 0.0, 1.0]
+    );
     let lost = by("lost");
     assert_eq!(lost.albedo_texture, NO_TEXTURE, "a missing map falls back");
     assert_eq!(lost.albedo, glam::Vec3::new(0.25, 0.5, 0.75));
@@ -354,4 +360,23 @@ fn a_malformed_map_option_is_an_error_naming_the_library_line() {
         assert!(message.contains("m.mtl:2:"), "{mtl}: {message}");
         assert!(message.contains(needle), "{mtl}: {message}");
     }
+}
+
+/// KHR_texture_transform's matrix: scale, then rotate by u' = cos u − sin v,
+/// v' = sin u + cos v (the extension's GLSL), then offset.
+#[test]
+fn uv_transforms_scale_then_rotate() {
+    use meshtrace::scene::texture::UvTransform;
+    let t = UvTransform {
+        scale: [2.0, 3.0],
+        rotation: std::f32::consts::FRAC_PI_2,
+        offset: [0.25, 0.5],
+    };
+    let m = t.matrix();
+    let apply = |u: f32, v: f32| (m[0] * u + m[1] * v, m[2] * u + m[3] * v);
+    let (x, y) = apply(1.0, 0.0);
+    assert!(x.abs() < 1e-6 && (y - 2.0).abs() < 1e-6, "({x}, {y})");
+    let (x, y) = apply(0.0, 1.0);
+    assert!((x + 3.0).abs() < 1e-6 && y.abs() < 1e-6, "({x}, {y})");
+    assert_eq!(UvTransform::scale(2.0, 3.0).matrix(), [2.0, 0.0, 0.0, 3.0]);
 }

@@ -37,13 +37,17 @@ pub fn texel(scene: &RenderScene, t: &Texture, x: u32, y: u32) -> Vec4 {
     )
 }
 
-/// Texture `index` at `uv` (v running down from the image's top edge), scaled by the
-/// texture's UV scale: bilinear between the four nearest texel centres, wrapping around
-/// the edges.
+/// Texture `index` at `uv` (v running down from the image's top edge), mapped by the
+/// texture's UV transform: bilinear between the four nearest texel centres, wrapping
+/// around the edges.
 /// mirror: shaders/texture.wgsl `texture_lookup`
 pub fn texture_lookup(scene: &RenderScene, index: u32, uv: Vec2) -> Vec4 {
     let t = &scene.textures[index as usize];
-    let s = uv * Vec2::from(t.scale);
+    let m = &t.uv_matrix;
+    let s = Vec2::new(
+        m[0] * uv.x + m[1] * uv.y + t.uv_offset[0],
+        m[2] * uv.x + m[3] * uv.y + t.uv_offset[1],
+    );
     // The image repeats: only the fractional part matters, which also keeps the integer
     // conversions below in range for any finite coordinate.
     let f = s - s.floor();

@@ -8,7 +8,7 @@ use super::file::{
 use super::light::PunctualLight;
 use super::obj::{FileSource, Fs, MeshPart, PartTriangle, load_obj};
 use super::sphere::{default_subdivisions, icosphere};
-use super::texture::{TextureError, TextureRef, Textures, Usage};
+use super::texture::{TextureError, TextureRef, Textures, Usage, UvTransform};
 use super::{
     Camera, Material, MaterialKind, Mesh, NO_NORMAL, NO_TEXTURE, NO_UV, RenderSettings, Scene,
     SceneError, Sky, Triangle,
@@ -471,7 +471,7 @@ impl Ctx<'_> {
         let r = TextureRef {
             path: self.dir.join(&t.texture),
             usage,
-            scale,
+            transform: UvTransform::scale(scale[0], scale[1]),
             optional: false,
         };
         textures.add(&r, self.files).map_err(|e| {

@@ -9,7 +9,7 @@
 //! borrowing a neighbour's normal.
 
 use super::mtl::{MtlMap, MtlMaterial, parse_mtl};
-use super::texture::{TextureRef, Usage};
+use super::texture::{TextureRef, Usage, UvTransform};
 use super::{Material, MaterialKind, NO_NORMAL, NO_UV, SceneError};
 use glam::{Vec2, Vec3};
 use std::collections::HashMap;
@@ -564,7 +564,7 @@ pub fn map_mtl(m: &MtlMaterial, dir: &Path, textures: &mut Vec<TextureRef>) -> M
         textures.push(TextureRef {
             path: dir.join(&map.file),
             usage,
-            scale: map.scale,
+            transform: UvTransform::scale(map.scale[0], map.scale[1]),
             optional: true,
         });
         textures.len() as u32 - 1

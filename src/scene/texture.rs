@@ -36,8 +36,10 @@ impl TextureFormat {
     }
 }
 
-/// One texture as a material slot reads it (32 bytes): an image in the texel table, how
-/// its texels decode, its UV tiling, and for a scalar parameter the channel it reads.
+/// One texture as a material slot reads it (48 bytes): an image in the texel table, how
+/// its texels decode, the affine map applied to texture coordinates before the lookup
+/// (`uv_matrix · uv + uv_offset`: a tiling scale, and glTF's KHR_texture_transform), and
+/// for a scalar parameter the channel it reads.
 /// mirror: shaders/types.wgsl `Texture`
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
@@ -47,11 +49,43 @@ pub struct Texture {
     pub width: u32,
     pub height: u32,
     pub format: TextureFormat,
-    /// UV multipliers: (2, 2) repeats the image twice each way.
-    pub scale: [f32; 2],
+    /// The linear part, row by row: u' = m0 u + m1 v, v' = m2 u + m3 v.
+    pub uv_matrix: [f32; 4],
+    pub uv_offset: [f32; 2],
     /// The channel a scalar parameter reads (0 = red).
     pub channel: u32,
     pub _pad: u32,
+}
+
+/// An affine map of texture coordinates, as scene files and glTF's KHR_texture_transform
+/// give it: scale, then rotate (radians, as the extension's matrix), then offset.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvTransform {
+    pub scale: [f32; 2],
+    pub rotation: f32,
+    pub offset: [f32; 2],
+}
+
+impl UvTransform {
+    /// A tiling scale alone.
+    pub fn scale(su: f32, sv: f32) -> Self {
+        Self {
+            scale: [su, sv],
+            rotation: 0.0,
+            offset: [0.0, 0.0],
+        }
+    }
+
+    /// The matrix of [`Texture::uv_matrix`]: KHR_texture_transform's rotation
+    /// (u' = cos·u − sin·v, v' = sin·u + cos·v) times the scale.
+    pub fn matrix(&self) -> [f32; 4] {
+        let [su, sv] = self.scale;
+        if self.rotation == 0.0 {
+            return [su, 0.0, 0.0, sv];
+        }
+        let (s, c) = self.rotation.sin_cos();
+        [c * su, -s * sv, s * su, c * sv]
+    }
 }
 
 /// How a parameter reads its texture.
@@ -64,13 +98,13 @@ pub enum Usage {
 }
 
 /// A texture a material asks for before its image is read: the file, its use, its UV
-/// scale, and whether a missing file falls back to the parameter's constant factor (MTL
+/// transform, and whether a missing file falls back to the parameter's constant factor (MTL
 /// and glTF files) or is an error (scene files).
 #[derive(Clone, Debug, PartialEq)]
 pub struct TextureRef {
     pub path: PathBuf,
     pub usage: Usage,
-    pub scale: [f32; 2],
+    pub transform: UvTransform,
     pub optional: bool,
 }
 
@@ -115,7 +149,8 @@ impl Textures {
             width,
             height,
             format,
-            scale: r.scale,
+            uv_matrix: r.transform.matrix(),
+            uv_offset: r.transform.offset,
             channel: match r.usage {
                 Usage::Colour => 0,
                 Usage::Scalar { channel } => channel,

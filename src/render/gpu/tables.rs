@@ -134,7 +134,8 @@ pub const TABLES: &[Table] = &[
                 width,
                 height,
                 format,
-                scale,
+                uv_matrix,
+                uv_offset,
                 channel,
                 _pad,
             }))
