@@ -15,7 +15,21 @@ fn no_sample() -> BsdfSample {
 
 // mirror: src/render/bsdf.rs `bsdf_is_delta`
 fn bsdf_is_delta(m: Material) -> bool {
+    if m.kind == MAT_PBR {
+        return m.roughness == 0.0 && (1.0 - m.metallic) * (1.0 - m.transmission) == 0.0;
+    }
     return m.kind == MAT_CONDUCTOR || m.kind == MAT_DIELECTRIC;
+}
+
+// mirror: src/render/bsdf.rs `bsdf_is_two_sided`
+fn bsdf_is_two_sided(m: Material) -> bool {
+    if m.kind == MAT_DIELECTRIC {
+        return false;
+    }
+    if m.kind == MAT_PBR {
+        return m.transmission == 0.0 || (m.flags & MAT_THIN_WALLED) != 0u;
+    }
+    return true;
 }
 
 // f(wo, wi) |cos(wi)|. mirror: src/render/bsdf.rs `bsdf_eval`
@@ -35,6 +49,9 @@ fn bsdf_eval(m: Material, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
         let g = ggx_g1(wo, alpha) * ggx_g1(wi, alpha);
         return m.albedo * (ggx_d(h, alpha) * g / (4.0 * wo.z));
     }
+    if m.kind == MAT_PBR {
+        return pbr_eval(m, wo, wi);
+    }
     return vec3<f32>(0.0);
 }
 
@@ -53,6 +70,9 @@ fn bsdf_pdf(m: Material, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
         let alpha = ggx_alpha(m.roughness);
         let h = normalize(wo + wi);
         return ggx_g1(wo, alpha) * ggx_d(h, alpha) / (4.0 * wo.z);
+    }
+    if m.kind == MAT_PBR {
+        return pbr_pdf(m, wo, wi);
     }
     return 0.0;
 }
@@ -98,6 +118,9 @@ fn bsdf_sample(m: Material, wo: vec3<f32>, u_lobe: f32, u: vec2<f32>) -> BsdfSam
         let eta_ti = fr.w;
         let wi = vec3<f32>(-eta_ti * wo.x, -eta_ti * wo.y, fr.y);
         return BsdfSample(wi, vec3<f32>(eta_ti * eta_ti), 1.0 - f, true, fr.z, true);
+    }
+    if m.kind == MAT_PBR {
+        return pbr_sample(m, wo, u_lobe, u);
     }
     return no_sample();
 }
@@ -161,4 +184,250 @@ fn fresnel_dielectric(cos_i: f32, eta: f32) -> vec4<f32> {
     let a_p = (ct - eta_it * ci) / (ct + eta_it * ci);
     let f = 0.5 * (a_s * a_s + a_p * a_p);
     return vec4<f32>(f, select(ct, -ct, outside), eta_it, eta_ti);
+}
+
+// ---------------------------------------------------------------------------------------
+// pbr: the glTF metallic-roughness material. mirror: src/render/bsdf.rs (see there).
+
+// mirror: src/render/bsdf.rs `mean3`
+fn mean3(c: vec3<f32>) -> f32 {
+    return (c.x + c.y + c.z) * (1.0 / 3.0);
+}
+
+// mirror: src/render/bsdf.rs `fresnel_schlick`
+fn fresnel_schlick(f0: vec3<f32>, c: f32) -> vec3<f32> {
+    let k = clamp(1.0 - c, 0.0, 1.0);
+    let k5 = k * k * k * k * k;
+    return f0 + (vec3<f32>(1.0) - f0) * k5;
+}
+
+// mirror: src/render/bsdf.rs `pbr_fresnel`
+fn pbr_fresnel(m: Material, cos_i: f32) -> vec3<f32> {
+    let f = fresnel_dielectric(cos_i, m.ior).x;
+    let r = (m.ior - 1.0) / (m.ior + 1.0);
+    let k = 1.0 - abs(cos_i);
+    let k5 = k * k * k * k * k;
+    let tint = (m.specular_color - vec3<f32>(1.0)) * (r * r * (1.0 - k5));
+    return clamp(m.specular * (vec3<f32>(f) + tint), vec3<f32>(0.0), vec3<f32>(1.0));
+}
+
+// (metal, dielectric reflection, transmission, diffuse).
+// mirror: src/render/bsdf.rs `pbr_lobe_pdfs`
+fn pbr_lobe_pdfs(m: Material, wo: vec3<f32>) -> vec4<f32> {
+    var fd = mean3(pbr_fresnel(m, wo.z));
+    if m.roughness > 0.0 && m.specular > 0.0 {
+        fd = clamp(fd, 0.05, 0.95);
+    }
+    let base = mean3(m.albedo);
+    let dielectric = 1.0 - m.metallic;
+    let outside = select(0.0, 1.0, wo.z > 0.0);
+    let w = vec4<f32>(
+        outside * m.metallic * mean3(fresnel_schlick(m.albedo, wo.z)),
+        dielectric * fd,
+        dielectric * (1.0 - fd) * m.transmission * base,
+        outside * dielectric * (1.0 - fd) * (1.0 - m.transmission) * base,
+    );
+    let sum = w.x + w.y + w.z + w.w;
+    if sum > 0.0 {
+        return w / sum;
+    }
+    return vec4<f32>(0.0);
+}
+
+// mirror: src/render/bsdf.rs `pbr_half_vector`
+fn pbr_half_vector(wo: vec3<f32>, wi: vec3<f32>, etap: f32, transmit: bool) -> vec3<f32> {
+    let v = select(wo + wi, wo + wi * etap, transmit);
+    let len2 = dot(v, v);
+    let h = select(vec3<f32>(0.0), v * inverseSqrt(len2), len2 > 0.0);
+    return select(h, -h, h.z < 0.0);
+}
+
+// mirror: src/render/bsdf.rs `pbr_etap`
+fn pbr_etap(m: Material, wo: vec3<f32>) -> f32 {
+    return select(1.0 / m.ior, m.ior, wo.z > 0.0);
+}
+
+// mirror: src/render/bsdf.rs `ggx_g1_abs`
+fn ggx_g1_abs(w: vec3<f32>, h: vec3<f32>, alpha: f32) -> f32 {
+    if dot(w, h) * w.z <= 0.0 {
+        return 0.0;
+    }
+    let z = abs(w.z);
+    let tan2 = (w.x * w.x + w.y * w.y) / (z * z);
+    return 2.0 / (1.0 + sqrt(1.0 + alpha * alpha * tan2));
+}
+
+// mirror: src/render/bsdf.rs `ggx_visible_pdf`
+fn ggx_visible_pdf(wo: vec3<f32>, h: vec3<f32>, alpha: f32) -> f32 {
+    return ggx_g1_abs(wo, h, alpha) * ggx_d(h, alpha) * abs(dot(wo, h)) / abs(wo.z);
+}
+
+// mirror: src/render/bsdf.rs `pbr_eval`
+fn pbr_eval(m: Material, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    if wo.z == 0.0 || wi.z == 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let dielectric = 1.0 - m.metallic;
+    let same_side = wo.z * wi.z > 0.0;
+    var f = vec3<f32>(0.0);
+    if same_side && wo.z > 0.0 {
+        let weight = dielectric * (1.0 - m.transmission);
+        if weight > 0.0 {
+            let fo = vec3<f32>(1.0) - pbr_fresnel(m, wo.z);
+            let fi = vec3<f32>(1.0) - pbr_fresnel(m, wi.z);
+            f += m.albedo * fo * fi * (weight * FRAC_1_PI * wi.z);
+        }
+    }
+    if m.roughness == 0.0 {
+        return f;
+    }
+    let alpha = ggx_alpha(m.roughness);
+    if same_side {
+        let h = pbr_half_vector(wo, wi, 1.0, false);
+        let micro = ggx_d(h, alpha) * ggx_g1_abs(wo, h, alpha) * ggx_g1_abs(wi, h, alpha)
+            / (4.0 * abs(wo.z));
+        if wo.z > 0.0 && m.metallic > 0.0 {
+            f += fresnel_schlick(m.albedo, dot(wo, h)) * (m.metallic * micro);
+        }
+        f += pbr_fresnel(m, dot(wo, h)) * (dielectric * micro);
+        return f;
+    }
+    let t = dielectric * m.transmission;
+    if t == 0.0 {
+        return f;
+    }
+    if (m.flags & MAT_THIN_WALLED) != 0u {
+        let wr = vec3<f32>(wi.x, wi.y, -wi.z);
+        let h = pbr_half_vector(wo, wr, 1.0, false);
+        let micro = ggx_d(h, alpha) * ggx_g1_abs(wo, h, alpha) * ggx_g1_abs(wr, h, alpha)
+            / (4.0 * abs(wo.z));
+        return f + m.albedo * (vec3<f32>(1.0) - pbr_fresnel(m, dot(wo, h))) * (t * micro);
+    }
+    let etap = pbr_etap(m, wo);
+    let h = pbr_half_vector(wo, wi, etap, true);
+    let oh = dot(wo, h);
+    let ih = dot(wi, h);
+    if oh * wo.z <= 0.0 || ih * wi.z <= 0.0 {
+        return f;
+    }
+    let denom = ih + oh / etap;
+    let jac = abs(ih * oh) / (denom * denom * abs(wo.z));
+    let micro = ggx_d(h, alpha) * ggx_g1_abs(wo, h, alpha) * ggx_g1_abs(wi, h, alpha) * jac;
+    return f + m.albedo * (vec3<f32>(1.0) - pbr_fresnel(m, oh)) * (t * micro / (etap * etap));
+}
+
+// mirror: src/render/bsdf.rs `pbr_pdf`
+fn pbr_pdf(m: Material, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    if wo.z == 0.0 || wi.z == 0.0 {
+        return 0.0;
+    }
+    let p = pbr_lobe_pdfs(m, wo);
+    let same_side = wo.z * wi.z > 0.0;
+    var pdf = 0.0;
+    if same_side && wo.z > 0.0 {
+        pdf += p.w * cosine_hemisphere_pdf(wi.z);
+    }
+    if m.roughness == 0.0 {
+        return pdf;
+    }
+    let alpha = ggx_alpha(m.roughness);
+    if same_side {
+        let h = pbr_half_vector(wo, wi, 1.0, false);
+        let reflect = ggx_visible_pdf(wo, h, alpha) / (4.0 * abs(dot(wo, h)));
+        return pdf + (p.x + p.y) * reflect;
+    }
+    if (m.flags & MAT_THIN_WALLED) != 0u {
+        let wr = vec3<f32>(wi.x, wi.y, -wi.z);
+        let h = pbr_half_vector(wo, wr, 1.0, false);
+        return pdf + p.z * ggx_visible_pdf(wo, h, alpha) / (4.0 * abs(dot(wo, h)));
+    }
+    let etap = pbr_etap(m, wo);
+    let h = pbr_half_vector(wo, wi, etap, true);
+    let oh = dot(wo, h);
+    let ih = dot(wi, h);
+    if oh * wo.z <= 0.0 || ih * wi.z <= 0.0 {
+        return pdf;
+    }
+    let denom = ih + oh / etap;
+    return pdf + p.z * ggx_visible_pdf(wo, h, alpha) * abs(ih) / (denom * denom);
+}
+
+// mirror: src/render/bsdf.rs `pbr_sample`
+fn pbr_sample(m: Material, wo: vec3<f32>, u_lobe: f32, u: vec2<f32>) -> BsdfSample {
+    if wo.z == 0.0 {
+        return no_sample();
+    }
+    let p = pbr_lobe_pdfs(m, wo);
+    var lobe = 3u;
+    if u_lobe < p.x {
+        lobe = 0u;
+    } else if u_lobe < p.x + p.y {
+        lobe = 1u;
+    } else if u_lobe < p.x + p.y + p.z {
+        lobe = 2u;
+    } else if !(p.w > 0.0) {
+        return no_sample();
+    }
+    let dielectric = 1.0 - m.metallic;
+    let thin = (m.flags & MAT_THIN_WALLED) != 0u;
+    if m.roughness == 0.0 && lobe != 3u {
+        let c = wo.z;
+        let mirrored = vec3<f32>(-wo.x, -wo.y, wo.z);
+        if lobe == 0u {
+            return BsdfSample(mirrored, fresnel_schlick(m.albedo, c) * m.metallic / p.x, p.x, true, 1.0, true);
+        }
+        if lobe == 1u {
+            return BsdfSample(mirrored, pbr_fresnel(m, c) * dielectric / p.y, p.y, true, 1.0, true);
+        }
+        let trans = m.albedo * (vec3<f32>(1.0) - pbr_fresnel(m, c)) * (dielectric * m.transmission);
+        if thin {
+            return BsdfSample(-wo, trans / p.z, p.z, true, 1.0, true);
+        }
+        let fr = fresnel_dielectric(c, m.ior);
+        if fr.x >= 1.0 {
+            return no_sample();
+        }
+        let eta_ti = fr.w;
+        let wi = vec3<f32>(-eta_ti * wo.x, -eta_ti * wo.y, fr.y);
+        return BsdfSample(wi, trans * (eta_ti * eta_ti) / p.z, p.z, true, fr.z, true);
+    }
+    var wi: vec3<f32>;
+    if lobe == 3u {
+        wi = sample_cosine_hemisphere(u);
+    } else {
+        let alpha = ggx_alpha(m.roughness);
+        let side = select(-1.0, 1.0, wo.z > 0.0);
+        var h = ggx_sample_visible(wo * side, alpha, u) * side;
+        h = select(h, -h, h.z < 0.0);
+        let reflected = 2.0 * dot(wo, h) * h - wo;
+        if lobe < 2u || thin {
+            if reflected.z * wo.z <= 0.0 {
+                return no_sample();
+            }
+            wi = select(vec3<f32>(reflected.x, reflected.y, -reflected.z), reflected, lobe < 2u);
+        } else {
+            let etap = pbr_etap(m, wo);
+            let oh = dot(wo, h);
+            let n = select(h, -h, oh < 0.0);
+            let cos_i = abs(oh);
+            let sin2_t = max(1.0 - cos_i * cos_i, 0.0) / (etap * etap);
+            if sin2_t >= 1.0 {
+                return no_sample();
+            }
+            let cos_t = sqrt(1.0 - sin2_t);
+            wi = -wo / etap + (cos_i / etap - cos_t) * n;
+            if wi.z * wo.z >= 0.0 {
+                return no_sample();
+            }
+        }
+    }
+    let pdf = pbr_pdf(m, wo, wi);
+    if !(pdf > 0.0) {
+        return no_sample();
+    }
+    var eta = 1.0;
+    if wo.z * wi.z < 0.0 && !thin {
+        eta = pbr_etap(m, wo);
+    }
+    return BsdfSample(wi, pbr_eval(m, wo, wi) / pdf, pdf, false, eta, true);
 }

@@ -87,10 +87,11 @@ fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
         return true;
     }
     let wo_world = -(*st).ray.dir;
-    let flip = mat.kind != MAT_DIELECTRIC && dot(wo_world, si.ng) < 0.0;
+    let two_sided = bsdf_is_two_sided(mat);
+    let flip = two_sided && dot(wo_world, si.ng) < 0.0;
     let ng = select(si.ng, -si.ng, flip);
     var ns = select(si.ns, -si.ns, flip);
-    if mat.kind != MAT_DIELECTRIC && dot(ns, wo_world) <= 0.0 {
+    if two_sided && dot(ns, wo_world) <= 0.0 {
         ns = ng;
     }
     let frame = onb_from_normal(ns);

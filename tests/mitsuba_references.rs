@@ -169,3 +169,15 @@ fn cpu_matches_mitsuba_textured() {
 fn gpu_matches_mitsuba_textured() {
     check_gpu("textured");
 }
+
+/// The pbr material's sub-cases with exact Mitsuba twins: specular 0 (Lambertian walls),
+/// smooth white metal (a perfect mirror), smooth transmission into a volume (glass).
+#[test]
+fn cpu_matches_mitsuba_pbr_subcases() {
+    check_cpu("pbr_subcases");
+}
+
+#[test]
+fn gpu_matches_mitsuba_pbr_subcases() {
+    check_gpu("pbr_subcases");
+}

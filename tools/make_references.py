@@ -40,6 +40,8 @@ MATERIAL_SCENES = {
     "box_area": ("tests/scenes/box_area.toml", 8192),
     # image textures; cheap per sample (no spheres or glass), hence the higher count
     "textured": ("tests/scenes/textured.toml", 32768),
+    # the pbr material's sub-cases that have exact Mitsuba twins
+    "pbr_subcases": ("tests/scenes/pbr_subcases.toml", 8192),
 }
 
 

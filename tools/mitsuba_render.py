@@ -538,10 +538,44 @@ def mitsuba_bsdf(mi, mat, where):
     elif t == "dielectric":
         allowed |= {"ior"}
         b = {"type": "dielectric", "int_ior": float(mat.get("ior", 1.5)), "ext_ior": 1.0}
+    elif t == "pbr":
+        allowed |= {"base_color", "metallic", "roughness", "ior", "specular", "transmission"}
+        b = pbr_twin(mi, mat, where)
     else:
         raise SceneError("%s: unknown material type '%s'" % (where, t))
     check_keys(mat, allowed, where)
     return b
+
+
+PBR_NO_TWIN = ("has no exact Mitsuba twin; only these pbr sub-cases translate: specular 0 "
+               "without metallic or transmission (Lambertian), metallic 1 roughness 0 "
+               "with a white base colour (a perfect mirror), and transmission 1 "
+               "roughness 0 with a white base colour and specular 1 (a dielectric)")
+
+
+def pbr_twin(mi, mat, where):
+    """The Mitsuba BSDF that a `pbr` material equals exactly, for its sub-cases that have
+    one (see src/render/bsdf.rs); anything else is refused rather than approximated."""
+    for key in ("base_color", "metallic", "roughness", "transmission"):
+        if isinstance(mat.get(key), TexRef):
+            raise SceneError("%s.%s: a textured pbr parameter %s" % (where, key, PBR_NO_TWIN))
+    base = vec3(mat.get("base_color", 0.8), where + ".base_color")
+    metallic = float(mat.get("metallic", 0.0))
+    roughness = float(mat.get("roughness", 0.5))
+    specular = float(mat.get("specular", 1.0))
+    transmission = float(mat.get("transmission", 0.0))
+    ior = float(mat.get("ior", 1.5))
+    white = base == [1.0, 1.0, 1.0]
+    if specular == 0.0 and metallic == 0.0 and transmission == 0.0:
+        return {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": rgb_spec(base)}}
+    if metallic == 1.0 and roughness == 0.0 and white:
+        return {"type": "twosided", "bsdf": {
+            "type": "conductor", "material": "none",
+            "specular_reflectance": rgb_spec([1.0, 1.0, 1.0])}}
+    if (transmission == 1.0 and roughness == 0.0 and metallic == 0.0 and white
+            and specular == 1.0):
+        return {"type": "dielectric", "int_ior": ior, "ext_ior": 1.0}
+    raise SceneError("%s: this pbr material %s" % (where, PBR_NO_TWIN))
 
 
 def emission_of(mi, mat, where):

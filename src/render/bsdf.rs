@@ -7,6 +7,7 @@
 //! twin of the same name in `shaders/bsdf.wgsl`.
 
 use super::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
+use crate::scene::material::MAT_THIN_WALLED;
 use crate::scene::{Material, MaterialKind};
 use glam::{Vec2, Vec3};
 use std::f32::consts::{FRAC_1_PI, PI};
@@ -23,10 +24,28 @@ pub struct BsdfSample {
     pub eta: f32,
 }
 
-/// Whether the material's BSDF is a Dirac delta (next event estimation cannot help).
+/// Whether the material's BSDF is a Dirac delta (next event estimation cannot help). A
+/// smooth `pbr` material is, unless part of it is diffuse.
 /// mirror: shaders/bsdf.wgsl `bsdf_is_delta`
 pub fn bsdf_is_delta(m: &Material) -> bool {
-    matches!(m.kind, MaterialKind::CONDUCTOR | MaterialKind::DIELECTRIC)
+    match m.kind {
+        MaterialKind::CONDUCTOR | MaterialKind::DIELECTRIC => true,
+        MaterialKind::PBR => {
+            m.roughness == 0.0 && (1.0 - m.metallic) * (1.0 - m.transmission) == 0.0
+        }
+        _ => false,
+    }
+}
+
+/// Whether the BSDF is two-sided: the caller turns the frame towards `wo`. A dielectric,
+/// and a `pbr` material that transmits into a volume, tell entering from leaving instead.
+/// mirror: shaders/bsdf.wgsl `bsdf_is_two_sided`
+pub fn bsdf_is_two_sided(m: &Material) -> bool {
+    match m.kind {
+        MaterialKind::DIELECTRIC => false,
+        MaterialKind::PBR => m.transmission == 0.0 || m.flags & MAT_THIN_WALLED != 0,
+        _ => true,
+    }
 }
 
 /// f(wo, wi) |cos(wi)|. mirror: shaders/bsdf.wgsl `bsdf_eval`
@@ -47,6 +66,7 @@ pub fn bsdf_eval(m: &Material, wo: Vec3, wi: Vec3) -> Vec3 {
             let g = ggx_g1(wo, alpha) * ggx_g1(wi, alpha);
             m.albedo * (ggx_d(h, alpha) * g / (4.0 * wo.z))
         }
+        MaterialKind::PBR => pbr_eval(m, wo, wi),
         // Delta lobes (and no other kind exists).
         _ => Vec3::ZERO,
     }
@@ -71,6 +91,7 @@ pub fn bsdf_pdf(m: &Material, wo: Vec3, wi: Vec3) -> f32 {
             // reflection Jacobian 1 / (4 wo.h).
             ggx_g1(wo, alpha) * ggx_d(h, alpha) / (4.0 * wo.z)
         }
+        MaterialKind::PBR => pbr_pdf(m, wo, wi),
         _ => 0.0,
     }
 }
@@ -145,6 +166,7 @@ pub fn bsdf_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfS
                 })
             }
         }
+        MaterialKind::PBR => pbr_sample(m, wo, u_lobe, u),
         _ => None,
     }
 }
@@ -214,4 +236,320 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> (f32, f32, f32, f32) {
     let a_p = (ct - eta_it * ci) / (ct + eta_it * ci);
     let f = 0.5 * (a_s * a_s + a_p * a_p);
     (f, if outside { -ct } else { ct }, eta_it, eta_ti)
+}
+
+// ---------------------------------------------------------------------------------------
+// pbr: the glTF metallic-roughness material.
+//
+// A mix, by `metallic`, of a metal (GGX reflection with Schlick's Fresnel of the base
+// colour) and a dielectric: GGX reflection with the exact Fresnel of `ior` (its F0 tinted
+// by `specular_color` and the whole scaled by `specular`, as KHR_materials_specular says)
+// over a base that is Lambertian (weight 1 - transmission) or transmits (weight
+// transmission, tinted by the base colour): refracting into a volume, or straight through
+// a thin wall. Roughness 0 makes the reflections and the transmission deltas.
+//
+// Appendix B of the glTF specification weighs the diffuse base by 1 - F(wo.h), which gains
+// energy at grazing angles (a white base then reflects more than it receives); here the
+// base is weighed by (1 - F(n.wo)) (1 - F(n.wi)), which keeps the BSDF reciprocal and
+// below unit albedo, and is exactly Lambertian when `specular` is 0.
+//
+// The lobes are chosen by probabilities that depend on wo only (`pbr_lobe_pdfs`), so that
+// `pbr_pdf` is the sum of the non-delta lobes' pdfs weighed by them.
+
+/// The mean of a colour's channels.
+/// mirror: shaders/bsdf.wgsl `mean3`
+pub fn mean3(c: Vec3) -> f32 {
+    (c.x + c.y + c.z) * (1.0 / 3.0)
+}
+
+/// Schlick's Fresnel of a conductor of reflectance `f0` at cosine `c`.
+/// mirror: shaders/bsdf.wgsl `fresnel_schlick`
+pub fn fresnel_schlick(f0: Vec3, c: f32) -> Vec3 {
+    let k = (1.0 - c).clamp(0.0, 1.0);
+    let k5 = k * k * k * k * k;
+    f0 + (Vec3::ONE - f0) * k5
+}
+
+/// The dielectric layer's reflectance at incident cosine `cos_i` (negative from inside a
+/// volume): the exact Fresnel of the IOR, with KHR_materials_specular's tint of F0 by
+/// `specular_color` (fading out at grazing angles, where F90 is untinted) and its scale
+/// by `specular`. mirror: shaders/bsdf.wgsl `pbr_fresnel`
+pub fn pbr_fresnel(m: &Material, cos_i: f32) -> Vec3 {
+    let f = fresnel_dielectric(cos_i, m.ior).0;
+    let r = (m.ior - 1.0) / (m.ior + 1.0);
+    let k = 1.0 - cos_i.abs();
+    let k5 = k * k * k * k * k;
+    let tint = (m.specular_color - Vec3::ONE) * (r * r * (1.0 - k5));
+    (m.specular * (Vec3::splat(f) + tint)).clamp(Vec3::ZERO, Vec3::ONE)
+}
+
+/// The probabilities of choosing each lobe at `wo`: metal, dielectric reflection,
+/// transmission, diffuse; from the lobes' approximate albedos. From inside a volume only
+/// the interface (reflection and transmission) exists. All zero when nothing reflects.
+/// mirror: shaders/bsdf.wgsl `pbr_lobe_pdfs`
+pub fn pbr_lobe_pdfs(m: &Material, wo: Vec3) -> [f32; 4] {
+    // A rough interface reflects and transmits at every angle (its microfacets see wo at
+    // other angles than the macro surface), so neither lobe may be left unsampled.
+    let fd = mean3(pbr_fresnel(m, wo.z));
+    let fd = if m.roughness > 0.0 && m.specular > 0.0 {
+        fd.clamp(0.05, 0.95)
+    } else {
+        fd
+    };
+    let base = mean3(m.albedo);
+    let dielectric = 1.0 - m.metallic;
+    let outside = if wo.z > 0.0 { 1.0 } else { 0.0 };
+    let w = [
+        outside * m.metallic * mean3(fresnel_schlick(m.albedo, wo.z)),
+        dielectric * fd,
+        dielectric * (1.0 - fd) * m.transmission * base,
+        outside * dielectric * (1.0 - fd) * (1.0 - m.transmission) * base,
+    ];
+    let sum = w[0] + w[1] + w[2] + w[3];
+    if sum > 0.0 {
+        w.map(|x| x / sum)
+    } else {
+        [0.0; 4]
+    }
+}
+
+/// The half vector of a reflection (`transmit` false) or of a refraction between `wo` and
+/// `wi` (for relative IOR `etap`, wi's side over wo's), on the side of +Z.
+/// mirror: shaders/bsdf.wgsl `pbr_half_vector`
+pub fn pbr_half_vector(wo: Vec3, wi: Vec3, etap: f32, transmit: bool) -> Vec3 {
+    let h = if transmit { wo + wi * etap } else { wo + wi };
+    let h = h.normalize_or_zero();
+    if h.z < 0.0 { -h } else { h }
+}
+
+/// The relative IOR a ray from `wo`'s side meets: ior entering from outside, its inverse
+/// leaving. mirror: shaders/bsdf.wgsl `pbr_etap`
+pub fn pbr_etap(m: &Material, wo: Vec3) -> f32 {
+    if wo.z > 0.0 { m.ior } else { 1.0 / m.ior }
+}
+
+/// f |cos wi| of the non-delta lobes. mirror: shaders/bsdf.wgsl `pbr_eval`
+pub fn pbr_eval(m: &Material, wo: Vec3, wi: Vec3) -> Vec3 {
+    if wo.z == 0.0 || wi.z == 0.0 {
+        return Vec3::ZERO;
+    }
+    let dielectric = 1.0 - m.metallic;
+    let same_side = wo.z * wi.z > 0.0;
+    let mut f = Vec3::ZERO;
+    if same_side && wo.z > 0.0 {
+        // Diffuse base: (1 - F(n.wo)) (1 - F(n.wi)) base / pi.
+        let weight = dielectric * (1.0 - m.transmission);
+        if weight > 0.0 {
+            let fo = Vec3::ONE - pbr_fresnel(m, wo.z);
+            let fi = Vec3::ONE - pbr_fresnel(m, wi.z);
+            f += m.albedo * fo * fi * (weight * FRAC_1_PI * wi.z);
+        }
+    }
+    if m.roughness == 0.0 {
+        return f;
+    }
+    let alpha = ggx_alpha(m.roughness);
+    if same_side {
+        let h = pbr_half_vector(wo, wi, 1.0, false);
+        let micro = ggx_d(h, alpha) * ggx_g1_abs(wo, h, alpha) * ggx_g1_abs(wi, h, alpha)
+            / (4.0 * wo.z.abs());
+        if wo.z > 0.0 && m.metallic > 0.0 {
+            f += fresnel_schlick(m.albedo, wo.dot(h)) * (m.metallic * micro);
+        }
+        f += pbr_fresnel(m, wo.dot(h)) * (dielectric * micro);
+        return f;
+    }
+    // Across the surface: the transmission lobe.
+    let t = dielectric * m.transmission;
+    if t == 0.0 {
+        return f;
+    }
+    if m.flags & MAT_THIN_WALLED != 0 {
+        // A thin wall: the reflection lobe mirrored through the surface.
+        let wr = Vec3::new(wi.x, wi.y, -wi.z);
+        let h = pbr_half_vector(wo, wr, 1.0, false);
+        let micro = ggx_d(h, alpha) * ggx_g1_abs(wo, h, alpha) * ggx_g1_abs(wr, h, alpha)
+            / (4.0 * wo.z.abs());
+        return f + m.albedo * (Vec3::ONE - pbr_fresnel(m, wo.dot(h))) * (t * micro);
+    }
+    // Refraction into (or out of) a volume (Walter et al. 2007), in radiance units.
+    let etap = pbr_etap(m, wo);
+    let h = pbr_half_vector(wo, wi, etap, true);
+    let (oh, ih) = (wo.dot(h), wi.dot(h));
+    if oh * wo.z <= 0.0 || ih * wi.z <= 0.0 {
+        return f;
+    }
+    let denom = ih + oh / etap;
+    let jac = (ih * oh).abs() / (denom * denom * wo.z.abs());
+    let micro = ggx_d(h, alpha) * ggx_g1_abs(wo, h, alpha) * ggx_g1_abs(wi, h, alpha) * jac;
+    f + m.albedo * (Vec3::ONE - pbr_fresnel(m, oh)) * (t * micro / (etap * etap))
+}
+
+/// Smith's G1 for GGX seen along `w` against microfacet normal `h`: zero where `w` sees
+/// the back of the microfacet. mirror: shaders/bsdf.wgsl `ggx_g1_abs`
+pub fn ggx_g1_abs(w: Vec3, h: Vec3, alpha: f32) -> f32 {
+    if w.dot(h) * w.z <= 0.0 {
+        return 0.0;
+    }
+    let z = w.z.abs();
+    let tan2 = (w.x * w.x + w.y * w.y) / (z * z);
+    2.0 / (1.0 + (1.0 + alpha * alpha * tan2).sqrt())
+}
+
+/// The pdf of the visible normal `h` seen from `wo` (either side).
+/// mirror: shaders/bsdf.wgsl `ggx_visible_pdf`
+pub fn ggx_visible_pdf(wo: Vec3, h: Vec3, alpha: f32) -> f32 {
+    ggx_g1_abs(wo, h, alpha) * ggx_d(h, alpha) * wo.dot(h).abs() / wo.z.abs()
+}
+
+/// The pdf with which `pbr_sample` draws `wi` through a non-delta lobe.
+/// mirror: shaders/bsdf.wgsl `pbr_pdf`
+pub fn pbr_pdf(m: &Material, wo: Vec3, wi: Vec3) -> f32 {
+    if wo.z == 0.0 || wi.z == 0.0 {
+        return 0.0;
+    }
+    let p = pbr_lobe_pdfs(m, wo);
+    let same_side = wo.z * wi.z > 0.0;
+    let mut pdf = 0.0;
+    if same_side && wo.z > 0.0 {
+        pdf += p[3] * cosine_hemisphere_pdf(wi.z);
+    }
+    if m.roughness == 0.0 {
+        return pdf;
+    }
+    let alpha = ggx_alpha(m.roughness);
+    if same_side {
+        let h = pbr_half_vector(wo, wi, 1.0, false);
+        let reflect = ggx_visible_pdf(wo, h, alpha) / (4.0 * wo.dot(h).abs());
+        return pdf + (p[0] + p[1]) * reflect;
+    }
+    if m.flags & MAT_THIN_WALLED != 0 {
+        let wr = Vec3::new(wi.x, wi.y, -wi.z);
+        let h = pbr_half_vector(wo, wr, 1.0, false);
+        return pdf + p[2] * ggx_visible_pdf(wo, h, alpha) / (4.0 * wo.dot(h).abs());
+    }
+    let etap = pbr_etap(m, wo);
+    let h = pbr_half_vector(wo, wi, etap, true);
+    let (oh, ih) = (wo.dot(h), wi.dot(h));
+    if oh * wo.z <= 0.0 || ih * wi.z <= 0.0 {
+        return pdf;
+    }
+    let denom = ih + oh / etap;
+    pdf + p[2] * ggx_visible_pdf(wo, h, alpha) * ih.abs() / (denom * denom)
+}
+
+/// Draws `wi` from one lobe chosen by `u_lobe`.
+/// mirror: shaders/bsdf.wgsl `pbr_sample`
+pub fn pbr_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+    if wo.z == 0.0 {
+        return None;
+    }
+    let p = pbr_lobe_pdfs(m, wo);
+    let lobe = if u_lobe < p[0] {
+        0
+    } else if u_lobe < p[0] + p[1] {
+        1
+    } else if u_lobe < p[0] + p[1] + p[2] {
+        2
+    } else if p[3] > 0.0 {
+        3
+    } else {
+        return None;
+    };
+    let dielectric = 1.0 - m.metallic;
+    let thin = m.flags & MAT_THIN_WALLED != 0;
+    if m.roughness == 0.0 && lobe != 3 {
+        // The delta lobes: mirror reflection, straight or refracted transmission.
+        let c = wo.z;
+        let (wi, weight, eta) = match lobe {
+            0 => (
+                Vec3::new(-wo.x, -wo.y, wo.z),
+                fresnel_schlick(m.albedo, c) * m.metallic,
+                1.0,
+            ),
+            1 => (
+                Vec3::new(-wo.x, -wo.y, wo.z),
+                pbr_fresnel(m, c) * dielectric,
+                1.0,
+            ),
+            _ => {
+                let trans =
+                    m.albedo * (Vec3::ONE - pbr_fresnel(m, c)) * (dielectric * m.transmission);
+                if thin {
+                    (-wo, trans, 1.0)
+                } else {
+                    let (f, cos_t, eta_it, eta_ti) = fresnel_dielectric(c, m.ior);
+                    if f >= 1.0 {
+                        return None;
+                    }
+                    (
+                        Vec3::new(-eta_ti * wo.x, -eta_ti * wo.y, cos_t),
+                        trans * (eta_ti * eta_ti),
+                        eta_it,
+                    )
+                }
+            }
+        };
+        return Some(BsdfSample {
+            wi,
+            weight: weight / p[lobe],
+            pdf: p[lobe],
+            delta: true,
+            eta,
+        });
+    }
+    let wi = if lobe == 3 {
+        sample_cosine_hemisphere(u)
+    } else {
+        let alpha = ggx_alpha(m.roughness);
+        let side = if wo.z > 0.0 { 1.0 } else { -1.0 };
+        let h = ggx_sample_visible(wo * side, alpha, u) * side;
+        let h = if h.z < 0.0 { -h } else { h };
+        let reflected = 2.0 * wo.dot(h) * h - wo;
+        if lobe < 2 || thin {
+            // A reflection must stay on wo's side (a thin wall's then crosses over).
+            if reflected.z * wo.z <= 0.0 {
+                return None;
+            }
+            if lobe < 2 {
+                reflected
+            } else {
+                Vec3::new(reflected.x, reflected.y, -reflected.z)
+            }
+        } else {
+            // Refraction about the microfacet normal on wo's side (Snell's law).
+            let etap = pbr_etap(m, wo);
+            let oh = wo.dot(h);
+            let n = if oh < 0.0 { -h } else { h };
+            let cos_i = oh.abs();
+            let sin2_t = (1.0 - cos_i * cos_i).max(0.0) / (etap * etap);
+            if sin2_t >= 1.0 {
+                return None;
+            }
+            let cos_t = (1.0 - sin2_t).sqrt();
+            let wi = -wo / etap + (cos_i / etap - cos_t) * n;
+            // A refraction must cross the macro surface.
+            if wi.z * wo.z >= 0.0 {
+                return None;
+            }
+            wi
+        }
+    };
+    let pdf = pbr_pdf(m, wo, wi);
+    // (Also refuses a NaN pdf.)
+    if pdf.is_nan() || pdf <= 0.0 {
+        return None;
+    }
+    let eta = if wo.z * wi.z < 0.0 && !thin {
+        pbr_etap(m, wo)
+    } else {
+        1.0
+    };
+    Some(BsdfSample {
+        wi,
+        weight: pbr_eval(m, wo, wi) / pdf,
+        pdf,
+        delta: false,
+        eta,
+    })
 }

@@ -7,7 +7,7 @@
 //! name), drawing every random number from the same counter-based [`Rng`], so a path traced
 //! on either device is the same path.
 
-use super::bsdf::{bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample};
+use super::bsdf::{bsdf_eval, bsdf_is_delta, bsdf_is_two_sided, bsdf_pdf, bsdf_sample};
 use super::lights::{light_pdf, sample_light, sky_pdf, sky_radiance};
 use super::rng::{self, Rng};
 use super::sampling::power_heuristic;
@@ -16,7 +16,6 @@ use super::{RenderScene, TRI_SMOOTH, TRI_UV};
 use crate::bvh::{Hit, traverse_any, traverse_closest};
 use crate::geometry::{self, T_INF};
 use crate::math::{Ray, onb_from_normal};
-use crate::scene::MaterialKind;
 use glam::{Vec2, Vec3};
 
 /// Path depth (in bounces) from which Russian roulette may end a path.
@@ -157,15 +156,16 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
         return true;
     }
     let wo_world = -st.ray.dir;
-    // Two-sided kinds turn the frame towards the viewer; the dielectric keeps the front
-    // face's frame so that it knows whether it is entered or left.
-    let flip = mat.kind != MaterialKind::DIELECTRIC && wo_world.dot(si.ng) < 0.0;
+    // Two-sided BSDFs turn the frame towards the viewer; the others (dielectrics) keep the
+    // front face's frame so that they know whether they are entered or left.
+    let two_sided = bsdf_is_two_sided(mat);
+    let flip = two_sided && wo_world.dot(si.ng) < 0.0;
     let (ng, mut ns) = if flip {
         (-si.ng, -si.ns)
     } else {
         (si.ng, si.ns)
     };
-    if mat.kind != MaterialKind::DIELECTRIC && ns.dot(wo_world) <= 0.0 {
+    if two_sided && ns.dot(wo_world) <= 0.0 {
         ns = ng;
     }
     let (t, b) = onb_from_normal(ns);

@@ -56,6 +56,7 @@ pub enum MaterialType {
     Conductor,
     RoughConductor,
     Dielectric,
+    Pbr,
 }
 
 impl MaterialType {
@@ -66,6 +67,7 @@ impl MaterialType {
             Self::Conductor => "conductor",
             Self::RoughConductor => "rough_conductor",
             Self::Dielectric => "dielectric",
+            Self::Pbr => "pbr",
         }
     }
 }
@@ -79,6 +81,11 @@ pub struct MaterialFile {
     pub emission: Option<ColorFile>,
     pub roughness: Option<ScalarFile>,
     pub ior: Option<f32>,
+    /// `pbr` only.
+    pub base_color: Option<ColorFile>,
+    pub metallic: Option<ScalarFile>,
+    pub specular: Option<f32>,
+    pub transmission: Option<ScalarFile>,
 }
 
 /// A colour parameter: an RGB triple, or an image texture.

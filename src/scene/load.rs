@@ -502,50 +502,96 @@ impl Ctx<'_> {
             MaterialType::Conductor => MaterialKind::CONDUCTOR,
             MaterialType::RoughConductor => MaterialKind::ROUGH_CONDUCTOR,
             MaterialType::Dielectric => MaterialKind::DIELECTRIC,
+            MaterialType::Pbr => MaterialKind::PBR,
         };
+        let pbr = kind == MaterialKind::PBR;
+        // Which parameters each kind takes.
+        let takes = [
+            (
+                "albedo",
+                m.albedo.is_some(),
+                !pbr && kind != MaterialKind::DIELECTRIC,
+            ),
+            (
+                "roughness",
+                m.roughness.is_some(),
+                pbr || kind == MaterialKind::ROUGH_CONDUCTOR,
+            ),
+            (
+                "ior",
+                m.ior.is_some(),
+                pbr || kind == MaterialKind::DIELECTRIC,
+            ),
+            ("base_color", m.base_color.is_some(), pbr),
+            ("metallic", m.metallic.is_some(), pbr),
+            ("specular", m.specular.is_some(), pbr),
+            ("transmission", m.transmission.is_some(), pbr),
+        ];
+        if let Some((key, _, _)) = takes.iter().find(|(_, given, ok)| *given && !ok) {
+            return Err(not_for(key));
+        }
         let mut mat = Material::new(kind);
         if kind == MaterialKind::DIFFUSE {
             mat.albedo = Vec3::splat(0.8);
         }
-        if let Some(a) = &m.albedo {
-            if kind == MaterialKind::DIELECTRIC {
-                return Err(not_for("albedo"));
-            }
-            (mat.albedo, mat.albedo_texture) =
-                self.color_param(&field("albedo"), a, false, textures)?;
+        if pbr {
+            // Blender's Principled defaults: a grey, half-rough dielectric.
+            (mat.albedo, mat.metallic, mat.roughness) = (Vec3::splat(0.8), 0.0, 0.5);
+        }
+        if let Some(a) = m.albedo.as_ref().or(m.base_color.as_ref()) {
+            let key = if pbr { "base_color" } else { "albedo" };
+            (mat.albedo, mat.albedo_texture) = self.color_param(&field(key), a, false, textures)?;
         }
         if let Some(e) = &m.emission {
             (mat.emission, mat.emission_texture) =
                 self.color_param(&field("emission"), e, true, textures)?;
         }
-        match (kind, &m.roughness) {
-            (MaterialKind::ROUGH_CONDUCTOR, Some(ScalarFile::Value(r))) => {
-                mat.roughness = self.scalar(
-                    &field("roughness"),
-                    *r,
-                    |r| (0.0..=1.0).contains(&r),
-                    "in [0, 1]",
-                )?;
+        let unit = |r: f32| (0.0..=1.0).contains(&r);
+        match (&m.roughness, kind) {
+            (Some(r), _) => {
+                (mat.roughness, mat.roughness_texture) =
+                    self.scalar_param(&field("roughness"), r, textures)?;
             }
-            (MaterialKind::ROUGH_CONDUCTOR, Some(ScalarFile::Texture(t))) => {
-                let usage = Usage::Scalar { channel: 0 };
-                mat.roughness = 1.0;
-                mat.roughness_texture = self.texture(&field("roughness"), t, usage, textures)?;
-            }
-            (MaterialKind::ROUGH_CONDUCTOR, None) => {
+            (None, MaterialKind::ROUGH_CONDUCTOR) => {
                 return Err(self.invalid(field("roughness"), "is required for rough_conductor"));
             }
-            (_, Some(_)) => return Err(not_for("roughness")),
-            (_, None) => {}
+            (None, _) => {}
         }
-        match (kind, m.ior) {
-            (MaterialKind::DIELECTRIC, Some(ior)) => {
-                mat.ior = self.scalar(&field("ior"), ior, |v| v > 0.0, "positive")?;
-            }
-            (_, Some(_)) if kind != MaterialKind::DIELECTRIC => return Err(not_for("ior")),
-            _ => {}
+        if let Some(x) = &m.metallic {
+            (mat.metallic, mat.metallic_texture) =
+                self.scalar_param(&field("metallic"), x, textures)?;
+        }
+        if let Some(x) = &m.transmission {
+            (mat.transmission, mat.transmission_texture) =
+                self.scalar_param(&field("transmission"), x, textures)?;
+        }
+        if let Some(x) = m.specular {
+            mat.specular = self.scalar(&field("specular"), x, unit, "in [0, 1]")?;
+        }
+        if let Some(ior) = m.ior {
+            mat.ior = self.scalar(&field("ior"), ior, |v| v > 0.0, "positive")?;
         }
         Ok(mat)
+    }
+
+    /// A scalar parameter in [0, 1]: the number and no texture, or factor 1 and a texture
+    /// read from its first channel.
+    fn scalar_param(
+        &self,
+        field: &str,
+        x: &ScalarFile,
+        textures: &mut Textures,
+    ) -> Result<(f32, u32), SceneError> {
+        match x {
+            ScalarFile::Value(v) => Ok((
+                self.scalar(field, *v, |r| (0.0..=1.0).contains(&r), "in [0, 1]")?,
+                NO_TEXTURE,
+            )),
+            ScalarFile::Texture(t) => Ok((
+                1.0,
+                self.texture(field, t, Usage::Scalar { channel: 0 }, textures)?,
+            )),
+        }
     }
 
     fn object(&self, builder: &mut Builder, i: usize, o: &ObjectFile) -> Result<(), SceneError> {
