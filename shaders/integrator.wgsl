@@ -106,7 +106,10 @@ fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
             if any(f != vec3<f32>(0.0)) {
                 (*st).rays += 1u;
                 if !traverse_any(Ray(ls.origin, ls.wi), ls.t_max) {
-                    let w = power_heuristic(ls.pdf, bsdf_pdf(mat, wo, wi));
+                    var w = 1.0;
+                    if !ls.delta {
+                        w = power_heuristic(ls.pdf, bsdf_pdf(mat, wo, wi));
+                    }
                     (*st).radiance += (*st).beta * f * ls.le * (w / ls.pdf);
                 }
             }

@@ -28,18 +28,26 @@ struct LightSample {
     t_max: f32,
     le: vec3<f32>,
     pdf: f32,
+    delta: bool,
     valid: bool,
 }
 
 // mirror: src/render/lights.rs `sample_light`
 fn sample_light(p: vec3<f32>, ng: vec3<f32>, rng: Rng, depth: u32) -> LightSample {
-    var none = LightSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, false);
+    var none = LightSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, false, false);
     let k = sample_cdf(rng_1d(rng, depth, DIM_LIGHT_PICK));
     let light = load_emitter(k);
     let u = vec2<f32>(rng_1d(rng, depth, DIM_LIGHT_U), rng_1d(rng, depth, DIM_LIGHT_V));
     if light == SKY_EMITTER {
         let wi = sample_uniform_sphere(u);
-        return LightSample(offset_ray_origin(p, ng, wi), wi, T_INF, sky_radiance(wi), sky_pdf(), true);
+        return LightSample(offset_ray_origin(p, ng, wi), wi, T_INF, sky_radiance(wi), sky_pdf(), false, true);
+    }
+    if (light & LIGHT_EMITTER) != 0u {
+        var prev = 0.0;
+        if k > 0u {
+            prev = load_emitter_cdf(k - 1u);
+        }
+        return sample_punctual(light & ~LIGHT_EMITTER, p, ng, load_emitter_cdf(k) - prev);
     }
     let tri = load_tri(light);
     let bary = sample_uniform_triangle(u);
@@ -53,5 +61,43 @@ fn sample_light(p: vec3<f32>, ng: vec3<f32>, rng: Rng, depth: u32) -> LightSampl
         return none;
     }
     let le = material_at(load_material(load_shading(light).material), triangle_uv(light, bary.x, bary.y)).emission;
-    return LightSample(origin, wi, dist * (1.0 - 1e-4), le, light_pdf(light, dist, cos_l), true);
+    return LightSample(origin, wi, dist * (1.0 - 1e-4), le, light_pdf(light, dist, cos_l), false, true);
+}
+
+// mirror: src/render/lights.rs `sample_punctual`
+fn sample_punctual(index: u32, p: vec3<f32>, ng: vec3<f32>, pmf: f32) -> LightSample {
+    var none = LightSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, false, false);
+    let l = load_light(index);
+    if l.kind == LIGHT_DIRECTIONAL {
+        let wi = -l.direction;
+        return LightSample(offset_ray_origin(p, ng, wi), wi, T_INF, l.intensity, pmf, true, true);
+    }
+    let origin = offset_ray_origin(p, ng, l.position - p);
+    let to_light = l.position - origin;
+    let dist2 = dot(to_light, to_light);
+    let dist = sqrt(dist2);
+    if !(dist > 0.0) {
+        return none;
+    }
+    let wi = to_light / dist;
+    var le = l.intensity / dist2;
+    if l.kind == LIGHT_SPOT {
+        le *= spot_falloff(l, -wi);
+    }
+    if all(le == vec3<f32>(0.0)) {
+        return none;
+    }
+    return LightSample(origin, wi, dist * (1.0 - 1e-4), le, pmf, true, true);
+}
+
+// mirror: src/render/lights.rs `spot_falloff`
+fn spot_falloff(l: Light, d: vec3<f32>) -> f32 {
+    let c = dot(d, l.direction);
+    if c <= l.cos_cutoff {
+        return 0.0;
+    }
+    if c >= l.cos_beam {
+        return 1.0;
+    }
+    return (l.cutoff - acos(c)) * l.inv_transition;
 }

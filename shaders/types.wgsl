@@ -45,6 +45,20 @@ struct Texture {
     _pad: u32,
 }
 
+// mirror: src/render/mod.rs `Light` (64 bytes): a punctual light; kind is a LIGHT_* code.
+struct Light {
+    position: vec3<f32>,
+    kind: u32,
+    direction: vec3<f32>,
+    cos_cutoff: f32,
+    intensity: vec3<f32>,
+    cos_beam: f32,
+    cutoff: f32,
+    inv_transition: f32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
 // mirror: src/render/gpu/params.rs `Params` (144 bytes): one dispatch's camera, sky and range.
 struct Params {
     cam_position: vec3<f32>,

@@ -158,6 +158,7 @@ fn structs_match_their_rust_twins() {
             "Material",
             "TriUvs",
             "Texture",
+            "Light",
             "Params"
         ]
     );

@@ -181,3 +181,14 @@ fn cpu_matches_mitsuba_pbr_subcases() {
 fn gpu_matches_mitsuba_pbr_subcases() {
     check_gpu("pbr_subcases");
 }
+
+/// Point, spot and directional lights beside an area light.
+#[test]
+fn cpu_matches_mitsuba_lights() {
+    check_cpu("lights");
+}
+
+#[test]
+fn gpu_matches_mitsuba_lights() {
+    check_gpu("lights");
+}

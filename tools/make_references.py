@@ -42,6 +42,8 @@ MATERIAL_SCENES = {
     "textured": ("tests/scenes/textured.toml", 32768),
     # the pbr material's sub-cases that have exact Mitsuba twins
     "pbr_subcases": ("tests/scenes/pbr_subcases.toml", 8192),
+    # point, spot and directional lights beside an area light
+    "lights": ("tests/scenes/lights.toml", 16384),
 }
 
 

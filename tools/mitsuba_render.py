@@ -578,6 +578,37 @@ def pbr_twin(mi, mat, where):
     raise SceneError("%s: this pbr material %s" % (where, PBR_NO_TWIN))
 
 
+def punctual_light(mi, light, where):
+    """Mitsuba's `point`, `spot` or `directional` emitter for a [[lights]] table (the same
+    units: W/sr intensity, W/m^2 irradiance; a spot's falloff linear in angle from its beam
+    width to its cutoff, as Mitsuba's `spot`)."""
+    t = light.get("type")
+    if t == "point":
+        check_keys(light, {"type", "position", "intensity"}, where)
+        return {"type": "point", "position": vec3(light["position"], where + ".position"),
+                "intensity": rgb_spec(vec3(light["intensity"], where + ".intensity"))}
+    if t == "spot":
+        check_keys(light, {"type", "position", "direction", "intensity", "cutoff_angle",
+                           "beam_width"}, where)
+        p = np.array(vec3(light["position"], where + ".position"))
+        d = np.array(vec3(light["direction"], where + ".direction"))
+        d = d / np.linalg.norm(d)
+        up = [0.0, 1.0, 0.0] if abs(d[1]) < 0.9 else [1.0, 0.0, 0.0]
+        cutoff = float(light.get("cutoff_angle", 20.0))
+        return {"type": "spot",
+                "to_world": mi.ScalarTransform4f().look_at(
+                    origin=p.tolist(), target=(p + d).tolist(), up=up),
+                "intensity": rgb_spec(vec3(light["intensity"], where + ".intensity")),
+                "cutoff_angle": cutoff,
+                "beam_width": float(light.get("beam_width", 0.75 * cutoff))}
+    if t == "directional":
+        check_keys(light, {"type", "direction", "irradiance"}, where)
+        return {"type": "directional",
+                "direction": vec3(light["direction"], where + ".direction"),
+                "irradiance": rgb_spec(vec3(light["irradiance"], where + ".irradiance"))}
+    raise SceneError("%s: unknown light type '%s'" % (where, t))
+
+
 def emission_of(mi, mat, where):
     e = mat.get("emission", [0.0, 0.0, 0.0])
     if isinstance(e, TexRef):
@@ -654,7 +685,7 @@ def icosphere_obj(path, level):
 def build_scene_dict(mi, path, args, tmpdir):
     with open(path, "rb") as fh:
         doc = tomllib.load(fh)
-    check_keys(doc, {"camera", "render", "sky", "materials", "objects"}, "scene")
+    check_keys(doc, {"camera", "render", "sky", "materials", "objects", "lights"}, "scene")
     base = os.path.dirname(os.path.abspath(path))
 
     render = doc.get("render", {})
@@ -714,6 +745,9 @@ def build_scene_dict(mi, path, args, tmpdir):
                     scene["sky"] = {"type": "constant", "radiance": rgb_spec(z)}
             else:
                 scene["sky"] = gradient_envmap(mi, z, h)
+
+    for li, light in enumerate(doc.get("lights", [])):
+        scene["light_%d" % li] = punctual_light(mi, light, "lights[%d]" % li)
 
     materials = {}
     for name, mat in doc.get("materials", {}).items():

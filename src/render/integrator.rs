@@ -181,7 +181,11 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
                 if f != Vec3::ZERO {
                     st.rays += 1;
                     if !traverse_any(nodes, tris, &Ray::new(ls.origin, ls.wi), ls.t_max) {
-                        let w = power_heuristic(ls.pdf, bsdf_pdf(mat, wo, wi));
+                        let w = if ls.delta {
+                            1.0
+                        } else {
+                            power_heuristic(ls.pdf, bsdf_pdf(mat, wo, wi))
+                        };
                         st.radiance += st.beta * f * ls.le * (w / ls.pdf);
                     }
                 }

@@ -1,5 +1,6 @@
-//! The lights next event estimation samples: emissive triangles, chosen by power, and the
-//! sky. Every function has a WGSL twin of the same name in `shaders/lights.wgsl`.
+//! The lights next event estimation samples: emissive triangles and punctual lights,
+//! chosen by power, and the sky. Every function has a WGSL twin of the same name in
+//! `shaders/lights.wgsl`.
 
 use super::integrator::offset_ray_origin;
 use super::rng::{self, Rng};
@@ -7,7 +8,7 @@ use super::sampling::{
     UNIFORM_SPHERE_PDF, sample_cdf, sample_uniform_sphere, sample_uniform_triangle,
 };
 use super::texture::{material_at, triangle_uv};
-use super::{RenderScene, SKY_EMITTER};
+use super::{LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_SPOT, Light, RenderScene, SKY_EMITTER};
 use crate::geometry::{self, T_INF};
 use crate::scene::{NO_TEXTURE, Sky};
 use glam::{Vec2, Vec3};
@@ -47,8 +48,11 @@ pub struct LightSample {
     pub t_max: f32,
     /// Radiance arriving along the shadow ray if nothing blocks it.
     pub le: Vec3,
-    /// Solid-angle pdf of having drawn `wi`, the light's pick included.
+    /// Solid-angle pdf of having drawn `wi`, the light's pick included; for a punctual
+    /// light (`delta`) the probability of its pick.
     pub pdf: f32,
+    /// A punctual light, which BSDF sampling can never hit: no MIS.
+    pub delta: bool,
 }
 
 /// Picks a light by the emitter CDF and a point (triangle) or direction (sky) on it, as
@@ -75,7 +79,13 @@ pub fn sample_light(
             t_max: T_INF,
             le: sky_radiance(scene, wi),
             pdf: sky_pdf(scene),
+            delta: false,
         });
+    }
+    if light & LIGHT_EMITTER != 0 {
+        let prev = if k > 0 { scene.emitter_cdf[k - 1] } else { 0.0 };
+        let pmf = scene.emitter_cdf[k] - prev;
+        return sample_punctual(scene, light & !LIGHT_EMITTER, p, ng, pmf);
     }
     let tri = &scene.tris[light as usize];
     let [a, b, c] = tri.corners();
@@ -101,5 +111,70 @@ pub fn sample_light(
         t_max: dist * (1.0 - 1e-4),
         le,
         pdf: light_pdf(scene, light, dist, cos_l),
+        delta: false,
     })
+}
+
+/// The shadow ray and arriving radiance of punctual light `index`, picked with probability
+/// `pmf`, seen from `p`: a point or spot light's intensity over the squared distance (a
+/// spot's times its falloff), a directional light's irradiance. `None` where it sends no
+/// light. mirror: shaders/lights.wgsl `sample_punctual`
+pub fn sample_punctual(
+    scene: &RenderScene,
+    index: u32,
+    p: Vec3,
+    ng: Vec3,
+    pmf: f32,
+) -> Option<LightSample> {
+    let l = &scene.lights[index as usize];
+    let intensity = Vec3::from(l.intensity);
+    if l.kind == LIGHT_DIRECTIONAL {
+        let wi = -Vec3::from(l.direction);
+        return Some(LightSample {
+            origin: offset_ray_origin(p, ng, wi),
+            wi,
+            t_max: T_INF,
+            le: intensity,
+            pdf: pmf,
+            delta: true,
+        });
+    }
+    let position = Vec3::from(l.position);
+    let origin = offset_ray_origin(p, ng, position - p);
+    let to_light = position - origin;
+    let dist2 = to_light.length_squared();
+    let dist = dist2.sqrt();
+    if dist.is_nan() || dist <= 0.0 {
+        return None;
+    }
+    let wi = to_light / dist;
+    let mut le = intensity / dist2;
+    if l.kind == LIGHT_SPOT {
+        le *= spot_falloff(l, -wi);
+    }
+    if le == Vec3::ZERO {
+        return None;
+    }
+    Some(LightSample {
+        origin,
+        wi,
+        t_max: dist * (1.0 - 1e-4),
+        le,
+        pdf: pmf,
+        delta: true,
+    })
+}
+
+/// A spot light's intensity scale in unit direction `d` from it: 1 within the beam width
+/// of its axis, 0 beyond the cutoff, linear in the angle between (Mitsuba's `spot`).
+/// mirror: shaders/lights.wgsl `spot_falloff`
+pub fn spot_falloff(l: &Light, d: Vec3) -> f32 {
+    let c = d.dot(Vec3::from(l.direction));
+    if c <= l.cos_cutoff {
+        0.0
+    } else if c >= l.cos_beam {
+        1.0
+    } else {
+        (l.cutoff - c.acos()) * l.inv_transition
+    }
 }

@@ -21,7 +21,8 @@ use crate::film::srgb8_to_linear;
 use crate::geometry::{self, TriVerts};
 use crate::math::{Aabb, luminance};
 use crate::scene::{
-    Camera, Material, NO_NORMAL, NO_TEXTURE, NO_UV, RenderSettings, Scene, Sky, Texture,
+    Camera, Material, NO_NORMAL, NO_TEXTURE, NO_UV, PunctualLight, RenderSettings, Scene, Sky,
+    Texture,
 };
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -61,6 +62,85 @@ pub struct TriUvs {
     pub _pad: [u32; 2],
 }
 
+/// A punctual light as both renderers read it (64 bytes), from
+/// [`PunctualLight`](crate::scene::PunctualLight). mirror: shaders/types.wgsl `Light`
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Light {
+    pub position: [f32; 3],
+    /// [`LIGHT_POINT`], [`LIGHT_SPOT`] or [`LIGHT_DIRECTIONAL`].
+    pub kind: u32,
+    /// A spot's axis, or the direction a directional light travels (unit).
+    pub direction: [f32; 3],
+    /// cos of a spot's cutoff angle.
+    pub cos_cutoff: f32,
+    /// Radiant intensity (W/sr), or a directional light's irradiance (W/m²).
+    pub intensity: [f32; 3],
+    /// cos of a spot's full-intensity beam width.
+    pub cos_beam: f32,
+    /// A spot's cutoff angle (radians) and 1 / (cutoff − beam width): its falloff is linear
+    /// in the angle from the axis.
+    pub cutoff: f32,
+    pub inv_transition: f32,
+    pub _pad: [u32; 2],
+}
+
+/// [`Light::kind`] codes.
+pub const LIGHT_POINT: u32 = 0;
+pub const LIGHT_SPOT: u32 = 1;
+pub const LIGHT_DIRECTIONAL: u32 = 2;
+
+/// The bit of an entry of [`RenderScene::emitters`] that marks a punctual light: the other
+/// bits are its index in [`RenderScene::lights`].
+pub const LIGHT_EMITTER: u32 = 1 << 31;
+
+impl Light {
+    /// The table entry of a scene light.
+    pub fn new(l: &PunctualLight) -> Self {
+        let mut out = Self::default();
+        match *l {
+            PunctualLight::Point {
+                position,
+                intensity,
+            } => {
+                (out.kind, out.position, out.intensity) =
+                    (LIGHT_POINT, position.into(), intensity.into());
+            }
+            PunctualLight::Spot {
+                position,
+                direction,
+                intensity,
+                cutoff,
+                beam_width,
+            } => {
+                out = Self {
+                    position: position.into(),
+                    kind: LIGHT_SPOT,
+                    direction: direction.into(),
+                    cos_cutoff: cutoff.cos(),
+                    intensity: intensity.into(),
+                    cos_beam: beam_width.cos(),
+                    cutoff,
+                    inv_transition: if cutoff > beam_width {
+                        1.0 / (cutoff - beam_width)
+                    } else {
+                        0.0
+                    },
+                    _pad: [0; 2],
+                };
+            }
+            PunctualLight::Directional {
+                direction,
+                irradiance,
+            } => {
+                (out.kind, out.direction, out.intensity) =
+                    (LIGHT_DIRECTIONAL, direction.into(), irradiance.into());
+            }
+        }
+        out
+    }
+}
+
 /// The entry of [`RenderScene::emitters`] that stands for the sky.
 /// The shaders get it from `render::gpu::shader::shared_constants`.
 pub const SKY_EMITTER: u32 = u32::MAX;
@@ -80,8 +160,11 @@ pub struct RenderScene {
     /// Texel values of 8-bit channels: entries 0–255 decode sRGB, 256–511 are linear
     /// (`k / 255`). The shaders read the same table, so both renderers decode alike.
     pub texel_lut: Vec<f32>,
+    /// Point, spot and directional lights.
+    pub lights: Vec<Light>,
     /// The lights next event estimation picks from: leaf-order indices of emissive
-    /// triangles, then [`SKY_EMITTER`] if the sky is not black; and their inclusive CDF.
+    /// triangles, then punctual lights ([`LIGHT_EMITTER`] | index), then [`SKY_EMITTER`]
+    /// if the sky is not black; and their inclusive CDF.
     pub emitters: Vec<u32>,
     pub emitter_cdf: Vec<f32>,
     /// Probability that next event estimation picks the sky (sampled uniformly over the
@@ -161,37 +244,93 @@ impl RenderScene {
             textures: scene.textures.records.clone(),
             texels: scene.textures.texels.clone(),
             texel_lut,
+            lights: scene.lights.iter().map(Light::new).collect(),
             emitters: Vec::new(),
             emitter_cdf: Vec::new(),
             sky_pmf: 0.0,
             camera: scene.camera.clone(),
             sky: scene.sky,
         };
-        rs.build_emitters();
+        rs.build_emitters(&scene.lights);
         Ok(rs)
     }
 
-    /// Chooses the lights next event estimation samples: emissive triangles by power
-    /// (area × emission luminance, times a texture's mean luminance), then the sky.
-    fn build_emitters(&mut self) {
-        let (mut emitters, mut emitter_cdf) = (Vec::new(), Vec::new());
-        let mut total = 0.0f64;
+    /// Chooses the lights next event estimation samples: emissive triangles and punctual
+    /// lights, then the sky. Without punctual lights, triangles are picked by power (pi ×
+    /// area × emission luminance, times a texture's mean luminance). With them, half the
+    /// probability goes by power (a punctual light's radiant flux, a directional light's
+    /// through the disc of the scene's bounding sphere) and half evenly to each punctual
+    /// light and to the emissive triangles as a group (by power within it): power alone
+    /// starves a narrow, bright spot light, whose flux is small.
+    fn build_emitters(&mut self, lights: &[PunctualLight]) {
+        let mut emitters = Vec::new();
+        // Each entry's power, and whether it is a triangle.
+        let mut powers: Vec<(f64, bool)> = Vec::new();
         let mean: Vec<f64> = (0..self.textures.len() as u32)
             .map(|t| luminance(texture::texture_mean(self, t)) as f64)
             .collect();
         for (i, s) in self.shading.iter().enumerate() {
             let m = &self.materials[s.material as usize];
-            let mut power =
-                geometry::triangle_area(&self.tris[i]) as f64 * luminance(m.emission) as f64;
+            // A Lambertian emitter's flux: pi × area × radiance.
+            let mut power = std::f64::consts::PI
+                * geometry::triangle_area(&self.tris[i]) as f64
+                * luminance(m.emission) as f64;
             if m.emission_texture != NO_TEXTURE {
                 power *= mean[m.emission_texture as usize];
             }
             if power > 0.0 {
-                total += power;
                 emitters.push(i as u32);
-                emitter_cdf.push(total);
+                powers.push((power, true));
             }
         }
+        let radius = self.bvh.nodes.first().map_or(1.0, |n| {
+            let b = n.bounds();
+            if b.is_empty() {
+                1.0
+            } else {
+                0.5 * b.extent().length() as f64
+            }
+        });
+        for (k, l) in lights.iter().enumerate() {
+            let power = match *l {
+                PunctualLight::Point { intensity, .. } => {
+                    4.0 * std::f64::consts::PI * luminance(intensity) as f64
+                }
+                PunctualLight::Spot {
+                    intensity, cutoff, ..
+                } => {
+                    2.0 * std::f64::consts::PI
+                        * (1.0 - cutoff.cos() as f64)
+                        * luminance(intensity) as f64
+                }
+                PunctualLight::Directional { irradiance, .. } => {
+                    std::f64::consts::PI * radius * radius * luminance(irradiance) as f64
+                }
+            };
+            if power > 0.0 {
+                emitters.push(LIGHT_EMITTER | k as u32);
+                powers.push((power, false));
+            }
+        }
+        let all: f64 = powers.iter().map(|p| p.0).sum();
+        let triangles: f64 = powers.iter().filter(|p| p.1).map(|p| p.0).sum();
+        let punctual = powers.iter().filter(|p| !p.1).count();
+        let groups = punctual as f64 + if triangles > 0.0 { 1.0 } else { 0.0 };
+        let weights = powers.iter().map(|&(p, triangle)| {
+            if punctual == 0 {
+                p
+            } else {
+                let group = if triangle { p / triangles } else { 1.0 };
+                0.5 * p / all + 0.5 * group / groups
+            }
+        });
+        let mut total = 0.0f64;
+        let emitter_cdf: Vec<f64> = weights
+            .map(|w| {
+                total += w;
+                total
+            })
+            .collect();
         let sky_pmf = match (self.sky.is_black(), emitters.is_empty()) {
             (true, _) => 0.0,
             (false, true) => 1.0,
@@ -204,7 +343,9 @@ impl RenderScene {
             .collect();
         let mut prev = 0.0;
         for (k, &i) in emitters.iter().enumerate() {
-            self.shading[i as usize].emitter_pmf = emitter_cdf[k] - prev;
+            if i & LIGHT_EMITTER == 0 {
+                self.shading[i as usize].emitter_pmf = emitter_cdf[k] - prev;
+            }
             prev = emitter_cdf[k];
         }
         if sky_pmf > 0.0 {

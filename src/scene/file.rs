@@ -18,6 +18,41 @@ pub struct SceneFile {
     pub materials: BTreeMap<String, MaterialFile>,
     #[serde(default)]
     pub objects: Vec<ObjectFile>,
+    #[serde(default)]
+    pub lights: Vec<LightFile>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LightType {
+    Point,
+    Spot,
+    Directional,
+}
+
+impl LightType {
+    /// The name as a scene file spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Point => "point",
+            Self::Spot => "spot",
+            Self::Directional => "directional",
+        }
+    }
+}
+
+/// A `[[lights]]` table: a punctual light in world space.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightFile {
+    #[serde(rename = "type")]
+    pub kind: LightType,
+    pub position: Option<[f32; 3]>,
+    pub direction: Option<[f32; 3]>,
+    pub intensity: Option<[f32; 3]>,
+    pub irradiance: Option<[f32; 3]>,
+    pub cutoff_angle: Option<f32>,
+    pub beam_width: Option<f32>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -2,8 +2,8 @@
 //! Each error names the file and the line or field at fault.
 
 use super::file::{
-    ColorFile, MaterialFile, MaterialType, ObjectFile, ScalarFile, ScaleFile, SceneFile,
-    TextureFile,
+    ColorFile, LightFile, LightType, MaterialFile, MaterialType, ObjectFile, ScalarFile, ScaleFile,
+    SceneFile, TextureFile,
 };
 use super::light::PunctualLight;
 use super::obj::{FileSource, Fs, MeshPart, PartTriangle, load_obj};
@@ -69,6 +69,9 @@ fn parse_scene_from(text: &str, path: &Path, files: &dyn FileSource) -> Result<S
     }
     for (i, object) in file.objects.iter().enumerate() {
         ctx.object(&mut builder, i, object)?;
+    }
+    for (i, light) in file.lights.iter().enumerate() {
+        builder.lights.push(ctx.light(i, light)?);
     }
     Ok(builder.finish(Some(path.to_path_buf()), camera, sky, settings))
 }
@@ -592,6 +595,82 @@ impl Ctx<'_> {
                 self.texture(field, t, Usage::Scalar { channel: 0 }, textures)?,
             )),
         }
+    }
+
+    /// A `[[lights]]` table, each type with its own fields.
+    fn light(&self, i: usize, l: &LightFile) -> Result<PunctualLight, SceneError> {
+        let field = |key: &str| format!("lights[{i}].{key}");
+        let given = [
+            ("position", l.position.is_some()),
+            ("direction", l.direction.is_some()),
+            ("intensity", l.intensity.is_some()),
+            ("irradiance", l.irradiance.is_some()),
+            ("cutoff_angle", l.cutoff_angle.is_some()),
+            ("beam_width", l.beam_width.is_some()),
+        ];
+        let takes: &[&str] = match l.kind {
+            LightType::Point => &["position", "intensity"],
+            LightType::Spot => &[
+                "position",
+                "direction",
+                "intensity",
+                "cutoff_angle",
+                "beam_width",
+            ],
+            LightType::Directional => &["direction", "irradiance"],
+        };
+        if let Some((key, _)) = given.iter().find(|(k, g)| *g && !takes.contains(k)) {
+            return Err(self.invalid(
+                field(key),
+                format!("is not a parameter of {} lights", l.kind.name()),
+            ));
+        }
+        let required = |key: &str, v: Option<[f32; 3]>| {
+            v.ok_or_else(|| {
+                self.invalid(
+                    field(key),
+                    format!("is required for {} lights", l.kind.name()),
+                )
+            })
+        };
+        let direction = |v: Option<[f32; 3]>| -> Result<Vec3, SceneError> {
+            let d = self.vec3(&field("direction"), required("direction", v)?)?;
+            d.try_normalize()
+                .ok_or_else(|| self.invalid(field("direction"), "must not be zero"))
+        };
+        Ok(match l.kind {
+            LightType::Point => PunctualLight::Point {
+                position: self.vec3(&field("position"), required("position", l.position)?)?,
+                intensity: self.color(&field("intensity"), required("intensity", l.intensity)?)?,
+            },
+            LightType::Spot => {
+                let cutoff = self.scalar(
+                    &field("cutoff_angle"),
+                    l.cutoff_angle.unwrap_or(20.0),
+                    |a| a > 0.0 && a <= 180.0,
+                    "in (0, 180] degrees",
+                )?;
+                let beam = self.scalar(
+                    &field("beam_width"),
+                    l.beam_width.unwrap_or(0.75 * cutoff),
+                    |b| b > 0.0 && b <= cutoff,
+                    "in (0, cutoff_angle] degrees",
+                )?;
+                PunctualLight::Spot {
+                    position: self.vec3(&field("position"), required("position", l.position)?)?,
+                    direction: direction(l.direction)?,
+                    intensity: self
+                        .color(&field("intensity"), required("intensity", l.intensity)?)?,
+                    cutoff: cutoff.to_radians(),
+                    beam_width: beam.to_radians(),
+                }
+            }
+            LightType::Directional => PunctualLight::Directional {
+                direction: direction(l.direction)?,
+                irradiance: self
+                    .color(&field("irradiance"), required("irradiance", l.irradiance)?)?,
+            },
+        })
     }
 
     fn object(&self, builder: &mut Builder, i: usize, o: &ObjectFile) -> Result<(), SceneError> {

@@ -12,7 +12,9 @@ use crate::geometry::{GAMMA_2, GAMMA_3, SLAB_SLACK, T_INF};
 use crate::render::integrator::RR_DEPTH;
 use crate::render::rng;
 use crate::render::sampling::UNIFORM_SPHERE_PDF;
-use crate::render::{SKY_EMITTER, TRI_SMOOTH, TRI_UV};
+use crate::render::{
+    LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_POINT, LIGHT_SPOT, SKY_EMITTER, TRI_SMOOTH, TRI_UV,
+};
 use crate::scene::material::{MAT_ALPHA_MASK, MAT_THIN_WALLED};
 use crate::scene::{MaterialKind, NO_TEXTURE, TextureFormat};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4, PI};
@@ -45,6 +47,10 @@ pub fn shared_constants() -> Vec<(String, Value)> {
         ("RR_DEPTH", U32(RR_DEPTH)),
         ("TRI_SMOOTH", U32(TRI_SMOOTH)),
         ("TRI_UV", U32(TRI_UV)),
+        ("LIGHT_POINT", U32(LIGHT_POINT)),
+        ("LIGHT_SPOT", U32(LIGHT_SPOT)),
+        ("LIGHT_DIRECTIONAL", U32(LIGHT_DIRECTIONAL)),
+        ("LIGHT_EMITTER", U32(LIGHT_EMITTER)),
         ("SKY_EMITTER", U32(SKY_EMITTER)),
         ("NO_TEXTURE", U32(NO_TEXTURE)),
         ("MAT_THIN_WALLED", U32(MAT_THIN_WALLED)),

@@ -9,7 +9,7 @@ use super::params::Params;
 use super::{GpuContext, GpuError};
 use crate::bvh::BvhNode;
 use crate::geometry::TriVerts;
-use crate::render::{RenderScene, TriShading, TriUvs};
+use crate::render::{Light, RenderScene, TriShading, TriUvs};
 use crate::scene::{Material, Texture};
 
 /// Texels per row of the table textures (the shaders get its log2 from `shader::shared_constants`).
@@ -155,6 +155,25 @@ pub const TABLES: &[Table] = &[
         loader: "load_texel_lut",
         element: || Element::F32,
         bytes: |s| bytemuck::cast_slice(&s.texel_lut),
+    },
+    Table {
+        what: "punctual lights",
+        texture: "lights_tex",
+        loader: "load_light",
+        element: || {
+            Element::Struct(struct_layout!(Light {
+                position,
+                kind,
+                direction,
+                cos_cutoff,
+                intensity,
+                cos_beam,
+                cutoff,
+                inv_transition,
+                _pad,
+            }))
+        },
+        bytes: |s| bytemuck::cast_slice(&s.lights),
     },
     Table {
         what: "emitters",
