@@ -57,7 +57,8 @@ fn sample_light(p: vec3<f32>, ng: vec3<f32>, rng: Rng, depth: u32) -> LightSampl
     let dist = length(to_light);
     let wi = to_light / dist;
     let cos_l = -dot(wi, geometric_normal(tri));
-    if !(cos_l > 0.0 && dist > 0.0) {
+    // A point that an alpha mask cuts out emits nothing.
+    if !(cos_l > 0.0 && dist > 0.0) || (tri.v0.w != 0.0 && !alpha_test(light, bary.x, bary.y)) {
         return none;
     }
     let le = material_at(load_material(load_shading(light).material), triangle_uv(light, bary.x, bary.y)).emission;

@@ -55,6 +55,12 @@ fn triangle_uv(tri: u32, b1: f32, b2: f32) -> vec2<f32> {
     return (1.0 - b1 - b2) * t.uv0 + b1 * t.uv1 + b2 * t.uv2;
 }
 
+// mirror: src/render/texture.rs `scalar_lookup`
+fn scalar_lookup(index: u32, uv: vec2<f32>) -> f32 {
+    let channel = load_texture(index).channel;
+    return texture_lookup(index, uv)[channel];
+}
+
 // mirror: src/render/texture.rs `material_at`
 fn material_at(m: Material, uv: vec2<f32>) -> Material {
     var out = m;
@@ -65,9 +71,30 @@ fn material_at(m: Material, uv: vec2<f32>) -> Material {
         out.emission *= texture_lookup(m.emission_texture, uv).xyz;
     }
     if m.roughness_texture != NO_TEXTURE {
-        let channel = load_texture(m.roughness_texture).channel;
-        let r = texture_lookup(m.roughness_texture, uv)[channel];
+        let r = scalar_lookup(m.roughness_texture, uv);
         out.roughness = clamp(out.roughness * r, 0.0, 1.0);
     }
+    if m.metallic_texture != NO_TEXTURE {
+        let k = scalar_lookup(m.metallic_texture, uv);
+        out.metallic = clamp(out.metallic * k, 0.0, 1.0);
+    }
+    if m.transmission_texture != NO_TEXTURE {
+        let k = scalar_lookup(m.transmission_texture, uv);
+        out.transmission = clamp(out.transmission * k, 0.0, 1.0);
+    }
     return out;
+}
+
+// mirror: src/render/texture.rs `alpha_test`
+fn alpha_test(tri: u32, b1: f32, b2: f32) -> bool {
+    let m = load_material(load_shading(tri).material);
+    if (m.flags & MAT_ALPHA_MASK) == 0u {
+        return true;
+    }
+    var alpha = m.alpha;
+    if m.albedo_texture != NO_TEXTURE {
+        let uv = triangle_uv(tri, b1, b2);
+        alpha *= texture_lookup(m.albedo_texture, uv).w;
+    }
+    return alpha >= m.alpha_cutoff;
 }

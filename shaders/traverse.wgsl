@@ -24,7 +24,8 @@ fn traverse_any(ray: Ray, t_max: f32) -> bool {
 }
 
 // The leaves the ray may reach, nearer child first: the closest hit, or with `any_hit`
-// the first found. The same visits as the CPU's single loop, arranged "while-while"
+// the first found. Hits on masked triangles (TriVerts.v0.w != 0) count where
+// `alpha_test` passes, as the CPU's `accept`. The same visits as the CPU's single loop, arranged "while-while"
 // (Aila and Laine 2009): interior nodes in an inner loop, then the leaf, so that the lanes
 // of a SIMD group intersect their leaves together rather than one branch at a time (15-20%
 // less time on lavapipe, BENCHMARKS.md). mirror: src/bvh/traverse.rs `walk`
@@ -81,8 +82,10 @@ fn walk(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
             break;
         }
         for (var i = n.left_or_first; i < n.left_or_first + n.count; i++) {
-            let h = intersect_triangle(sheared, load_tri(i), best.t);
-            if h.hit {
+            let tri = load_tri(i);
+            let h = intersect_triangle(sheared, tri, best.t);
+            // A masked triangle's hit counts only where its alpha test passes.
+            if h.hit && (tri.v0.w == 0.0 || alpha_test(i, h.u, h.v)) {
                 best = Hit(h.t, h.u, h.v, i);
                 if any_hit {
                     return best;

@@ -10,6 +10,7 @@ use crate::render::gpu::{GpuContext, GpuError, GpuRenderer, kernels::Kernel, sha
 use crate::render::integrator::offset_ray_origin;
 use crate::render::rng::Rng;
 use crate::render::sampling::{sample_cosine_hemisphere, sample_uniform_triangle};
+use crate::render::texture::alpha_test;
 use crate::render::{RenderJob, RenderScene, SKY_EMITTER, cpu};
 use crate::scene::{
     Camera, Material, Mesh, NO_NORMAL, NO_UV, RenderSettings, Scene, Sky, Triangle,
@@ -78,7 +79,9 @@ impl RaySets {
             .par_iter()
             .enumerate()
             .filter_map(|(i, (ray, _))| {
-                let h = traverse_closest(&scene.bvh.nodes, &scene.tris, ray, T_INF)?;
+                let h = traverse_closest(&scene.bvh.nodes, &scene.tris, ray, T_INF, |k, u, v| {
+                    alpha_test(scene, k, u, v)
+                })?;
                 let mut n = geometric_normal(&scene.tris[h.tri as usize]);
                 if n.dot(ray.dir) > 0.0 {
                     n = -n;
@@ -220,9 +223,14 @@ pub fn bench_scene(
                     .par_iter()
                     .map(|(r, t)| {
                         if any {
-                            traverse_any(&rs.bvh.nodes, &rs.tris, r, *t) as usize
+                            traverse_any(&rs.bvh.nodes, &rs.tris, r, *t, |k, u, v| {
+                                alpha_test(&rs, k, u, v)
+                            }) as usize
                         } else {
-                            traverse_closest(&rs.bvh.nodes, &rs.tris, r, *t).is_some() as usize
+                            traverse_closest(&rs.bvh.nodes, &rs.tris, r, *t, |k, u, v| {
+                                alpha_test(&rs, k, u, v)
+                            })
+                            .is_some() as usize
                         }
                     })
                     .sum();

@@ -9,7 +9,9 @@ use glam::{Vec3, Vec3Swizzles};
 pub const T_INF: f32 = f32::MAX;
 
 /// A triangle's three corners in BVH leaf order, padded to 16-byte rows as WGSL lays out
-/// `array<vec4<f32>>` (48 bytes). mirror: shaders/geometry.wgsl `TriVerts`
+/// `array<vec4<f32>>` (48 bytes). The first padding word marks a triangle whose material
+/// cuts out parts of it (1; else 0): traversals ask before counting a hit on it.
+/// mirror: shaders/geometry.wgsl `TriVerts`
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct TriVerts {
@@ -25,6 +27,17 @@ impl TriVerts {
             v1: b.extend(0.0).into(),
             v2: c.extend(0.0).into(),
         }
+    }
+
+    /// Whether hits on this triangle pass an alpha test before they count.
+    #[inline(always)]
+    pub fn is_masked(&self) -> bool {
+        self.v0[3] != 0.0
+    }
+
+    /// Marks the triangle as [`is_masked`](Self::is_masked).
+    pub fn set_masked(&mut self) {
+        self.v0[3] = 1.0;
     }
 
     /// The three corners. (Always inlined: on the hot paths the compiler otherwise may

@@ -5,7 +5,7 @@ mod common;
 
 use common::rand::hashed_unit;
 use glam::Vec3;
-use meshtrace::bvh::{BuildParams, Bvh, traverse_any, traverse_closest, validate};
+use meshtrace::bvh::{BuildParams, Bvh, solid, traverse_any, traverse_closest, validate};
 use meshtrace::geometry::{ShearedRay, T_INF, TriVerts, intersect_triangle};
 use meshtrace::math::{Aabb, Ray};
 use meshtrace::scene::{self, sphere::icosphere};
@@ -103,8 +103,8 @@ fn check_rays(name: &str, corners: &[[Vec3; 3]], n_rays: u32) {
                     best = Some((h.t, k as u32));
                 }
             }
-            let hit = traverse_closest(&bvh.nodes, &tris, ray, T_INF);
-            let any = traverse_any(&bvh.nodes, &tris, ray, T_INF);
+            let hit = traverse_closest(&bvh.nodes, &tris, ray, T_INF, solid);
+            let any = traverse_any(&bvh.nodes, &tris, ray, T_INF, solid);
             let same = match (best, hit) {
                 (None, None) => true,
                 // The same distance from a different triangle: a ray through a shared edge.
@@ -125,12 +125,18 @@ fn check_rays(name: &str, corners: &[[Vec3; 3]], n_rays: u32) {
     );
     // A shorter ray must stop at the hit: any-hit with t_max just short of the closest hit is false.
     for ray in rays.iter().take(10_000) {
-        if let Some(h) = traverse_closest(&bvh.nodes, &tris, ray, T_INF) {
+        if let Some(h) = traverse_closest(&bvh.nodes, &tris, ray, T_INF, solid) {
             assert!(
-                !traverse_any(&bvh.nodes, &tris, ray, h.t * 0.999),
+                !traverse_any(&bvh.nodes, &tris, ray, h.t * 0.999, solid),
                 "{name}: any-hit beyond t_max"
             );
-            assert!(traverse_any(&bvh.nodes, &tris, ray, h.t * 1.001 + 1e-6));
+            assert!(traverse_any(
+                &bvh.nodes,
+                &tris,
+                ray,
+                h.t * 1.001 + 1e-6,
+                solid
+            ));
         }
     }
 }

@@ -5,7 +5,7 @@
 mod common;
 
 use glam::Vec3;
-use meshtrace::bvh::{BuildParams, Bvh, traverse_any, traverse_closest, validate};
+use meshtrace::bvh::{BuildParams, Bvh, solid, traverse_any, traverse_closest, validate};
 use meshtrace::geometry::{
     ShearedRay, T_INF, TriVerts, intersect_aabb, intersect_triangle, safe_inverse,
 };
@@ -229,7 +229,7 @@ fn check_soup(soup: &Soup, rays: &[RaySpec], checks: Checks) -> Result<(), TestC
             continue;
         };
         let best = brute_force(&tris, &ray);
-        let hit = traverse_closest(&bvh.nodes, &tris, &ray, T_INF);
+        let hit = traverse_closest(&bvh.nodes, &tris, &ray, T_INF, solid);
         if checks.closest {
             let same = match (best, hit) {
                 (None, None) => true,
@@ -260,7 +260,7 @@ fn check_soup(soup: &Soup, rays: &[RaySpec], checks: Checks) -> Result<(), TestC
         }
         for t_max in limits {
             let expected = closest.is_some_and(|t| t < t_max);
-            let any = traverse_any(&bvh.nodes, &tris, &ray, t_max);
+            let any = traverse_any(&bvh.nodes, &tris, &ray, t_max, solid);
             prop_assert!(
                 any == expected,
                 "ray {r} {ray:?}: traverse_any(t_max = {t_max:e}) is {any}, closest hit {best:?}; {}",
@@ -679,7 +679,7 @@ fn no_ray_escapes_a_closed_mesh() {
     let (mut escapes, mut mt_escapes) = (Vec::new(), 0);
     for &(origin, dir) in &probe.rays {
         let ray = Ray::new(origin, dir);
-        if traverse_closest(&bvh.nodes, &leaf_tris, &ray, T_INF).is_none() {
+        if traverse_closest(&bvh.nodes, &leaf_tris, &ray, T_INF, solid).is_none() {
             escapes.push(ray);
         }
         mt_escapes += !tris.iter().any(|&t| moller_trumbore_hits(&ray, t)) as usize;

@@ -14,7 +14,7 @@ use common::rand::SplitMix;
 use common::scenes::{add_sphere, cornell, scene};
 use common::stats::{Failures, Tally, Worst, rel, rel3};
 use glam::{Vec2, Vec3};
-use meshtrace::bvh::{BuildParams, traverse_any, traverse_closest};
+use meshtrace::bvh::{BuildParams, solid, traverse_any, traverse_closest};
 use meshtrace::geometry::{
     ShearedRay, T_INF, TriVerts, intersect_aabb, intersect_triangle, safe_inverse,
 };
@@ -513,8 +513,8 @@ fn traverse_matches() {
     for (c, o) in cases.iter().zip(&out) {
         let ray = Ray::new(v3(c[0]), v3(c[1]));
         let t_max = f(c[1][3]);
-        let cpu = traverse_closest(nodes, tris, &ray, t_max);
-        let cpu_any = traverse_any(nodes, tris, &ray, t_max);
+        let cpu = traverse_closest(nodes, tris, &ray, t_max, solid);
+        let cpu_any = traverse_any(nodes, tris, &ray, t_max, solid);
         let (gtri, gt, gu, gv) = (o[0][0], f(o[0][1]), f(o[0][2]), f(o[0][3]));
         let gpu_any = o[1][0] == 1;
         let show = || {

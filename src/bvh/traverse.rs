@@ -17,20 +17,31 @@ pub struct Hit {
     pub tri: u32,
 }
 
-/// The nearest intersection with `0 < t < t_max`.
+/// For traversals of scenes without cut-outs: every hit counts.
+pub fn solid(_tri: u32, _u: f32, _v: f32) -> bool {
+    true
+}
+
+/// The nearest intersection with `0 < t < t_max`. A hit on a triangle marked
+/// [`TriVerts::is_masked`] counts only where `accept(tri, u, v)` says so (alpha cut-outs);
+/// others count without asking.
 /// mirror: shaders/traverse.wgsl `traverse_closest`
 pub fn traverse_closest(
     nodes: &[BvhNode],
     tris: &[TriVerts],
     ray: &Ray,
     t_max: f32,
+    mut accept: impl FnMut(u32, f32, f32) -> bool,
 ) -> Option<Hit> {
     let sheared = ShearedRay::new(ray);
     let mut best: Option<Hit> = None;
     let mut t_best = t_max;
     walk(nodes, ray, t_max, |first, count, _| {
         for i in first..first + count {
-            if let Some(h) = intersect_triangle(&sheared, &tris[i as usize], t_best) {
+            let tri = &tris[i as usize];
+            if let Some(h) = intersect_triangle(&sheared, tri, t_best)
+                && (!tri.is_masked() || accept(i, h.u, h.v))
+            {
                 t_best = h.t;
                 best = Some(Hit {
                     t: h.t,
@@ -45,14 +56,24 @@ pub fn traverse_closest(
     best
 }
 
-/// Whether anything lies on the ray with `0 < t < t_max` (shadow rays).
+/// Whether anything lies on the ray with `0 < t < t_max` (shadow rays), with hits on
+/// masked triangles counted as [`traverse_closest`] counts them.
 /// mirror: shaders/traverse.wgsl `traverse_any`
-pub fn traverse_any(nodes: &[BvhNode], tris: &[TriVerts], ray: &Ray, t_max: f32) -> bool {
+pub fn traverse_any(
+    nodes: &[BvhNode],
+    tris: &[TriVerts],
+    ray: &Ray,
+    t_max: f32,
+    mut accept: impl FnMut(u32, f32, f32) -> bool,
+) -> bool {
     let sheared = ShearedRay::new(ray);
     let mut hit = false;
     walk(nodes, ray, t_max, |first, count, _| {
-        hit = (first..first + count)
-            .any(|i| intersect_triangle(&sheared, &tris[i as usize], t_max).is_some());
+        hit = (first..first + count).any(|i| {
+            let tri = &tris[i as usize];
+            intersect_triangle(&sheared, tri, t_max)
+                .is_some_and(|h| !tri.is_masked() || accept(i, h.u, h.v))
+        });
         (hit, t_max)
     });
     hit

@@ -11,7 +11,7 @@ use super::bsdf::{bsdf_eval, bsdf_is_delta, bsdf_is_two_sided, bsdf_pdf, bsdf_sa
 use super::lights::{light_pdf, sample_light, sky_pdf, sky_radiance};
 use super::rng::{self, Rng};
 use super::sampling::power_heuristic;
-use super::texture::{material_at, triangle_uv};
+use super::texture::{alpha_test, material_at, triangle_uv};
 use super::{RenderScene, TRI_SMOOTH, TRI_UV};
 use crate::bvh::{Hit, traverse_any, traverse_closest};
 use crate::geometry::{self, T_INF};
@@ -123,7 +123,9 @@ pub fn path_start(ray: Ray) -> PathState {
 pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: u32) -> bool {
     let (nodes, tris) = (&scene.bvh.nodes, &scene.tris);
     st.rays += 1;
-    let Some(hit) = traverse_closest(nodes, tris, &st.ray, T_INF) else {
+    let Some(hit) = traverse_closest(nodes, tris, &st.ray, T_INF, |t, u, v| {
+        alpha_test(scene, t, u, v)
+    }) else {
         let w = if st.prev_delta || scene.sky_pmf == 0.0 {
             1.0
         } else {
@@ -180,7 +182,13 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
                 let f = bsdf_eval(mat, wo, wi);
                 if f != Vec3::ZERO {
                     st.rays += 1;
-                    if !traverse_any(nodes, tris, &Ray::new(ls.origin, ls.wi), ls.t_max) {
+                    if !traverse_any(
+                        nodes,
+                        tris,
+                        &Ray::new(ls.origin, ls.wi),
+                        ls.t_max,
+                        |t, u, v| alpha_test(scene, t, u, v),
+                    ) {
                         let w = if ls.delta {
                             1.0
                         } else {

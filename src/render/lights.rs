@@ -7,7 +7,7 @@ use super::rng::{self, Rng};
 use super::sampling::{
     UNIFORM_SPHERE_PDF, sample_cdf, sample_uniform_sphere, sample_uniform_triangle,
 };
-use super::texture::{material_at, triangle_uv};
+use super::texture::{alpha_test, material_at, triangle_uv};
 use super::{LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_SPOT, Light, RenderScene, SKY_EMITTER};
 use crate::geometry::{self, T_INF};
 use crate::scene::{NO_TEXTURE, Sky};
@@ -96,7 +96,10 @@ pub fn sample_light(
     let dist = to_light.length();
     let wi = to_light / dist;
     let cos_l = -wi.dot(geometry::geometric_normal(tri));
-    if !(cos_l > 0.0 && dist > 0.0) {
+    // A point that an alpha mask cuts out emits nothing.
+    if !(cos_l > 0.0 && dist > 0.0)
+        || (tri.is_masked() && !alpha_test(scene, light, bary.x, bary.y))
+    {
         return None;
     }
     let material = &scene.materials[scene.shading[light as usize].material as usize];

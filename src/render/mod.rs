@@ -20,6 +20,7 @@ use crate::film::Film;
 use crate::film::srgb8_to_linear;
 use crate::geometry::{self, TriVerts};
 use crate::math::{Aabb, luminance};
+use crate::scene::material::MAT_ALPHA_MASK;
 use crate::scene::{
     Camera, Material, NO_NORMAL, NO_TEXTURE, NO_UV, PunctualLight, RenderSettings, Scene, Sky,
     Texture,
@@ -184,7 +185,14 @@ impl RenderScene {
         let tris: Vec<TriVerts> = bvh
             .order
             .iter()
-            .map(|&i| TriVerts::new(corners[i as usize]))
+            .map(|&i| {
+                let mut t = TriVerts::new(corners[i as usize]);
+                let m = &scene.materials[mesh.triangles[i as usize].material as usize];
+                if m.flags & MAT_ALPHA_MASK != 0 {
+                    t.set_masked();
+                }
+                t
+            })
             .collect();
         drop(corners);
         let textured = !scene.textures.records.is_empty();

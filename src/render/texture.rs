@@ -4,6 +4,7 @@
 //! function has a WGSL twin of the same name in `shaders/texture.wgsl`.
 
 use super::{RenderScene, TRI_UV};
+use crate::scene::material::MAT_ALPHA_MASK;
 use crate::scene::{Material, NO_TEXTURE, Texture, TextureFormat};
 use glam::{Vec2, Vec3, Vec4};
 
@@ -76,8 +77,16 @@ pub fn triangle_uv(scene: &RenderScene, tri: u32, b1: f32, b2: f32) -> Vec2 {
     (1.0 - b1 - b2) * Vec2::from(t.uv0) + b1 * Vec2::from(t.uv1) + b2 * Vec2::from(t.uv2)
 }
 
+/// Texture `index` at `uv`, read as a number: the channel its record names.
+/// mirror: shaders/texture.wgsl `scalar_lookup`
+pub fn scalar_lookup(scene: &RenderScene, index: u32, uv: Vec2) -> f32 {
+    let channel = scene.textures[index as usize].channel as usize;
+    texture_lookup(scene, index, uv)[channel]
+}
+
 /// `m` with every textured parameter multiplied by its texture at `uv`; a material
-/// without textures is returned as it is. Roughness stays within [0, 1].
+/// without textures is returned as it is. Roughness, metallic and transmission stay
+/// within [0, 1].
 /// mirror: shaders/texture.wgsl `material_at`
 pub fn material_at(scene: &RenderScene, m: &Material, uv: Vec2) -> Material {
     let mut out = *m;
@@ -88,11 +97,35 @@ pub fn material_at(scene: &RenderScene, m: &Material, uv: Vec2) -> Material {
         out.emission *= texture_lookup(scene, m.emission_texture, uv).truncate();
     }
     if m.roughness_texture != NO_TEXTURE {
-        let channel = scene.textures[m.roughness_texture as usize].channel as usize;
-        let r = texture_lookup(scene, m.roughness_texture, uv)[channel];
+        let r = scalar_lookup(scene, m.roughness_texture, uv);
         out.roughness = (out.roughness * r).clamp(0.0, 1.0);
     }
+    if m.metallic_texture != NO_TEXTURE {
+        let k = scalar_lookup(scene, m.metallic_texture, uv);
+        out.metallic = (out.metallic * k).clamp(0.0, 1.0);
+    }
+    if m.transmission_texture != NO_TEXTURE {
+        let k = scalar_lookup(scene, m.transmission_texture, uv);
+        out.transmission = (out.transmission * k).clamp(0.0, 1.0);
+    }
     out
+}
+
+/// Whether a hit at barycentrics (`b1`, `b2`) of triangle `tri` counts: false where its
+/// material is an alpha mask and the base colour's alpha (factor times the base colour
+/// texture's alpha) is below the cut-off, as glTF's `alphaMode` MASK says.
+/// mirror: shaders/texture.wgsl `alpha_test`
+pub fn alpha_test(scene: &RenderScene, tri: u32, b1: f32, b2: f32) -> bool {
+    let m = &scene.materials[scene.shading[tri as usize].material as usize];
+    if m.flags & MAT_ALPHA_MASK == 0 {
+        return true;
+    }
+    let mut alpha = m.alpha;
+    if m.albedo_texture != NO_TEXTURE {
+        let uv = triangle_uv(scene, tri, b1, b2);
+        alpha *= texture_lookup(scene, m.albedo_texture, uv).w;
+    }
+    alpha >= m.alpha_cutoff
 }
 
 /// The mean colour of texture `index` over its texels, for weighing textured emitters by
