@@ -3,13 +3,15 @@
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
+use glam::Vec3;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use meshtrace::bvh::BuildParams;
 use meshtrace::film::Film;
+use meshtrace::math::Aabb;
 use meshtrace::render::backend::{Backend, DeviceChoice};
 use meshtrace::render::gpu::{self, GpuError};
-use meshtrace::render::{RenderJob, RenderScene};
-use meshtrace::scene::{self, Scene, builtin, load::validate_settings};
+use meshtrace::render::{LIGHT_EMITTER, RenderJob, RenderScene, SKY_EMITTER};
+use meshtrace::scene::{self, Scene, TextureFormat, builtin, load::validate_settings};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -278,12 +280,28 @@ pub fn info(path: &Path) -> Result<()> {
     println!("triangles    {}", st.triangles);
     println!("vertices     {}", scene.mesh.positions.len());
     println!("materials    {}", scene.materials.len());
+    let bounds = rs.bvh.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds());
+    if bounds.is_empty() {
+        println!("bounds       empty");
+    } else {
+        let v = |p: Vec3| format!("({:.4}, {:.4}, {:.4})", p.x, p.y, p.z);
+        println!("bounds       {} to {}", v(bounds.min), v(bounds.max));
+        println!("centre       {}", v(bounds.center()));
+        println!("size         {}", v(bounds.extent()));
+    }
     let sky = rs.sky_pmf > 0.0;
-    let tris = rs.emitters.len() - sky as usize;
+    let punctual = rs
+        .emitters
+        .iter()
+        .filter(|&&e| e & LIGHT_EMITTER != 0 && e != SKY_EMITTER)
+        .count();
+    let tris = rs.emitters.len() - punctual - sky as usize;
     println!(
-        "emitters     {tris} triangles{}",
+        "emitters     {tris} triangles, {} point, spot or directional lights{}",
+        punctual,
         if sky { " and the sky" } else { "" }
     );
+    print_textures(&scene);
     println!(
         "bvh build    {:.2} ms ({:.2} M triangles/s)",
         st.build_seconds * 1e3,
@@ -309,6 +327,43 @@ pub fn info(path: &Path) -> Result<()> {
         println!("peak memory  {:.1} MiB", kib as f64 / 1024.0);
     }
     Ok(())
+}
+
+/// The scene's textures: how many, the distinct images they read, and the memory their
+/// texels take (the same on the host and the device), then one line per image.
+fn print_textures(scene: &Scene) {
+    let t = &scene.textures;
+    let mut images: Vec<(u32, usize)> = Vec::new();
+    for (k, r) in t.records.iter().enumerate() {
+        if !images.iter().any(|&(offset, _)| offset == r.offset) {
+            images.push((r.offset, k));
+        }
+    }
+    println!(
+        "textures     {} ({} images, {})",
+        t.records.len(),
+        images.len(),
+        mebibytes(t.texels.len() as u64 * 4)
+    );
+    for (_, k) in images {
+        let r = &t.records[k];
+        let (kind, bytes) = if r.format == TextureFormat::RGBA32F {
+            ("RGBA 32-bit float", 16)
+        } else {
+            ("RGBA 8-bit", 4)
+        };
+        println!(
+            "  {}  {}x{} {kind}, {}",
+            t.names[k],
+            r.width,
+            r.height,
+            mebibytes(r.width as u64 * r.height as u64 * bytes)
+        );
+    }
+}
+
+fn mebibytes(bytes: u64) -> String {
+    format!("{:.2} MiB", bytes as f64 / (1024.0 * 1024.0))
 }
 
 /// The process's peak resident memory, from /proc (Linux only).
