@@ -8,10 +8,10 @@ use super::file::{
 use super::light::PunctualLight;
 use super::obj::{FileSource, Fs, MeshPart, PartTriangle, load_obj};
 use super::sphere::{default_subdivisions, icosphere};
-use super::texture::{TextureError, TextureRef, Textures, Usage, UvTransform};
+use super::texture::{TextureError, TextureRef, TextureSource, Textures, Usage, UvTransform};
 use super::{
-    Camera, Material, MaterialKind, Mesh, NO_NORMAL, NO_TEXTURE, NO_UV, RenderSettings, Scene,
-    SceneError, Sky, Triangle,
+    Camera, Material, MaterialKind, Mesh, NO_NORMAL, NO_TANGENT, NO_TEXTURE, NO_UV, RenderSettings,
+    Scene, SceneError, Sky, Triangle,
 };
 use crate::math::Aabb;
 use glam::{Mat3, Mat4, Vec3};
@@ -163,15 +163,31 @@ impl Builder {
     /// triangles are dropped (and counted).
     fn append_part(
         &mut self,
-        part: MeshPart,
+        mut part: MeshPart,
         m: Mat4,
         material: Option<u32>,
         files: &dyn FileSource,
         error: &dyn Fn(String) -> SceneError,
     ) -> Result<(), SceneError> {
-        self.warnings.extend(part.warnings);
-        let mut slots = Vec::with_capacity(part.textures.len());
-        for r in &part.textures {
+        self.warnings.append(&mut part.warnings);
+        let materials = std::mem::take(&mut part.materials);
+        let local =
+            self.append_materials(materials, &part.material_names, &part.textures, files)?;
+        self.append_geometry(part, m, material, &local, error)
+    }
+
+    /// Appends materials to the table, reading the textures their slots index into
+    /// `textures` (a missing optional one is a warning, and its slot falls back to the
+    /// parameter's factor); returns the table index of each.
+    fn append_materials(
+        &mut self,
+        materials: Vec<Material>,
+        names: &[String],
+        textures: &[TextureRef],
+        files: &dyn FileSource,
+    ) -> Result<Vec<u32>, SceneError> {
+        let mut slots = Vec::with_capacity(textures.len());
+        for r in textures {
             slots.push(match self.textures.add(r, files) {
                 Ok(slot) => slot,
                 Err(TextureError::Missing(file)) => {
@@ -190,10 +206,42 @@ impl Builder {
                 slots[i as usize]
             }
         };
+        Ok(materials
+            .into_iter()
+            .zip(names)
+            .map(|(mat, name)| {
+                let mat = Material {
+                    albedo_texture: slot(mat.albedo_texture),
+                    emission_texture: slot(mat.emission_texture),
+                    roughness_texture: slot(mat.roughness_texture),
+                    metallic_texture: slot(mat.metallic_texture),
+                    transmission_texture: slot(mat.transmission_texture),
+                    normal_texture: slot(mat.normal_texture),
+                    ..mat
+                };
+                self.add_material(name, mat)
+            })
+            .collect())
+    }
+
+    /// Appends a part's geometry transformed by `m`: its triangles' materials index `local`
+    /// (the table indices [`Builder::append_materials`] returned), unless `material`
+    /// overrides them. A triangle without texture coordinates whose material uses a texture
+    /// is an error, made by `error`. Degenerate triangles are dropped (and counted).
+    fn append_geometry(
+        &mut self,
+        part: MeshPart,
+        m: Mat4,
+        material: Option<u32>,
+        local: &[u32],
+        error: &dyn Fn(String) -> SceneError,
+    ) -> Result<(), SceneError> {
         let base_p = self.mesh.positions.len() as u32;
         let base_n = self.mesh.normals.len() as u32;
         let base_t = self.mesh.texcoords.len() as u32;
-        let normal_matrix = Mat3::from_mat4(m).inverse().transpose();
+        let base_g = self.mesh.tangents.len() as u32;
+        let linear = Mat3::from_mat4(m);
+        let normal_matrix = linear.inverse().transpose();
         self.mesh
             .positions
             .extend(part.positions.iter().map(|&p| m.transform_point3(p)));
@@ -203,20 +251,18 @@ impl Builder {
                 .map(|&n| (normal_matrix * n).normalize_or_zero()),
         );
         self.mesh.texcoords.extend(&part.texcoords);
-        let local: Vec<u32> = part
-            .materials
-            .into_iter()
-            .zip(&part.material_names)
-            .map(|(mat, name)| {
-                let mat = Material {
-                    albedo_texture: slot(mat.albedo_texture),
-                    emission_texture: slot(mat.emission_texture),
-                    roughness_texture: slot(mat.roughness_texture),
-                    ..mat
-                };
-                self.add_material(name, mat)
-            })
-            .collect();
+        // A tangent follows the surface (the linear part, not the normal matrix); a mirror
+        // turns the bitangent's handedness.
+        let handedness = if linear.determinant() < 0.0 {
+            -1.0
+        } else {
+            1.0
+        };
+        self.mesh.tangents.extend(part.tangents.iter().map(|&t| {
+            (linear * t.truncate())
+                .normalize_or_zero()
+                .extend(t.w * handedness)
+        }));
         for t in part.triangles {
             let material = match (material, t.material) {
                 (Some(m), _) => m,
@@ -240,6 +286,11 @@ impl Builder {
             } else {
                 t.n.map(|i| i + base_n)
             };
+            let mut g = if t.g[0] == NO_TANGENT {
+                t.g
+            } else {
+                t.g.map(|i| i + base_g)
+            };
             let [a, b, c] = p.map(|i| self.mesh.positions[i as usize]);
             let area2 = (b - a).cross(c - a).length();
             if !(area2 > 0.0 && area2.is_finite()) {
@@ -251,6 +302,18 @@ impl Builder {
                     .any(|&i| self.mesh.normals[i as usize] == Vec3::ZERO)
             {
                 n = [NO_NORMAL; 3];
+            }
+            if g[0] != NO_TANGENT
+                && g.iter()
+                    .any(|&i| self.mesh.tangents[i as usize].truncate() == Vec3::ZERO)
+            {
+                g = [NO_TANGENT; 3];
+            }
+            // The tangent table runs beside the triangles from the first one with tangents.
+            let corners = &mut self.mesh.tangent_corners;
+            if g[0] != NO_TANGENT || !corners.is_empty() {
+                corners.resize(self.mesh.triangles.len(), [NO_TANGENT; 3]);
+                corners.push(g);
             }
             self.mesh.triangles.push(Triangle {
                 p,
@@ -469,7 +532,7 @@ impl Ctx<'_> {
             ));
         }
         let r = TextureRef {
-            path: self.dir.join(&t.texture),
+            source: TextureSource::File(self.dir.join(&t.texture)),
             usage,
             transform: UvTransform::scale(scale[0], scale[1]),
             optional: false,
@@ -563,8 +626,20 @@ impl Ctx<'_> {
         let object_error = |message: String| self.invalid(format!("objects[{i}]"), message);
         match (&o.mesh, &o.sphere) {
             (Some(mesh), None) => {
-                let part = load_obj(&self.dir.join(mesh), self.files)?;
-                builder.append_part(part, transform, material, self.files, &object_error)?;
+                let path = self.dir.join(mesh);
+                let no_faces = || {
+                    object_error(format!(
+                        "{} has no faces",
+                        super::shown(&path).escape_debug()
+                    ))
+                };
+                {
+                    let part = load_obj(&path, self.files)?;
+                    if part.triangles.is_empty() {
+                        return Err(no_faces());
+                    }
+                    builder.append_part(part, transform, material, self.files, &object_error)?;
+                }
             }
             (None, Some(s)) => {
                 let center = self.vec3(&field("sphere.center"), s.center)?;
@@ -590,6 +665,7 @@ impl Ctx<'_> {
                             p: f,
                             n: f,
                             t: [NO_UV; 3],
+                            g: [NO_TANGENT; 3],
                             material: None,
                         })
                         .collect(),

@@ -21,7 +21,7 @@ pub use load::{load_scene, load_scene_from, parse_scene};
 pub use material::{Material, MaterialKind, NO_TEXTURE};
 pub use texture::{Texture, TextureFormat, Textures};
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use std::path::PathBuf;
 
 /// Index value of a triangle corner that has no vertex normal.
@@ -29,6 +29,9 @@ pub const NO_NORMAL: u32 = u32::MAX;
 
 /// Index value of a triangle corner that has no texture coordinate.
 pub const NO_UV: u32 = u32::MAX;
+
+/// Index value of a triangle corner that has no tangent.
+pub const NO_TANGENT: u32 = u32::MAX;
 
 /// One triangle of the scene mesh, by index into [`Mesh::positions`] and [`Mesh::normals`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -49,11 +52,27 @@ pub struct Mesh {
     /// Texture coordinates, v running down an image from its top edge.
     pub texcoords: Vec<Vec2>,
     pub triangles: Vec<Triangle>,
+    /// Unit tangents in world space (glTF `TANGENT`), w (±1) the bitangent's handedness:
+    /// bitangent = `cross(normal, tangent.xyz) * w`.
+    pub tangents: Vec<Vec4>,
+    /// Per triangle, parallel to [`Mesh::triangles`], its corners' indices into
+    /// [`Mesh::tangents`] or `[NO_TANGENT; 3]`; empty when no triangle has tangents. (A
+    /// table beside the triangles rather than a field of [`Triangle`], so that meshes built
+    /// in code need not say that they have none.)
+    pub tangent_corners: Vec<[u32; 3]>,
 }
 
 impl Mesh {
     pub fn vertices(&self, t: &Triangle) -> [Vec3; 3] {
         t.p.map(|i| self.positions[i as usize])
+    }
+
+    /// The tangent indices of triangle `i`: `[NO_TANGENT; 3]` where it has none.
+    pub fn tangent_indices(&self, i: usize) -> [u32; 3] {
+        self.tangent_corners
+            .get(i)
+            .copied()
+            .unwrap_or([NO_TANGENT; 3])
     }
 }
 
