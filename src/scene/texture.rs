@@ -79,14 +79,17 @@ impl UvTransform {
     }
 
     /// The matrix of [`Texture::uv_matrix`]: KHR_texture_transform's rotation
-    /// (u' = cos·u − sin·v, v' = sin·u + cos·v) times the scale.
+    /// (u' = cos·u + sin·v, v' = −sin·u + cos·v) times the scale. That is the direction
+    /// Khronos's TextureTransformTest asset checks and the extension's own JSON example
+    /// implies (the image turns clockwise as seen with v running down), and the transpose
+    /// of what the draft README's GLSL matrix reads as in column-major order.
     pub fn matrix(&self) -> [f32; 4] {
         let [su, sv] = self.scale;
         if self.rotation == 0.0 {
             return [su, 0.0, 0.0, sv];
         }
         let (s, c) = self.rotation.sin_cos();
-        [c * su, -s * sv, s * su, c * sv]
+        [c * su, s * sv, -s * su, c * sv]
     }
 }
 
