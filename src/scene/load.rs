@@ -5,6 +5,7 @@ use super::file::{
     ColorFile, MaterialFile, MaterialType, ObjectFile, ScalarFile, ScaleFile, SceneFile,
     TextureFile,
 };
+use super::gltf::{GltfAsset, is_gltf, load_gltf};
 use super::light::PunctualLight;
 use super::obj::{FileSource, Fs, MeshPart, PartTriangle, load_obj};
 use super::sphere::{default_subdivisions, icosphere};
@@ -23,18 +24,32 @@ pub const MAX_PIXELS: u64 = 1 << 26;
 /// Deepest sphere subdivision accepted: 20 * 4^10 = 21M triangles.
 pub const MAX_SPHERE_SUBDIVISIONS: u32 = 10;
 
-/// Loads a scene file (`.toml`) or a bare mesh (`.obj`, framed by an automatic camera).
+/// Loads a scene file (`.toml`), a bare mesh (`.obj`, framed by an automatic camera) or a
+/// glTF file (`.gltf`, `.glb`: its own camera, else framed as a bare mesh).
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
     load_scene_from(path, &Fs)
 }
 
 /// [`load_scene`] reading through `files`, so that built-in scenes load like any other.
+/// The extension (in any case) says what the file is; any other is an error that lists
+/// the inputs meshtrace reads.
 pub fn load_scene_from(path: &Path, files: &dyn FileSource) -> Result<Scene, SceneError> {
-    let is_obj = path
+    let extension = path
         .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
-    if is_obj {
-        return load_bare_obj(path, files);
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match extension.as_deref() {
+        Some("obj") => return load_bare_obj(path, files),
+        Some("gltf" | "glb") => return load_bare_gltf(path, files),
+        Some("toml") => {}
+        _ => {
+            return Err(SceneError::Unsupported {
+                path: super::shown(path),
+                message: "not an input meshtrace reads: give a scene file (.toml), an OBJ mesh \
+                          (.obj) or a glTF file (.gltf, .glb)"
+                    .into(),
+            });
+        }
     }
     let io = |source| SceneError::Io {
         path: super::shown(path),
@@ -123,6 +138,61 @@ fn load_bare_obj(path: &Path, files: &dyn FileSource) -> Result<Scene, SceneErro
     ))
 }
 
+/// A bare glTF file: its materials and lights, seen through its first perspective camera
+/// or else framed as a bare OBJ; under a white sky, or a black one when the file brings its
+/// own light (punctual lights or emissive materials).
+fn load_bare_gltf(path: &Path, files: &dyn FileSource) -> Result<Scene, SceneError> {
+    let shown = super::shown(path);
+    let asset = load_gltf(path, files)?;
+    let camera = asset.camera.clone();
+    let mut builder = Builder::default();
+    let error = |at: &str, message: String| SceneError::Gltf {
+        path: shown.clone(),
+        at: at.to_string(),
+        message,
+    };
+    builder.append_gltf(asset, Mat4::IDENTITY, None, files, &error)?;
+    let mesh = &builder.mesh;
+    if mesh.triangles.is_empty() {
+        return Err(SceneError::Gltf {
+            path: shown,
+            at: "scene".into(),
+            message: "the default scene has no triangles to render".into(),
+        });
+    }
+    let camera = match camera {
+        Some(camera) => camera,
+        None => {
+            let bounds = mesh.triangles.iter().fold(Aabb::EMPTY, |b, t| {
+                b.union(Aabb::from_points(&mesh.vertices(t)))
+            });
+            Camera::framing(&bounds).ok_or_else(|| SceneError::Gltf {
+                path: shown.clone(),
+                at: "scene".into(),
+                message: format!(
+                    "the scene spans {} to {}, too far out to frame with a camera",
+                    bounds.min, bounds.max
+                ),
+            })?
+        }
+    };
+    let emissive = mesh
+        .triangles
+        .iter()
+        .any(|t| builder.materials[t.material as usize].is_emissive());
+    let sky = if emissive || !builder.lights.is_empty() {
+        Sky::Constant(Vec3::ZERO)
+    } else {
+        Sky::Constant(Vec3::ONE)
+    };
+    Ok(builder.finish(
+        Some(path.to_path_buf()),
+        camera,
+        sky,
+        RenderSettings::default(),
+    ))
+}
+
 /// Accumulates the world-space mesh and the material table while objects are read.
 #[derive(Default)]
 struct Builder {
@@ -174,6 +244,45 @@ impl Builder {
         let local =
             self.append_materials(materials, &part.material_names, &part.textures, files)?;
         self.append_geometry(part, m, material, &local, error)
+    }
+
+    /// Appends what a glTF file brings, transformed by `m`: its primitives with their
+    /// node matrices, and its materials unless `material` overrides them; its lights. An
+    /// error about a primitive is made by `error` from the primitive's JSON path.
+    fn append_gltf(
+        &mut self,
+        asset: GltfAsset,
+        m: Mat4,
+        material: Option<u32>,
+        files: &dyn FileSource,
+        error: &dyn Fn(&str, String) -> SceneError,
+    ) -> Result<(), SceneError> {
+        self.warnings.extend(asset.warnings);
+        let local = match material {
+            Some(_) => Vec::new(),
+            None => self.append_materials(
+                asset.materials,
+                &asset.material_names,
+                &asset.textures,
+                files,
+            )?,
+        };
+        for p in asset.parts {
+            let at = p.at;
+            self.append_geometry(p.part, m * p.matrix, material, &local, &|message| {
+                error(&at, message)
+            })?;
+        }
+        for light in asset.lights {
+            match light.transformed(m) {
+                Some(light) => self.lights.push(light),
+                None => self.warnings.push(
+                    "a glTF light's direction collapses under its object's transform; the light is dropped"
+                        .into(),
+                ),
+            }
+        }
+        Ok(())
     }
 
     /// Appends materials to the table, reading the textures their slots index into
@@ -633,7 +742,17 @@ impl Ctx<'_> {
                         super::shown(&path).escape_debug()
                     ))
                 };
-                {
+                if is_gltf(&path) {
+                    let asset = load_gltf(&path, self.files)?;
+                    if asset.parts.iter().all(|p| p.part.triangles.is_empty()) {
+                        return Err(no_faces());
+                    }
+                    let shown = super::shown(&path);
+                    let error = |at: &str, message: String| {
+                        object_error(format!("{shown}: {at}: {message}"))
+                    };
+                    builder.append_gltf(asset, transform, material, self.files, &error)?;
+                } else {
                     let part = load_obj(&path, self.files)?;
                     if part.triangles.is_empty() {
                         return Err(no_faces());

@@ -1,12 +1,14 @@
 //! Scenes: the validated, render-ready description of what to draw.
 //!
-//! `file` holds the serde types of the TOML format; `load` turns a file (or a bare OBJ)
-//! into a [`Scene`], checking every value and naming the file and field of any error.
+//! `file` holds the serde types of the TOML format; `load` turns a file (or a bare OBJ or
+//! glTF file) into a [`Scene`], checking every value and naming the file and field of any
+//! error; `obj`/`mtl` and `gltf` read the meshes.
 //! Nothing here knows about BVHs or devices.
 
 pub mod builtin;
 pub mod camera;
 pub mod file;
+pub mod gltf;
 pub mod light;
 pub mod load;
 pub mod material;
@@ -171,6 +173,17 @@ pub enum SceneError {
     /// An image that cannot be read as a texture.
     #[error("{path}: {message}")]
     Image { path: String, message: String },
+    /// A problem with a glTF file at `at`: a JSON path such as
+    /// `meshes[2].primitives[0].indices`, or a part of a `.glb` container.
+    #[error("{path}: {at}: {message}")]
+    Gltf {
+        path: String,
+        at: String,
+        message: String,
+    },
+    /// A file that is none of the inputs meshtrace reads.
+    #[error("{path}: {message}")]
+    Unsupported { path: String, message: String },
     /// A problem with an OBJ file or an MTL library it loads (`path` names the file at
     /// fault), at `line` when one line is at fault; whole-mesh problems have no line.
     #[error("{path}{}: {message}", at_line(*.line))]
