@@ -114,7 +114,8 @@ fn texture_transform_test_offsets_rotations_and_scales() {
     assert_eq!(record("Offset U").uv_offset, [0.5, 0.0]);
     assert_eq!(record("Offset V").uv_offset, [0.0, 0.5]);
     assert_eq!(record("Offset UV").uv_offset, [0.5, 0.5]);
-    let (s, c) = 0.392_699_1f32.sin_cos();
+    // 0.392699 rad, 22.5 degrees.
+    let (s, c) = std::f32::consts::FRAC_PI_8.sin_cos();
     let rotation = record("Rotation").uv_matrix;
     for (g, e) in rotation.iter().zip([c, s, -s, c]) {
         assert!((g - e).abs() < 1e-5, "{rotation:?}");
