@@ -31,11 +31,12 @@ pub struct Cli {
 
 #[derive(Subcommand)]
 pub enum Command {
-    /// Render a scene file (.toml), a bare mesh (.obj) or, with none, the built-in Cornell box.
+    /// Render a scene file (.toml), a bare mesh (.obj), a glTF file (.gltf, .glb) or, with
+    /// none, the built-in Cornell box.
     Render(RenderArgs),
     /// Print a scene's size and its BVH's statistics.
     Info {
-        /// Scene file, .obj mesh, or builtin:NAME.
+        /// Scene file, .obj mesh, .gltf/.glb file, or builtin:NAME.
         scene: PathBuf,
     },
     /// List the Vulkan adapters; pick one with --adapter INDEX or a name substring.
@@ -53,8 +54,9 @@ pub enum BenchDevice {
 
 #[derive(clap::Args)]
 pub struct BenchArgs {
-    /// Scene files, .obj meshes, builtin:NAME or generated:terrain; by default the built-in
-    /// Cornell box, the Stanford bunny (from ../shared/meshes) and a 2M-triangle terrain.
+    /// Scene files, .obj meshes, .gltf/.glb files, builtin:NAME or generated:terrain; by
+    /// default the built-in Cornell box, the Stanford bunny (from ../shared/meshes) and a
+    /// 2M-triangle terrain.
     pub scenes: Vec<PathBuf>,
     /// Devices to measure; by default the CPU, and the GPU where the render rule picks
     /// it (a hardware adapter, or one named by --adapter). `gpu` and `all` use a software
@@ -93,7 +95,8 @@ pub enum Device {
 
 #[derive(clap::Args)]
 pub struct RenderArgs {
-    /// Scene file, .obj mesh, or builtin:NAME; the built-in Cornell box when omitted.
+    /// Scene file, .obj mesh, .gltf/.glb file, or builtin:NAME; the built-in Cornell box when
+    /// omitted.
     pub scene: Option<PathBuf>,
     /// Output image; the extension picks the format (.png .jpg .bmp .exr .hdr).
     #[arg(short, long, default_value = "render.png")]

@@ -160,6 +160,43 @@ fn bad_meshes_fail_cleanly() {
 }
 
 #[test]
+fn other_inputs_and_bad_gltf_files_fail_cleanly() {
+    let dir = TempDir::new("inputs");
+    dir.write("README.md", "# meshtrace\n");
+    assert_fails(
+        &dir,
+        &["render", "README.md", "-o", "out.png", "--device", "cpu"],
+        &["README.md", "(.toml)", "(.obj)", "(.gltf, .glb)"],
+    );
+    dir.write("cut.glb", b"glTF\x02\0\0\0");
+    assert_fails(
+        &dir,
+        &["render", "cut.glb", "-o", "out.png", "--device", "cpu"],
+        &["cut.glb: GLB header: "],
+    );
+    let box_textured = data("gltf/BoxTextured/BoxTextured.glb");
+    let (code, stderr) = run(
+        &dir,
+        &[
+            "render",
+            box_textured.to_str().unwrap(),
+            "-o",
+            "box.png",
+            "--spp",
+            "1",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--device",
+            "cpu",
+        ],
+    );
+    assert_eq!(code, 0, "{stderr}");
+    assert!(dir.join("box.png").is_file());
+}
+
+#[test]
 fn bad_arguments_and_outputs_fail_cleanly() {
     let dir = TempDir::new("args");
     assert_fails(

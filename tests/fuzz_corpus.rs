@@ -1,4 +1,4 @@
-//! Replays the fuzz corpora (`fuzz/corpus/{scene_file,obj_mtl}`) through the fuzz targets'
+//! Replays the fuzz corpora (`fuzz/corpus/{scene_file,obj_mtl,gltf}`) through the fuzz targets'
 //! own harnesses, without libFuzzer: every input must load or fail with an error, never
 //! panic, and whatever loads must build a valid BVH. A failure names the corpus file.
 
@@ -55,6 +55,11 @@ fn scene_file_corpus_never_panics() {
 #[test]
 fn obj_mtl_corpus_never_panics() {
     replay_all("obj_mtl", harness::obj_mtl, 20);
+}
+
+#[test]
+fn gltf_corpus_never_panics() {
+    replay_all("gltf", harness::gltf, 20);
 }
 
 /// The harness's own plumbing: a panic inside it is reported, not propagated.

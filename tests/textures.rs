@@ -362,8 +362,9 @@ fn a_malformed_map_option_is_an_error_naming_the_library_line() {
     }
 }
 
-/// KHR_texture_transform's matrix: scale, then rotate by u' = cos u − sin v,
-/// v' = sin u + cos v (the extension's GLSL), then offset.
+/// KHR_texture_transform's matrix: scale, then rotate by u' = cos u + sin v,
+/// v' = −sin u + cos v (the direction Khronos's TextureTransformTest checks, see
+/// tests/gltf_samples.rs), then offset.
 #[test]
 fn uv_transforms_scale_then_rotate() {
     use meshtrace::scene::texture::UvTransform;
@@ -375,8 +376,8 @@ fn uv_transforms_scale_then_rotate() {
     let m = t.matrix();
     let apply = |u: f32, v: f32| (m[0] * u + m[1] * v, m[2] * u + m[3] * v);
     let (x, y) = apply(1.0, 0.0);
-    assert!(x.abs() < 1e-6 && (y - 2.0).abs() < 1e-6, "({x}, {y})");
+    assert!(x.abs() < 1e-6 && (y + 2.0).abs() < 1e-6, "({x}, {y})");
     let (x, y) = apply(0.0, 1.0);
-    assert!((x + 3.0).abs() < 1e-6 && y.abs() < 1e-6, "({x}, {y})");
+    assert!((x - 3.0).abs() < 1e-6 && y.abs() < 1e-6, "({x}, {y})");
     assert_eq!(UvTransform::scale(2.0, 3.0).matrix(), [2.0, 0.0, 0.0, 3.0]);
 }

@@ -9,7 +9,9 @@ use meshtrace::bvh::{BuildParams, validate};
 use meshtrace::math::Aabb;
 use meshtrace::render::RenderScene;
 use meshtrace::scene::obj::{FileSource, load_obj};
-use meshtrace::scene::{NO_NORMAL, Scene, load_scene_from};
+use meshtrace::scene::{
+    NO_NORMAL, NO_TANGENT, NO_TEXTURE, NO_UV, PunctualLight, Scene, load_scene_from,
+};
 use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 
@@ -108,6 +110,108 @@ pub fn obj_mtl(data: &[u8]) {
     if let Ok(scene) = load_scene_from(Path::new("m.obj"), &files) {
         check_scene(&scene);
     }
+}
+
+/// The external files a `gltf` input may name: a buffer and an image beside it.
+pub const GLTF_BIN: &str = "b.bin";
+pub const GLTF_PNG: &str = "t.png";
+
+/// A 2x2 RGBA PNG (red and green columns), served as `t.png` to `gltf` inputs.
+pub const PNG_2X2: &[u8] = &[
+    0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a, 0x00, 0x00, 0x00, 0x0d, 0x49, 0x48, 0x44, 0x52,
+    0x00, 0x00, 0x00, 0x02, 0x00, 0x00, 0x00, 0x02, 0x08, 0x06, 0x00, 0x00, 0x00, 0x72, 0xb6, 0x0d,
+    0x24, 0x00, 0x00, 0x00, 0x10, 0x49, 0x44, 0x41, 0x54, 0x78, 0x9c, 0x63, 0xf8, 0xcf, 0xc0, 0xf0,
+    0x1f, 0x0a, 0x21, 0x14, 0x00, 0x45, 0xcc, 0x07, 0xf9, 0x66, 0xcb, 0xff, 0x39, 0x00, 0x00, 0x00,
+    0x00, 0x49, 0x45, 0x4e, 0x44, 0xae, 0x42, 0x60, 0x82,
+];
+
+/// The bytes served as `b.bin`: three vertices of a triangle (36 bytes of floats), then
+/// the indices 0, 1, 2 as unsigned shorts, then 26 bytes counting up.
+pub fn gltf_bin() -> Vec<u8> {
+    let mut bin: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+        .iter()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    bin.extend([0, 0, 1, 0, 2, 0]);
+    bin.extend(0u8..26);
+    bin
+}
+
+/// Fuzz target `gltf`: the input is `fuzz.glb` when it starts with the GLB magic, else
+/// `fuzz.gltf`, beside `b.bin` and `t.png`; loaded as a bare glTF scene, it must load or
+/// fail with an error, and a loaded scene must be well formed.
+pub fn gltf(data: &[u8]) {
+    let name = if data.starts_with(b"glTF") {
+        "fuzz.glb"
+    } else {
+        "fuzz.gltf"
+    };
+    let bin = gltf_bin();
+    let files = MemFiles::new(&[(name, data), (GLTF_BIN, &bin), (GLTF_PNG, PNG_2X2)]);
+    if let Ok(scene) = load_scene_from(Path::new(name), &files) {
+        check_scene(&scene);
+        check_gltf_scene(&scene);
+    }
+}
+
+/// What a glTF scene adds to [`check_scene`]: texture coordinates and tangents in range,
+/// texture slots that name records, finite lights.
+fn check_gltf_scene(scene: &Scene) {
+    let mesh = &scene.mesh;
+    for (k, t) in mesh.triangles.iter().enumerate() {
+        assert!(
+            t.t == [NO_UV; 3] || t.t.iter().all(|&i| (i as usize) < mesh.texcoords.len()),
+            "triangle {k}: texture coordinate index out of range: {:?}",
+            t.t
+        );
+        let g = mesh.tangent_indices(k);
+        assert!(
+            g == [NO_TANGENT; 3] || g.iter().all(|&i| (i as usize) < mesh.tangents.len()),
+            "triangle {k}: tangent index out of range: {g:?}"
+        );
+    }
+    assert!(
+        mesh.tangent_corners.is_empty() || mesh.tangent_corners.len() == mesh.triangles.len(),
+        "{} tangent entries for {} triangles",
+        mesh.tangent_corners.len(),
+        mesh.triangles.len()
+    );
+    for (i, m) in scene.materials.iter().enumerate() {
+        for slot in [
+            m.albedo_texture,
+            m.emission_texture,
+            m.roughness_texture,
+            m.metallic_texture,
+            m.transmission_texture,
+            m.normal_texture,
+        ] {
+            assert!(
+                slot == NO_TEXTURE || (slot as usize) < scene.textures.records.len(),
+                "material {i}: texture slot {slot} of {}",
+                scene.textures.records.len()
+            );
+        }
+    }
+    for light in &scene.lights {
+        let finite = match *light {
+            PunctualLight::Point {
+                position,
+                intensity,
+            } => position.is_finite() && intensity.is_finite(),
+            PunctualLight::Spot {
+                position,
+                direction,
+                intensity,
+                ..
+            } => position.is_finite() && direction.is_normalized() && intensity.is_finite(),
+            PunctualLight::Directional {
+                direction,
+                irradiance,
+            } => direction.is_normalized() && irradiance.is_finite(),
+        };
+        assert!(finite, "a light that is not finite: {light:?}");
+    }
+    assert!(scene.camera.position.is_finite(), "{:?}", scene.camera);
 }
 
 /// A loaded scene is well formed, and if its BVH fits the traversal stack the tree is valid.

@@ -5,13 +5,14 @@ use super::file::{
     ColorFile, LightFile, LightType, MaterialFile, MaterialType, ObjectFile, ScalarFile, ScaleFile,
     SceneFile, TextureFile,
 };
+use super::gltf::{GltfAsset, is_gltf, load_gltf};
 use super::light::PunctualLight;
 use super::obj::{FileSource, Fs, MeshPart, PartTriangle, load_obj};
 use super::sphere::{default_subdivisions, icosphere};
-use super::texture::{TextureError, TextureRef, Textures, Usage, UvTransform};
+use super::texture::{TextureError, TextureRef, TextureSource, Textures, Usage, UvTransform};
 use super::{
-    Camera, Material, MaterialKind, Mesh, NO_NORMAL, NO_TEXTURE, NO_UV, RenderSettings, Scene,
-    SceneError, Sky, Triangle,
+    Camera, Material, MaterialKind, Mesh, NO_NORMAL, NO_TANGENT, NO_TEXTURE, NO_UV, RenderSettings,
+    Scene, SceneError, Sky, Triangle,
 };
 use crate::math::Aabb;
 use glam::{Mat3, Mat4, Vec3};
@@ -23,18 +24,32 @@ pub const MAX_PIXELS: u64 = 1 << 26;
 /// Deepest sphere subdivision accepted: 20 * 4^10 = 21M triangles.
 pub const MAX_SPHERE_SUBDIVISIONS: u32 = 10;
 
-/// Loads a scene file (`.toml`) or a bare mesh (`.obj`, framed by an automatic camera).
+/// Loads a scene file (`.toml`), a bare mesh (`.obj`, framed by an automatic camera) or a
+/// glTF file (`.gltf`, `.glb`: its own camera, else framed as a bare mesh).
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
     load_scene_from(path, &Fs)
 }
 
 /// [`load_scene`] reading through `files`, so that built-in scenes load like any other.
+/// The extension (in any case) says what the file is; any other is an error that lists
+/// the inputs meshtrace reads.
 pub fn load_scene_from(path: &Path, files: &dyn FileSource) -> Result<Scene, SceneError> {
-    let is_obj = path
+    let extension = path
         .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
-    if is_obj {
-        return load_bare_obj(path, files);
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match extension.as_deref() {
+        Some("obj") => return load_bare_obj(path, files),
+        Some("gltf" | "glb") => return load_bare_gltf(path, files),
+        Some("toml") => {}
+        _ => {
+            return Err(SceneError::Unsupported {
+                path: super::shown(path),
+                message: "not an input meshtrace reads: give a scene file (.toml), an OBJ mesh \
+                          (.obj) or a glTF file (.gltf, .glb)"
+                    .into(),
+            });
+        }
     }
     let io = |source| SceneError::Io {
         path: super::shown(path),
@@ -126,6 +141,61 @@ fn load_bare_obj(path: &Path, files: &dyn FileSource) -> Result<Scene, SceneErro
     ))
 }
 
+/// A bare glTF file: its materials and lights, seen through its first perspective camera
+/// or else framed as a bare OBJ; under a white sky, or a black one when the file brings its
+/// own light (punctual lights or emissive materials).
+fn load_bare_gltf(path: &Path, files: &dyn FileSource) -> Result<Scene, SceneError> {
+    let shown = super::shown(path);
+    let asset = load_gltf(path, files)?;
+    let camera = asset.camera.clone();
+    let mut builder = Builder::default();
+    let error = |at: &str, message: String| SceneError::Gltf {
+        path: shown.clone(),
+        at: at.to_string(),
+        message,
+    };
+    builder.append_gltf(asset, Mat4::IDENTITY, None, files, &error)?;
+    let mesh = &builder.mesh;
+    if mesh.triangles.is_empty() {
+        return Err(SceneError::Gltf {
+            path: shown,
+            at: "scene".into(),
+            message: "the default scene has no triangles to render".into(),
+        });
+    }
+    let camera = match camera {
+        Some(camera) => camera,
+        None => {
+            let bounds = mesh.triangles.iter().fold(Aabb::EMPTY, |b, t| {
+                b.union(Aabb::from_points(&mesh.vertices(t)))
+            });
+            Camera::framing(&bounds).ok_or_else(|| SceneError::Gltf {
+                path: shown.clone(),
+                at: "scene".into(),
+                message: format!(
+                    "the scene spans {} to {}, too far out to frame with a camera",
+                    bounds.min, bounds.max
+                ),
+            })?
+        }
+    };
+    let emissive = mesh
+        .triangles
+        .iter()
+        .any(|t| builder.materials[t.material as usize].is_emissive());
+    let sky = if emissive || !builder.lights.is_empty() {
+        Sky::Constant(Vec3::ZERO)
+    } else {
+        Sky::Constant(Vec3::ONE)
+    };
+    Ok(builder.finish(
+        Some(path.to_path_buf()),
+        camera,
+        sky,
+        RenderSettings::default(),
+    ))
+}
+
 /// Accumulates the world-space mesh and the material table while objects are read.
 #[derive(Default)]
 struct Builder {
@@ -166,15 +236,70 @@ impl Builder {
     /// triangles are dropped (and counted).
     fn append_part(
         &mut self,
-        part: MeshPart,
+        mut part: MeshPart,
         m: Mat4,
         material: Option<u32>,
         files: &dyn FileSource,
         error: &dyn Fn(String) -> SceneError,
     ) -> Result<(), SceneError> {
-        self.warnings.extend(part.warnings);
-        let mut slots = Vec::with_capacity(part.textures.len());
-        for r in &part.textures {
+        self.warnings.append(&mut part.warnings);
+        let materials = std::mem::take(&mut part.materials);
+        let local =
+            self.append_materials(materials, &part.material_names, &part.textures, files)?;
+        self.append_geometry(part, m, material, &local, error)
+    }
+
+    /// Appends what a glTF file brings, transformed by `m`: its primitives with their
+    /// node matrices, and its materials unless `material` overrides them; its lights. An
+    /// error about a primitive is made by `error` from the primitive's JSON path.
+    fn append_gltf(
+        &mut self,
+        asset: GltfAsset,
+        m: Mat4,
+        material: Option<u32>,
+        files: &dyn FileSource,
+        error: &dyn Fn(&str, String) -> SceneError,
+    ) -> Result<(), SceneError> {
+        self.warnings.extend(asset.warnings);
+        let local = match material {
+            Some(_) => Vec::new(),
+            None => self.append_materials(
+                asset.materials,
+                &asset.material_names,
+                &asset.textures,
+                files,
+            )?,
+        };
+        for p in asset.parts {
+            let at = p.at;
+            self.append_geometry(p.part, m * p.matrix, material, &local, &|message| {
+                error(&at, message)
+            })?;
+        }
+        for light in asset.lights {
+            match light.transformed(m) {
+                Some(light) => self.lights.push(light),
+                None => self.warnings.push(
+                    "a glTF light's direction collapses under its object's transform; the light is dropped"
+                        .into(),
+                ),
+            }
+        }
+        Ok(())
+    }
+
+    /// Appends materials to the table, reading the textures their slots index into
+    /// `textures` (a missing optional one is a warning, and its slot falls back to the
+    /// parameter's factor); returns the table index of each.
+    fn append_materials(
+        &mut self,
+        materials: Vec<Material>,
+        names: &[String],
+        textures: &[TextureRef],
+        files: &dyn FileSource,
+    ) -> Result<Vec<u32>, SceneError> {
+        let mut slots = Vec::with_capacity(textures.len());
+        for r in textures {
             slots.push(match self.textures.add(r, files) {
                 Ok(slot) => slot,
                 Err(TextureError::Missing(file)) => {
@@ -193,10 +318,42 @@ impl Builder {
                 slots[i as usize]
             }
         };
+        Ok(materials
+            .into_iter()
+            .zip(names)
+            .map(|(mat, name)| {
+                let mat = Material {
+                    albedo_texture: slot(mat.albedo_texture),
+                    emission_texture: slot(mat.emission_texture),
+                    roughness_texture: slot(mat.roughness_texture),
+                    metallic_texture: slot(mat.metallic_texture),
+                    transmission_texture: slot(mat.transmission_texture),
+                    normal_texture: slot(mat.normal_texture),
+                    ..mat
+                };
+                self.add_material(name, mat)
+            })
+            .collect())
+    }
+
+    /// Appends a part's geometry transformed by `m`: its triangles' materials index `local`
+    /// (the table indices [`Builder::append_materials`] returned), unless `material`
+    /// overrides them. A triangle without texture coordinates whose material uses a texture
+    /// is an error, made by `error`. Degenerate triangles are dropped (and counted).
+    fn append_geometry(
+        &mut self,
+        part: MeshPart,
+        m: Mat4,
+        material: Option<u32>,
+        local: &[u32],
+        error: &dyn Fn(String) -> SceneError,
+    ) -> Result<(), SceneError> {
         let base_p = self.mesh.positions.len() as u32;
         let base_n = self.mesh.normals.len() as u32;
         let base_t = self.mesh.texcoords.len() as u32;
-        let normal_matrix = Mat3::from_mat4(m).inverse().transpose();
+        let base_g = self.mesh.tangents.len() as u32;
+        let linear = Mat3::from_mat4(m);
+        let normal_matrix = linear.inverse().transpose();
         self.mesh
             .positions
             .extend(part.positions.iter().map(|&p| m.transform_point3(p)));
@@ -206,20 +363,18 @@ impl Builder {
                 .map(|&n| (normal_matrix * n).normalize_or_zero()),
         );
         self.mesh.texcoords.extend(&part.texcoords);
-        let local: Vec<u32> = part
-            .materials
-            .into_iter()
-            .zip(&part.material_names)
-            .map(|(mat, name)| {
-                let mat = Material {
-                    albedo_texture: slot(mat.albedo_texture),
-                    emission_texture: slot(mat.emission_texture),
-                    roughness_texture: slot(mat.roughness_texture),
-                    ..mat
-                };
-                self.add_material(name, mat)
-            })
-            .collect();
+        // A tangent follows the surface (the linear part, not the normal matrix); a mirror
+        // turns the bitangent's handedness.
+        let handedness = if linear.determinant() < 0.0 {
+            -1.0
+        } else {
+            1.0
+        };
+        self.mesh.tangents.extend(part.tangents.iter().map(|&t| {
+            (linear * t.truncate())
+                .normalize_or_zero()
+                .extend(t.w * handedness)
+        }));
         for t in part.triangles {
             let material = match (material, t.material) {
                 (Some(m), _) => m,
@@ -243,6 +398,11 @@ impl Builder {
             } else {
                 t.n.map(|i| i + base_n)
             };
+            let mut g = if t.g[0] == NO_TANGENT {
+                t.g
+            } else {
+                t.g.map(|i| i + base_g)
+            };
             let [a, b, c] = p.map(|i| self.mesh.positions[i as usize]);
             let area2 = (b - a).cross(c - a).length();
             if !(area2 > 0.0 && area2.is_finite()) {
@@ -254,6 +414,18 @@ impl Builder {
                     .any(|&i| self.mesh.normals[i as usize] == Vec3::ZERO)
             {
                 n = [NO_NORMAL; 3];
+            }
+            if g[0] != NO_TANGENT
+                && g.iter()
+                    .any(|&i| self.mesh.tangents[i as usize].truncate() == Vec3::ZERO)
+            {
+                g = [NO_TANGENT; 3];
+            }
+            // The tangent table runs beside the triangles from the first one with tangents.
+            let corners = &mut self.mesh.tangent_corners;
+            if g[0] != NO_TANGENT || !corners.is_empty() {
+                corners.resize(self.mesh.triangles.len(), [NO_TANGENT; 3]);
+                corners.push(g);
             }
             self.mesh.triangles.push(Triangle {
                 p,
@@ -472,7 +644,7 @@ impl Ctx<'_> {
             ));
         }
         let r = TextureRef {
-            path: self.dir.join(&t.texture),
+            source: TextureSource::File(self.dir.join(&t.texture)),
             usage,
             transform: UvTransform::scale(scale[0], scale[1]),
             optional: false,
@@ -688,8 +860,30 @@ impl Ctx<'_> {
         let object_error = |message: String| self.invalid(format!("objects[{i}]"), message);
         match (&o.mesh, &o.sphere) {
             (Some(mesh), None) => {
-                let part = load_obj(&self.dir.join(mesh), self.files)?;
-                builder.append_part(part, transform, material, self.files, &object_error)?;
+                let path = self.dir.join(mesh);
+                let no_faces = || {
+                    object_error(format!(
+                        "{} has no faces",
+                        super::shown(&path).escape_debug()
+                    ))
+                };
+                if is_gltf(&path) {
+                    let asset = load_gltf(&path, self.files)?;
+                    if asset.parts.iter().all(|p| p.part.triangles.is_empty()) {
+                        return Err(no_faces());
+                    }
+                    let shown = super::shown(&path);
+                    let error = |at: &str, message: String| {
+                        object_error(format!("{shown}: {at}: {message}"))
+                    };
+                    builder.append_gltf(asset, transform, material, self.files, &error)?;
+                } else {
+                    let part = load_obj(&path, self.files)?;
+                    if part.triangles.is_empty() {
+                        return Err(no_faces());
+                    }
+                    builder.append_part(part, transform, material, self.files, &object_error)?;
+                }
             }
             (None, Some(s)) => {
                 let center = self.vec3(&field("sphere.center"), s.center)?;
@@ -715,6 +909,7 @@ impl Ctx<'_> {
                             p: f,
                             n: f,
                             t: [NO_UV; 3],
+                            g: [NO_TANGENT; 3],
                             material: None,
                         })
                         .collect(),

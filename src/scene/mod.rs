@@ -1,12 +1,14 @@
 //! Scenes: the validated, render-ready description of what to draw.
 //!
-//! `file` holds the serde types of the TOML format; `load` turns a file (or a bare OBJ)
-//! into a [`Scene`], checking every value and naming the file and field of any error.
+//! `file` holds the serde types of the TOML format; `load` turns a file (or a bare OBJ or
+//! glTF file) into a [`Scene`], checking every value and naming the file and field of any
+//! error; `obj`/`mtl` and `gltf` read the meshes.
 //! Nothing here knows about BVHs or devices.
 
 pub mod builtin;
 pub mod camera;
 pub mod file;
+pub mod gltf;
 pub mod light;
 pub mod load;
 pub mod material;
@@ -21,7 +23,7 @@ pub use load::{load_scene, load_scene_from, parse_scene};
 pub use material::{Material, MaterialKind, NO_TEXTURE};
 pub use texture::{Texture, TextureFormat, Textures};
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use std::path::PathBuf;
 
 /// Index value of a triangle corner that has no vertex normal.
@@ -29,6 +31,9 @@ pub const NO_NORMAL: u32 = u32::MAX;
 
 /// Index value of a triangle corner that has no texture coordinate.
 pub const NO_UV: u32 = u32::MAX;
+
+/// Index value of a triangle corner that has no tangent.
+pub const NO_TANGENT: u32 = u32::MAX;
 
 /// One triangle of the scene mesh, by index into [`Mesh::positions`] and [`Mesh::normals`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -49,11 +54,27 @@ pub struct Mesh {
     /// Texture coordinates, v running down an image from its top edge.
     pub texcoords: Vec<Vec2>,
     pub triangles: Vec<Triangle>,
+    /// Unit tangents in world space (glTF `TANGENT`), w (±1) the bitangent's handedness:
+    /// bitangent = `cross(normal, tangent.xyz) * w`.
+    pub tangents: Vec<Vec4>,
+    /// Per triangle, parallel to [`Mesh::triangles`], its corners' indices into
+    /// [`Mesh::tangents`] or `[NO_TANGENT; 3]`; empty when no triangle has tangents. (A
+    /// table beside the triangles rather than a field of [`Triangle`], so that meshes built
+    /// in code need not say that they have none.)
+    pub tangent_corners: Vec<[u32; 3]>,
 }
 
 impl Mesh {
     pub fn vertices(&self, t: &Triangle) -> [Vec3; 3] {
         t.p.map(|i| self.positions[i as usize])
+    }
+
+    /// The tangent indices of triangle `i`: `[NO_TANGENT; 3]` where it has none.
+    pub fn tangent_indices(&self, i: usize) -> [u32; 3] {
+        self.tangent_corners
+            .get(i)
+            .copied()
+            .unwrap_or([NO_TANGENT; 3])
     }
 }
 
@@ -152,6 +173,17 @@ pub enum SceneError {
     /// An image that cannot be read as a texture.
     #[error("{path}: {message}")]
     Image { path: String, message: String },
+    /// A problem with a glTF file at `at`: a JSON path such as
+    /// `meshes[2].primitives[0].indices`, or a part of a `.glb` container.
+    #[error("{path}: {at}: {message}")]
+    Gltf {
+        path: String,
+        at: String,
+        message: String,
+    },
+    /// A file that is none of the inputs meshtrace reads.
+    #[error("{path}: {message}")]
+    Unsupported { path: String, message: String },
     /// A problem with an OBJ file or an MTL library it loads (`path` names the file at
     /// fault), at `line` when one line is at fault; whole-mesh problems have no line.
     #[error("{path}{}: {message}", at_line(*.line))]

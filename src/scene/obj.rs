@@ -9,9 +9,9 @@
 //! borrowing a neighbour's normal.
 
 use super::mtl::{MtlMap, MtlMaterial, parse_mtl};
-use super::texture::{TextureRef, Usage, UvTransform};
-use super::{Material, MaterialKind, NO_NORMAL, NO_UV, SceneError};
-use glam::{Vec2, Vec3};
+use super::texture::{TextureRef, TextureSource, Usage, UvTransform};
+use super::{Material, MaterialKind, NO_NORMAL, NO_TANGENT, NO_UV, SceneError};
+use glam::{Vec2, Vec3, Vec4};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -30,8 +30,8 @@ impl FileSource for Fs {
 }
 
 /// One piece of geometry in its own space, as a scene object brings it: an OBJ file with
-/// its materials already mapped, or a sphere. The scene builder transforms it and appends
-/// it to the scene mesh.
+/// its materials already mapped, a sphere, or a glTF primitive. The scene builder
+/// transforms it and appends it to the scene mesh.
 #[derive(Debug, Default)]
 pub struct MeshPart {
     /// Every vertex position the part defines (for an OBJ, every `v` line in file order,
@@ -42,6 +42,9 @@ pub struct MeshPart {
     /// Every texture coordinate the part defines, v running down the image from its top
     /// edge (an OBJ `vt u v` is (u, −v): OBJ runs v up from the bottom edge).
     pub texcoords: Vec<Vec2>,
+    /// Tangents (glTF `TANGENT`): xyz the direction of increasing u, w (±1) the handedness
+    /// of the bitangent, `cross(normal, tangent.xyz) * w`.
+    pub tangents: Vec<Vec4>,
     /// The triangles, in file order.
     pub triangles: Vec<PartTriangle>,
     /// The materials the triangles refer to: for an OBJ, every material of every library it
@@ -66,6 +69,8 @@ pub struct PartTriangle {
     /// Corner texture coordinates, indices into [`MeshPart::texcoords`], or `[NO_UV; 3]`
     /// when not every corner of the face has one.
     pub t: [u32; 3],
+    /// Corner tangents, indices into [`MeshPart::tangents`], or `[NO_TANGENT; 3]`.
+    pub g: [u32; 3],
     /// Index into [`MeshPart::materials`], or `None` for a face that names no material
     /// (or an unknown one): the scene's default material.
     pub material: Option<u32>,
@@ -245,6 +250,7 @@ fn parse_obj(
                                 [NO_NORMAL; 3]
                             },
                             t: if all_uvs { [a.2, b.2, c.2] } else { [NO_UV; 3] },
+                            g: [NO_TANGENT; 3],
                             material: current,
                         });
                     }
@@ -562,7 +568,7 @@ pub fn map_mtl(m: &MtlMaterial, dir: &Path, textures: &mut Vec<TextureRef>) -> M
     let glass = illum == Some(7) || (m.dissolve.is_some_and(|d| d < 1.0) && ior > 1.0);
     let mut slot = |map: &MtlMap, usage: Usage| {
         textures.push(TextureRef {
-            path: dir.join(&map.file),
+            source: TextureSource::File(dir.join(&map.file)),
             usage,
             transform: UvTransform::scale(map.scale[0], map.scale[1]),
             optional: true,

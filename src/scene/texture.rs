@@ -7,8 +7,10 @@
 use super::SceneError;
 use super::obj::FileSource;
 use bytemuck::{Pod, Zeroable};
+use image::ImageFormat;
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
+use std::sync::Arc;
 
 /// How a texture's texels are stored and decoded: a `u32` code, as the shaders compare it.
 #[repr(transparent)]
@@ -77,14 +79,17 @@ impl UvTransform {
     }
 
     /// The matrix of [`Texture::uv_matrix`]: KHR_texture_transform's rotation
-    /// (u' = cos·u − sin·v, v' = sin·u + cos·v) times the scale.
+    /// (u' = cos·u + sin·v, v' = −sin·u + cos·v) times the scale. That is the direction
+    /// Khronos's TextureTransformTest asset checks and the extension's own JSON example
+    /// implies (the image turns clockwise as seen with v running down), and the transpose
+    /// of what the draft README's GLSL matrix reads as in column-major order.
     pub fn matrix(&self) -> [f32; 4] {
         let [su, sv] = self.scale;
         if self.rotation == 0.0 {
             return [su, 0.0, 0.0, sv];
         }
         let (s, c) = self.rotation.sin_cos();
-        [c * su, -s * sv, s * su, c * sv]
+        [c * su, s * sv, -s * su, c * sv]
     }
 }
 
@@ -95,14 +100,57 @@ pub enum Usage {
     Colour,
     /// A number read from one channel, linear.
     Scalar { channel: u32 },
+    /// Linear RGB data that is not a colour, such as a tangent-space normal map: never
+    /// sRGB-decoded.
+    Linear,
 }
 
-/// A texture a material asks for before its image is read: the file, its use, its UV
+/// Where a texture's image comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TextureSource {
+    /// An image file, read through the scene's file source when the texture is added.
+    File(PathBuf),
+    /// Encoded image bytes already in memory (a glTF file's images): `name` identifies them
+    /// (images of one name are decoded once) and shows them in messages; `format` is the
+    /// format their MIME type or file name gives, else it is guessed from the bytes.
+    Memory {
+        name: String,
+        bytes: Arc<[u8]>,
+        format: Option<ImageFormat>,
+    },
+}
+
+impl TextureSource {
+    /// The image as messages show it: its path, or its name.
+    pub fn shown(&self) -> String {
+        match self {
+            TextureSource::File(path) => super::shown(path),
+            TextureSource::Memory { name, .. } => name.clone(),
+        }
+    }
+
+    /// What identifies the image in the cache of decoded images.
+    fn key(&self) -> SourceKey {
+        match self {
+            TextureSource::File(path) => SourceKey::File(path.clone()),
+            TextureSource::Memory { name, .. } => SourceKey::Memory(name.clone()),
+        }
+    }
+}
+
+/// [`TextureSource::key`]: a file by its path, bytes in memory by their name.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+enum SourceKey {
+    File(PathBuf),
+    Memory(String),
+}
+
+/// A texture a material asks for before its image is read: the image, its use, its UV
 /// transform, and whether a missing file falls back to the parameter's constant factor (MTL
 /// and glTF files) or is an error (scene files).
 #[derive(Clone, Debug, PartialEq)]
 pub struct TextureRef {
-    pub path: PathBuf,
+    pub source: TextureSource,
     pub usage: Usage,
     pub transform: UvTransform,
     pub optional: bool,
@@ -113,14 +161,14 @@ pub struct TextureRef {
 #[derive(Clone, Debug, Default)]
 pub struct Textures {
     pub records: Vec<Texture>,
-    /// The file each record reads, for messages.
+    /// The image each record reads (its file, or its name), for messages.
     pub names: Vec<String>,
     pub texels: Vec<u32>,
-    /// Images already packed, by file and whether their texels were sRGB-decoded on the
+    /// Images already packed, by image and whether their texels were sRGB-decoded on the
     /// way in (16-bit images for colour): (offset, width, height).
-    packed: HashMap<(PathBuf, bool), (u32, u32, u32)>,
-    /// What each file read so far holds.
-    kinds: HashMap<PathBuf, Kind>,
+    packed: HashMap<(SourceKey, bool), (u32, u32, u32)>,
+    /// What each image read so far holds.
+    kinds: HashMap<SourceKey, Kind>,
 }
 
 /// Why a texture could not be added.
@@ -132,16 +180,16 @@ pub enum TextureError {
 
 impl Textures {
     /// The index of a record reading `r`'s image as `r` says, reading and packing the image
-    /// unless an earlier record already did. `r.path` is shown in messages.
+    /// unless an earlier record already did. The image's path or name is shown in messages.
     pub fn add(&mut self, r: &TextureRef, files: &dyn FileSource) -> Result<u32, TextureError> {
-        let shown = super::shown(&r.path);
+        let shown = r.source.shown();
         let (kind, (offset, width, height)) = match self.cached(r) {
             Some(found) => found,
             None => self.pack(r, &shown, files)?,
         };
         let format = match (kind, r.usage) {
             (Kind::Ldr, Usage::Colour) => TextureFormat::RGBA8_SRGB,
-            (Kind::Ldr, Usage::Scalar { .. }) => TextureFormat::RGBA8_LINEAR,
+            (Kind::Ldr, Usage::Scalar { .. } | Usage::Linear) => TextureFormat::RGBA8_LINEAR,
             _ => TextureFormat::RGBA32F,
         };
         let record = Texture {
@@ -152,7 +200,7 @@ impl Textures {
             uv_matrix: r.transform.matrix(),
             uv_offset: r.transform.offset,
             channel: match r.usage {
-                Usage::Colour => 0,
+                Usage::Colour | Usage::Linear => 0,
                 Usage::Scalar { channel } => channel,
             },
             _pad: 0,
@@ -167,10 +215,9 @@ impl Textures {
 
     /// Where `r`'s texels already lie, if an earlier texture packed them.
     fn cached(&self, r: &TextureRef) -> Option<(Kind, (u32, u32, u32))> {
-        let kind = *self.kinds.get(&r.path)?;
-        let found = *self
-            .packed
-            .get(&(r.path.clone(), decodes_srgb(kind, r.usage)))?;
+        let key = r.source.key();
+        let kind = *self.kinds.get(&key)?;
+        let found = *self.packed.get(&(key, decodes_srgb(kind, r.usage)))?;
         Some((kind, found))
     }
 
@@ -181,15 +228,20 @@ impl Textures {
         shown: &str,
         files: &dyn FileSource,
     ) -> Result<(Kind, (u32, u32, u32)), TextureError> {
-        let bytes = match files.read(&r.path) {
-            Ok(bytes) => bytes,
-            Err(e) if r.optional => return Err(TextureError::Missing(format!("{shown} ({e})"))),
-            Err(source) => {
-                return Err(TextureError::Fatal(SceneError::Io {
-                    path: shown.to_string(),
-                    source,
-                }));
-            }
+        let (bytes, format) = match &r.source {
+            TextureSource::File(path) => match files.read(path) {
+                Ok(bytes) => (bytes.into(), ImageFormat::from_path(path).ok()),
+                Err(e) if r.optional => {
+                    return Err(TextureError::Missing(format!("{shown} ({e})")));
+                }
+                Err(source) => {
+                    return Err(TextureError::Fatal(SceneError::Io {
+                        path: shown.to_string(),
+                        source,
+                    }));
+                }
+            },
+            TextureSource::Memory { bytes, format, .. } => (bytes.clone(), *format),
         };
         let invalid = |message: String| {
             TextureError::Fatal(SceneError::Image {
@@ -197,7 +249,7 @@ impl Textures {
                 message,
             })
         };
-        let (kind, image) = decode(&r.path, &bytes).map_err(invalid)?;
+        let (kind, image) = decode(format, &bytes).map_err(invalid)?;
         let decode_srgb = decodes_srgb(kind, r.usage);
         let offset = u32::try_from(self.texels.len())
             .map_err(|_| invalid("the scene's textures exceed 2^32 words (16 GiB)".into()))?;
@@ -219,9 +271,10 @@ impl Textures {
                 "the scene's textures exceed 2^32 words (16 GiB)".into(),
             ));
         }
-        self.kinds.insert(r.path.clone(), kind);
+        let key = r.source.key();
+        self.kinds.insert(key.clone(), kind);
         self.packed
-            .insert((r.path.clone(), decode_srgb), (offset, width, height));
+            .insert((key, decode_srgb), (offset, width, height));
         Ok((kind, (offset, width, height)))
     }
 
@@ -268,11 +321,11 @@ impl Decoded {
     }
 }
 
-/// Decodes an image file's bytes, the format named by its extension (TGA has no magic
-/// number) or else guessed from its first bytes.
-fn decode(path: &Path, bytes: &[u8]) -> Result<(Kind, Decoded), String> {
-    let format = image::ImageFormat::from_path(path)
-        .or_else(|_| image::guess_format(bytes))
+/// Decodes an image's bytes, in `format` where its extension or MIME type names one (TGA
+/// has no magic number), or else in the format guessed from its first bytes.
+fn decode(format: Option<ImageFormat>, bytes: &[u8]) -> Result<(Kind, Decoded), String> {
+    let format = format
+        .map_or_else(|| image::guess_format(bytes), Ok)
         .map_err(|_| {
             "not an image format meshtrace reads (PNG, JPEG, BMP, TGA, HDR, EXR)".to_string()
         })?;

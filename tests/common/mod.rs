@@ -2,6 +2,7 @@
 //! job on either device; and by subject:
 //!
 //! - [`fs`]: the checkout's paths, fixtures, shared meshes, temporary directories.
+//! - [`gltf`]: glTF files built in tests (JSON, embedded or external buffers, GLB).
 //! - [`rand`]: deterministic random inputs (SplitMix64, and hashed random access).
 //! - [`scenes`]: scenes built in code, the built-in Cornell box, render settings.
 //! - [`stats`]: means and standard errors, relative errors, error and failure trackers.
@@ -14,6 +15,7 @@
 
 pub mod chi2;
 pub mod fs;
+pub mod gltf;
 pub mod kernels;
 pub mod materials;
 pub mod rand;

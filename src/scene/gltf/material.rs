@@ -1,0 +1,364 @@
+//! glTF materials as meshtrace `pbr` materials: the metallic-roughness factors and
+//! textures, the normal and emissive maps, the alpha mode, and KHR_materials_ior,
+//! _specular, _transmission, _volume and _emissive_strength; texture references with
+//! KHR_texture_transform. Each material is converted when a primitive first uses it.
+
+use super::buffers::Buffers;
+use crate::scene::material::{MAT_ALPHA_MASK, MAT_THIN_WALLED};
+use crate::scene::texture::{TextureRef, Usage, UvTransform};
+use crate::scene::{Material, MaterialKind, NO_TEXTURE, SceneError};
+use glam::Vec3;
+use gltf::json;
+use gltf::json::validation::Checked;
+
+/// The materials the primitives read so far use, converted, with their textures.
+pub(super) struct Materials<'b, 'a> {
+    buffers: &'b Buffers<'a>,
+    /// For each glTF material, its index in `materials` once converted.
+    converted: Vec<Option<u32>>,
+    /// The index of glTF's default material, once a primitive without one needs it.
+    default: Option<u32>,
+    pub materials: Vec<Material>,
+    pub names: Vec<String>,
+    pub textures: Vec<TextureRef>,
+}
+
+/// A texture reference as the file gives it: a `textureInfo` (or a `normalTexture`).
+struct Info<'j> {
+    index: usize,
+    tex_coord: u32,
+    transform: Option<&'j json::extensions::texture::TextureTransform>,
+}
+
+impl<'j> From<&'j json::texture::Info> for Info<'j> {
+    fn from(info: &'j json::texture::Info) -> Self {
+        Self {
+            index: info.index.value(),
+            tex_coord: info.tex_coord,
+            transform: info
+                .extensions
+                .as_ref()
+                .and_then(|e| e.texture_transform.as_ref()),
+        }
+    }
+}
+
+impl<'b, 'a> Materials<'b, 'a> {
+    pub fn new(buffers: &'b Buffers<'a>) -> Self {
+        Self {
+            buffers,
+            converted: vec![None; buffers.doc().root.materials.len()],
+            default: None,
+            materials: Vec::new(),
+            names: Vec::new(),
+            textures: Vec::new(),
+        }
+    }
+
+    /// The index in [`Materials::materials`] of glTF material `material` (`None`: the
+    /// specification's default material), converting it on first use. `at` is the JSON
+    /// path of the primitive that uses it.
+    pub fn index(&mut self, material: Option<usize>, at: &str) -> Result<u32, SceneError> {
+        let Some(i) = material else {
+            if let Some(d) = self.default {
+                return Ok(d);
+            }
+            // The specification's default: white, fully metallic, fully rough.
+            let mat = Material {
+                metallic: 1.0,
+                roughness: 1.0,
+                ..Material::new(MaterialKind::PBR)
+            };
+            let d = self.push(mat, "default (glTF)".into());
+            self.default = Some(d);
+            return Ok(d);
+        };
+        let doc = self.buffers.doc();
+        match self.converted.get(i) {
+            Some(Some(index)) => return Ok(*index),
+            Some(None) => {}
+            None => {
+                return Err(doc.error(
+                    format!("{at}.material"),
+                    format!(
+                        "material {i} does not exist (the file has {})",
+                        super::count(doc.root.materials.len(), "material")
+                    ),
+                ));
+            }
+        }
+        let json = &doc.root.materials[i];
+        let mat = self.convert(i, json)?;
+        let name = json
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("materials[{i}]"));
+        let index = self.push(mat, name);
+        self.converted[i] = Some(index);
+        Ok(index)
+    }
+
+    fn push(&mut self, mat: Material, name: String) -> u32 {
+        self.materials.push(mat);
+        self.names.push(name);
+        self.materials.len() as u32 - 1
+    }
+
+    /// Converts material `i`.
+    fn convert(&mut self, i: usize, m: &json::Material) -> Result<Material, SceneError> {
+        let doc = self.buffers.doc();
+        let at = format!("materials[{i}]");
+        let pbr = &m.pbr_metallic_roughness;
+        let pbr_at = format!("{at}.pbrMetallicRoughness");
+        let mut mat = Material::new(MaterialKind::PBR);
+        let [r, g, b, a] = pbr.base_color_factor.0;
+        let base = format!("{pbr_at}.baseColorFactor");
+        mat.albedo = Vec3::new(
+            self.unit(r, &base)?,
+            self.unit(g, &base)?,
+            self.unit(b, &base)?,
+        );
+        mat.alpha = self.unit(a, &base)?;
+        mat.metallic = self.unit(pbr.metallic_factor.0, &format!("{pbr_at}.metallicFactor"))?;
+        mat.roughness = self.unit(pbr.roughness_factor.0, &format!("{pbr_at}.roughnessFactor"))?;
+        if let Some(info) = &pbr.base_color_texture {
+            let at = format!("{pbr_at}.baseColorTexture");
+            mat.albedo_texture = self.texture(info.into(), &at, Usage::Colour)?;
+        }
+        if let Some(info) = &pbr.metallic_roughness_texture {
+            // Roughness in green, metallic in blue.
+            let at = format!("{pbr_at}.metallicRoughnessTexture");
+            mat.roughness_texture = self.texture(info.into(), &at, Usage::Scalar { channel: 1 })?;
+            mat.metallic_texture = self.texture(info.into(), &at, Usage::Scalar { channel: 2 })?;
+        }
+        if let Some(normal) = &m.normal_texture {
+            let at = format!("{at}.normalTexture");
+            mat.normal_scale = self.finite(normal.scale, &format!("{at}.scale"))?;
+            let transform = normal_transform(normal, &at).map_err(|(at, m)| doc.error(at, m))?;
+            let info = Info {
+                index: normal.index.value(),
+                tex_coord: normal.tex_coord,
+                transform: transform.as_ref(),
+            };
+            mat.normal_texture = self.texture(info, &at, Usage::Linear)?;
+        }
+        let mut emission = Vec3::from(m.emissive_factor.0);
+        for (k, e) in emission.to_array().into_iter().enumerate() {
+            if !(e.is_finite() && e >= 0.0) {
+                return Err(doc.error(
+                    format!("{at}.emissiveFactor"),
+                    format!("component {k} must be finite and at least 0, got {e}"),
+                ));
+            }
+        }
+        if let Some(info) = &m.emissive_texture {
+            let at = format!("{at}.emissiveTexture");
+            mat.emission_texture = self.texture(info.into(), &at, Usage::Colour)?;
+        }
+        match m.alpha_mode {
+            Checked::Valid(json::material::AlphaMode::Opaque) => {}
+            Checked::Valid(json::material::AlphaMode::Mask) => {
+                mat.flags |= MAT_ALPHA_MASK;
+                let cutoff = m.alpha_cutoff.map_or(0.5, |c| c.0);
+                mat.alpha_cutoff = self.unit(cutoff, &format!("{at}.alphaCutoff"))?;
+            }
+            Checked::Valid(json::material::AlphaMode::Blend) => {
+                doc.warn(
+                    format!("{at}.alphaMode"),
+                    "BLEND is rendered as MASK with an alphaCutoff of 0.5",
+                );
+                mat.flags |= MAT_ALPHA_MASK;
+                mat.alpha_cutoff = 0.5;
+            }
+            Checked::Invalid => {
+                return Err(doc.error(format!("{at}.alphaMode"), "is not OPAQUE, MASK or BLEND"));
+            }
+        }
+        if let Some(ext) = &m.extensions {
+            let at = format!("{at}.extensions");
+            if let Some(s) = &ext.emissive_strength {
+                let at = format!("{at}.KHR_materials_emissive_strength.emissiveStrength");
+                let strength = self.finite(s.emissive_strength.0, &at)?;
+                if strength < 0.0 {
+                    return Err(doc.error(at, format!("must be at least 0, got {strength}")));
+                }
+                emission *= strength;
+            }
+            if let Some(ior) = &ext.ior {
+                let at = format!("{at}.KHR_materials_ior.ior");
+                let ior = self.finite(ior.ior.0, &at)?;
+                if ior == 0.0 {
+                    doc.warn(&at, "an ior of 0 is not supported; 1.5 is used");
+                } else if ior < 1.0 {
+                    return Err(doc.error(at, format!("must be at least 1, got {ior}")));
+                } else {
+                    mat.ior = ior;
+                }
+            }
+            if let Some(s) = &ext.specular {
+                let at = format!("{at}.KHR_materials_specular");
+                mat.specular = self.unit(s.specular_factor.0, &format!("{at}.specularFactor"))?;
+                let color = Vec3::from(s.specular_color_factor.0);
+                if !(color.is_finite() && color.min_element() >= 0.0) {
+                    return Err(doc.error(
+                        format!("{at}.specularColorFactor"),
+                        format!("must be finite and at least 0, got {color}"),
+                    ));
+                }
+                mat.specular_color = color;
+                if s.specular_texture.is_some() || s.specular_color_texture.is_some() {
+                    doc.warn(
+                        at,
+                        "specularTexture and specularColorTexture are not supported; their factors are used",
+                    );
+                }
+            }
+            if let Some(t) = &ext.transmission {
+                let at = format!("{at}.KHR_materials_transmission");
+                mat.transmission =
+                    self.unit(t.transmission_factor.0, &format!("{at}.transmissionFactor"))?;
+                if let Some(info) = &t.transmission_texture {
+                    let at = format!("{at}.transmissionTexture");
+                    mat.transmission_texture =
+                        self.texture(info.into(), &at, Usage::Scalar { channel: 0 })?;
+                }
+                // Without a volume of some thickness, the surface is a thin wall.
+                let thick = ext
+                    .volume
+                    .as_ref()
+                    .is_some_and(|v| v.thickness_factor.0 > 0.0);
+                if !thick {
+                    mat.flags |= MAT_THIN_WALLED;
+                }
+            }
+            if let Some(v) = &ext.volume {
+                let at = format!("{at}.KHR_materials_volume");
+                if v.attenuation_distance.0.is_finite() || v.attenuation_color.0 != [1.0; 3] {
+                    doc.warn(at, "attenuation is not supported; the volume is clear");
+                }
+            }
+        }
+        mat.emission = emission;
+        Ok(mat)
+    }
+
+    /// A factor that must lie in [0, 1]: one outside is clamped, with a warning; one that
+    /// is not finite is an error.
+    fn unit(&self, x: f32, at: &str) -> Result<f32, SceneError> {
+        let x = self.finite(x, at)?;
+        if !(0.0..=1.0).contains(&x) {
+            self.buffers
+                .doc()
+                .warn(at, format!("{x} is outside [0, 1] and is clamped"));
+        }
+        Ok(x.clamp(0.0, 1.0))
+    }
+
+    fn finite(&self, x: f32, at: &str) -> Result<f32, SceneError> {
+        if x.is_finite() {
+            Ok(x)
+        } else {
+            Err(self
+                .buffers
+                .doc()
+                .error(at, format!("must be finite, got {x}")))
+        }
+    }
+
+    /// The slot of a texture reference in [`Materials::textures`], or `NO_TEXTURE` when
+    /// its image is a file that cannot be read (a warning).
+    fn texture(&mut self, info: Info, at: &str, usage: Usage) -> Result<u32, SceneError> {
+        let doc = self.buffers.doc();
+        let Some(texture) = doc.root.textures.get(info.index) else {
+            return Err(doc.error(
+                format!("{at}.index"),
+                format!(
+                    "texture {} does not exist (the file has {})",
+                    info.index,
+                    super::count(doc.root.textures.len(), "texture")
+                ),
+            ));
+        };
+        if let Some(s) = texture.sampler {
+            self.check_sampler(s.value());
+        }
+        let mut transform = UvTransform::scale(1.0, 1.0);
+        let mut tex_coord = info.tex_coord;
+        if let Some(t) = info.transform {
+            let at = format!("{at}.extensions.KHR_texture_transform");
+            let values = [
+                t.offset.0[0],
+                t.offset.0[1],
+                t.rotation.0,
+                t.scale.0[0],
+                t.scale.0[1],
+            ];
+            if values.iter().any(|x| !x.is_finite()) {
+                return Err(doc.error(at, "offset, rotation and scale must be finite"));
+            }
+            transform = UvTransform {
+                scale: t.scale.0,
+                rotation: t.rotation.0,
+                offset: t.offset.0,
+            };
+            tex_coord = t.tex_coord.unwrap_or(tex_coord);
+        }
+        if tex_coord != 0 {
+            doc.warn(
+                at,
+                format!("TEXCOORD_{tex_coord} is not supported; TEXCOORD_0 is used"),
+            );
+        }
+        let source = texture.source.value();
+        let Some(source) = self
+            .buffers
+            .image(source, &format!("textures[{}].source", info.index))?
+        else {
+            return Ok(NO_TEXTURE);
+        };
+        self.textures.push(TextureRef {
+            source,
+            usage,
+            transform,
+            optional: false,
+        });
+        Ok(self.textures.len() as u32 - 1)
+    }
+
+    /// Warns of a sampler that does not repeat: meshtrace's lookups always do.
+    fn check_sampler(&self, s: usize) {
+        let doc = self.buffers.doc();
+        let Some(sampler) = doc.root.samplers.get(s) else {
+            return;
+        };
+        let repeat = Checked::Valid(json::texture::WrappingMode::Repeat);
+        if sampler.wrap_s != repeat || sampler.wrap_t != repeat {
+            doc.warn(
+                format!("samplers[{s}]"),
+                "wrap modes other than REPEAT are not supported; textures repeat",
+            );
+        }
+    }
+}
+
+/// A normal texture's KHR_texture_transform, which the `gltf` crate leaves as JSON.
+fn normal_transform(
+    normal: &json::material::NormalTexture,
+    at: &str,
+) -> Result<Option<json::extensions::texture::TextureTransform>, (String, String)> {
+    let Some(value) = normal
+        .extensions
+        .as_ref()
+        .and_then(|e| e.others.get("KHR_texture_transform"))
+    else {
+        return Ok(None);
+    };
+    json::deserialize::from_value(value.clone())
+        .map(Some)
+        .map_err(|e| {
+            (
+                format!("{at}.extensions.KHR_texture_transform"),
+                format!("is malformed: {}", e.to_string().escape_debug()),
+            )
+        })
+}

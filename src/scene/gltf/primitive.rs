@@ -1,0 +1,203 @@
+//! Mesh primitives: their attributes (POSITION, NORMAL, TEXCOORD_0, TANGENT) and their
+//! topology (triangle lists, strips and fans, indexed or not) as a [`MeshPart`] whose
+//! corners all index one vertex table.
+
+use super::accessor::{self, read_floats, read_indices};
+use super::buffers::Buffers;
+use crate::scene::obj::{MeshPart, PartTriangle};
+use crate::scene::{NO_NORMAL, NO_TANGENT, NO_UV, SceneError};
+use glam::{Vec2, Vec3, Vec4};
+use gltf::json::mesh::{Mode, Primitive, Semantic};
+use gltf::json::validation::Checked;
+
+/// Reads primitive `p` of mesh `m`, its triangles without a material yet; `None`, with a
+/// warning, for a primitive of points or lines.
+pub(super) fn read_primitive(
+    buffers: &Buffers,
+    (m, p): (usize, usize),
+    primitive: &Primitive,
+) -> Result<Option<MeshPart>, SceneError> {
+    let doc = buffers.doc();
+    let at = format!("meshes[{m}].primitives[{p}]");
+    let Checked::Valid(mode) = primitive.mode else {
+        return Err(doc.error(format!("{at}.mode"), "is not a primitive mode"));
+    };
+    let mode_name = match mode {
+        Mode::Points => Some("POINTS"),
+        Mode::Lines => Some("LINES"),
+        Mode::LineLoop => Some("LINE_LOOP"),
+        Mode::LineStrip => Some("LINE_STRIP"),
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan => None,
+    };
+    if let Some(name) = mode_name {
+        doc.warn(
+            at,
+            format!("mode {name} draws no triangles; the primitive is skipped"),
+        );
+        return Ok(None);
+    }
+    let quantized = doc
+        .root
+        .extensions_used
+        .iter()
+        .any(|e| e == "KHR_mesh_quantization");
+    let attribute = |s: Semantic| {
+        primitive
+            .attributes
+            .get(&Checked::Valid(s))
+            .map(|i| i.value())
+    };
+    let attribute_at = |name: &str| format!("{at}.attributes[\"{name}\"]");
+
+    let Some(position) = attribute(Semantic::Positions) else {
+        return Err(doc.error(format!("{at}.attributes"), "has no POSITION"));
+    };
+    let at_p = attribute_at("POSITION");
+    let values = read_floats(buffers, position, &at_p, &accessor::position(quantized))?;
+    let positions: Vec<Vec3> = values.chunks_exact(3).map(Vec3::from_slice).collect();
+    if let Some((i, v)) = positions.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(doc.error(
+            at_p,
+            format!("accessor {position}: vertex {i} is not finite: {v}"),
+        ));
+    }
+    let n = positions.len();
+    if n >= u32::MAX as usize {
+        return Err(doc.error(
+            at_p,
+            format!("{n} vertices are more than meshtrace indexes"),
+        ));
+    }
+    let same_count = |name: &str, index: usize, len: usize| {
+        if len == n {
+            Ok(())
+        } else {
+            Err(doc.error(
+                attribute_at(name),
+                format!("accessor {index} has {len} elements, but POSITION has {n}"),
+            ))
+        }
+    };
+
+    let mut part = MeshPart {
+        positions,
+        ..MeshPart::default()
+    };
+    if let Some(index) = attribute(Semantic::Normals) {
+        let values = read_floats(
+            buffers,
+            index,
+            &attribute_at("NORMAL"),
+            &accessor::normal(quantized),
+        )?;
+        // A non-finite normal becomes zero, which the scene builder reads as none.
+        part.normals = values
+            .chunks_exact(3)
+            .map(Vec3::from_slice)
+            .map(|v| if v.is_finite() { v } else { Vec3::ZERO })
+            .collect();
+        same_count("NORMAL", index, part.normals.len())?;
+    }
+    if let Some(index) = attribute(Semantic::TexCoords(0)) {
+        let at_t = attribute_at("TEXCOORD_0");
+        let values = read_floats(buffers, index, &at_t, &accessor::texcoord(quantized))?;
+        // glTF's (0, 0) is the image's top-left corner, as meshtrace's.
+        part.texcoords = values.chunks_exact(2).map(Vec2::from_slice).collect();
+        same_count("TEXCOORD_0", index, part.texcoords.len())?;
+        if let Some((i, v)) = part
+            .texcoords
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !v.is_finite())
+        {
+            return Err(doc.error(
+                at_t,
+                format!("accessor {index}: texture coordinate {i} is not finite: {v}"),
+            ));
+        }
+    }
+    if let Some(index) = attribute(Semantic::Tangents) {
+        let values = read_floats(
+            buffers,
+            index,
+            &attribute_at("TANGENT"),
+            &accessor::tangent(quantized),
+        )?;
+        part.tangents = values
+            .chunks_exact(4)
+            .map(Vec4::from_slice)
+            .map(|v| if v.is_finite() { v } else { Vec4::ZERO })
+            .collect();
+        same_count("TANGENT", index, part.tangents.len())?;
+    }
+    if attribute(Semantic::Colors(0)).is_some() {
+        doc.warn(&at, "vertex colours (COLOR_0) are ignored");
+    }
+    if primitive.targets.as_ref().is_some_and(|t| !t.is_empty()) {
+        doc.warn(
+            &at,
+            "morph targets are not applied; the base shape is drawn",
+        );
+    }
+
+    let vertices: Vec<u32> = match primitive.indices {
+        Some(index) => {
+            let at_i = format!("{at}.indices");
+            let indices = read_indices(buffers, index.value(), &at_i)?;
+            if let Some((k, &i)) = indices.iter().enumerate().find(|&(_, &i)| i as usize >= n) {
+                return Err(doc.error(
+                    at_i,
+                    format!(
+                        "index {i} (entry {k} of accessor {}) is out of range: POSITION has {n} vertices",
+                        index.value(),
+                    ),
+                ));
+            }
+            indices
+        }
+        None => (0..n as u32).collect(),
+    };
+    let corners = triangles(mode, &vertices);
+    let leftover = match mode {
+        Mode::Triangles => vertices.len() % 3,
+        _ => 0,
+    };
+    if leftover != 0 {
+        doc.warn(
+            &at,
+            format!(
+                "{} vertices do not make whole triangles; the last {leftover} are ignored",
+                vertices.len()
+            ),
+        );
+    }
+    let (has_n, has_t, has_g) = (
+        !part.normals.is_empty(),
+        !part.texcoords.is_empty(),
+        !part.tangents.is_empty(),
+    );
+    part.triangles = corners
+        .map(|c| PartTriangle {
+            p: c,
+            n: if has_n { c } else { [NO_NORMAL; 3] },
+            t: if has_t { c } else { [NO_UV; 3] },
+            g: if has_g { c } else { [NO_TANGENT; 3] },
+            material: None,
+        })
+        .collect();
+    Ok(Some(part))
+}
+
+/// The triangles a primitive's vertex sequence makes, as the specification orders their
+/// corners: lists by threes; strips {v_i, v_(i+1+i%2), v_(i+2-i%2)}; fans
+/// {v_(i+1), v_(i+2), v_0}.
+fn triangles(mode: Mode, v: &[u32]) -> Box<dyn Iterator<Item = [u32; 3]> + '_> {
+    let strips = v.len().saturating_sub(2);
+    match mode {
+        Mode::TriangleStrip => {
+            Box::new((0..strips).map(|i| [v[i], v[i + 1 + i % 2], v[i + 2 - i % 2]]))
+        }
+        Mode::TriangleFan => Box::new((0..strips).map(|i| [v[i + 1], v[i + 2], v[0]])),
+        _ => Box::new(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]])),
+    }
+}

@@ -1,0 +1,162 @@
+//! Khronos's glTF sample assets in `tests/data/gltf/` (see its README for their sources and
+//! licences), loaded as bare files: what each contains.
+
+mod common;
+
+use common::fs::data;
+use glam::Vec3;
+use meshtrace::scene::{MaterialKind, NO_TEXTURE, NO_UV, Scene, Sky, load_scene};
+
+fn sample(path: &str) -> Scene {
+    load_scene(&data(&format!("gltf/{path}"))).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn close(a: Vec3, b: Vec3) -> bool {
+    (a - b).abs().max_element() < 1e-5
+}
+
+/// Twice each triangle's area along its front-face normal ((b − a) × (c − a)).
+fn normals(scene: &Scene) -> Vec<Vec3> {
+    let mesh = &scene.mesh;
+    mesh.triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = mesh.vertices(t);
+            (b - a).cross(c - a)
+        })
+        .collect()
+}
+
+#[test]
+fn box_textured_glb() {
+    let scene = sample("BoxTextured/BoxTextured.glb");
+    assert_eq!(scene.mesh.triangles.len(), 12);
+    assert_eq!(scene.mesh.positions.len(), 24);
+    assert_eq!(scene.material_names, ["Texture"]);
+    let m = scene.materials[0];
+    assert_eq!(
+        (m.kind, m.metallic, m.roughness),
+        (MaterialKind::PBR, 0.0, 1.0)
+    );
+    assert_ne!(m.albedo_texture, NO_TEXTURE);
+    let texture = scene.textures.records[m.albedo_texture as usize];
+    assert!(texture.width > 0 && texture.height > 0);
+    assert!(
+        scene
+            .mesh
+            .triangles
+            .iter()
+            .all(|t| t.t[0] != NO_UV && t.n[0] != meshtrace::scene::NO_NORMAL)
+    );
+    // A unit cube about the origin (the root node turns Z up into Y up).
+    let (lo, hi) = scene
+        .mesh
+        .positions
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
+    assert!(
+        close(lo, Vec3::splat(-0.5)) && close(hi, Vec3::splat(0.5)),
+        "{lo} {hi}"
+    );
+    // Every face points out of the cube.
+    let mesh = &scene.mesh;
+    for (t, n) in mesh.triangles.iter().zip(normals(&scene)) {
+        let centre = mesh.vertices(t).iter().sum::<Vec3>() / 3.0;
+        assert!(n.dot(centre) > 0.0, "a face turned inwards: {centre} {n}");
+    }
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_eq!(scene.sky, Sky::Constant(Vec3::ONE));
+}
+
+#[test]
+fn cameras_uses_the_perspective_camera() {
+    let scene = sample("Cameras/Cameras.gltf");
+    let c = &scene.camera;
+    assert!(
+        close(c.position, Vec3::new(0.5, 0.5, 3.0)),
+        "{}",
+        c.position
+    );
+    assert!(close(c.forward, Vec3::NEG_Z) && close(c.up, Vec3::Y));
+    assert!((c.vfov - 0.7f32.to_degrees()).abs() < 1e-4, "{}", c.vfov);
+    assert_eq!(scene.mesh.triangles.len(), 2);
+    // The square is turned about X by the node's rotation: (0, 1, 0) moves towards -z.
+    let top = scene.mesh.positions[2];
+    assert!(top.y > 0.0 && top.y < 1.0 && top.z < 0.0, "{top}");
+    // Without a material, the specification's default one.
+    assert_eq!(scene.material_names, ["default (glTF)"]);
+}
+
+#[test]
+fn simple_sparse_accessor_moves_three_vertices() {
+    let scene = sample("SimpleSparseAccessor/SimpleSparseAccessor.gltf");
+    let p = &scene.mesh.positions;
+    assert_eq!(p.len(), 14);
+    assert_eq!(scene.mesh.triangles.len(), 12);
+    // The base: a row of 7 at y = 0 and 7 at y = 1; vertices 8, 10 and 12 move up.
+    assert_eq!(p[0], Vec3::ZERO);
+    assert_eq!(p[7], Vec3::new(0.0, 1.0, 0.0));
+    assert_eq!(p[8], Vec3::new(1.0, 2.0, 0.0));
+    assert_eq!(p[9], Vec3::new(2.0, 1.0, 0.0));
+    assert_eq!(p[10], Vec3::new(3.0, 3.0, 0.0));
+    assert_eq!(p[12], Vec3::new(5.0, 4.0, 0.0));
+}
+
+#[test]
+fn texture_transform_test_offsets_rotations_and_scales() {
+    let scene = sample("TextureTransformTest/TextureTransformTest.gltf");
+    let record = |name: &str| {
+        let i = scene.material_names.iter().position(|n| n == name).unwrap();
+        scene.textures.records[scene.materials[i].albedo_texture as usize]
+    };
+    assert_eq!(record("Offset U").uv_offset, [0.5, 0.0]);
+    assert_eq!(record("Offset V").uv_offset, [0.0, 0.5]);
+    assert_eq!(record("Offset UV").uv_offset, [0.5, 0.5]);
+    // 0.392699 rad, 22.5 degrees.
+    let (s, c) = std::f32::consts::FRAC_PI_8.sin_cos();
+    let rotation = record("Rotation").uv_matrix;
+    for (g, e) in rotation.iter().zip([c, s, -s, c]) {
+        assert!((g - e).abs() < 1e-5, "{rotation:?}");
+    }
+    assert_eq!(record("Scale").uv_matrix, [1.5, 0.0, 0.0, 1.5]);
+    let all = record("All");
+    assert_eq!(all.uv_offset, [-0.2, -0.1]);
+    let (s, c) = 0.3f32.sin_cos();
+    for (g, e) in all
+        .uv_matrix
+        .iter()
+        .zip([1.5 * c, 1.5 * s, -1.5 * s, 1.5 * c])
+    {
+        assert!((g - e).abs() < 1e-5, "{:?}", all.uv_matrix);
+    }
+    assert_eq!(scene.materials.len(), 9);
+    assert_eq!(
+        scene.warnings,
+        [format!(
+            "{}: samplers[0]: wrap modes other than REPEAT are not supported; textures repeat",
+            data("gltf/TextureTransformTest/TextureTransformTest.gltf").display()
+        )]
+    );
+}
+
+#[test]
+fn primitive_modes_strips_fans_and_lines() {
+    for n in ["04", "05", "11", "12", "14"] {
+        let scene = sample(&format!("Mesh_PrimitiveMode/Mesh_PrimitiveMode_{n}.gltf"));
+        let normals = normals(&scene);
+        assert_eq!(normals.len(), 2, "{n}");
+        // The unit square, both triangles facing +Z.
+        let area: f32 = normals.iter().map(|v| 0.5 * v.z).sum();
+        assert!((area - 1.0).abs() < 1e-6, "{n}: area {area}");
+        assert!(normals.iter().all(|v| v.z > 0.0), "{n}: {normals:?}");
+    }
+    let err = load_scene(&data("gltf/Mesh_PrimitiveMode/Mesh_PrimitiveMode_01.gltf"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.ends_with("scene: the default scene has no triangles to render"),
+        "{err}"
+    );
+}
