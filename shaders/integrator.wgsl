@@ -30,7 +30,11 @@ fn surface_at(ray: Ray, hit: Hit) -> SurfaceHit {
             ns = ng;
         }
     }
-    return SurfaceHit(ray.origin + hit.t * ray.dir, ng, ns, sh.material, dot(ray.dir, ng) < 0.0, hit.tri, triangle_uv(hit.tri, hit.u, hit.v));
+    let uv = triangle_uv(hit.tri, hit.u, hit.v);
+    if (sh.flags & TRI_TANGENT) != 0u {
+        ns = normal_mapped(hit.tri, hit.u, hit.v, uv, ns, ng);
+    }
+    return SurfaceHit(ray.origin + hit.t * ray.dir, ng, ns, sh.material, dot(ray.dir, ng) < 0.0, hit.tri, uv);
 }
 
 // mirror: src/render/integrator.rs `offset_ray_origin`

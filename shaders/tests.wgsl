@@ -163,3 +163,23 @@ fn test_texture(@builtin(global_invocation_id) gid: vec3<u32>) {
     let m = material_at(load_material(k.w), uv);
     case_out(i, u4(texture_lookup(k.z, uv)), u4(vec4<f32>(m.albedo, m.roughness)));
 }
+
+// in: (triangle, b1, b2, -), (n.xyz, -) | out: (normal_mapped(triangle, b1, b2, its uv, n,
+// its geometric normal), alpha_test as 0 or 1), (material_at(its material, uv).metallic,
+// .transmission, -, -)
+@compute @workgroup_size(64)
+fn test_surface_maps(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = case_index(gid);
+    if i >= case_count() { return; }
+    let k = case_in(i, 0u);
+    let tri = k.x;
+    let b1 = bitcast<f32>(k.y);
+    let b2 = bitcast<f32>(k.z);
+    let n = f4(case_in(i, 1u)).xyz;
+    let uv = triangle_uv(tri, b1, b2);
+    let ng = geometric_normal(load_tri(tri));
+    let mapped = normal_mapped(tri, b1, b2, uv, n, ng);
+    let passes = select(0u, 1u, alpha_test(tri, b1, b2));
+    let m = material_at(load_material(load_shading(tri).material), uv);
+    case_out(i, vec4<u32>(u4(vec4<f32>(mapped, 0.0)).xyz, passes), u4(vec4<f32>(m.metallic, m.transmission, 0.0, 0.0)));
+}

@@ -85,6 +85,32 @@ fn material_at(m: Material, uv: vec2<f32>) -> Material {
     return out;
 }
 
+// mirror: src/render/texture.rs `normal_mapped`
+fn normal_mapped(tri: u32, b1: f32, b2: f32, uv: vec2<f32>, n: vec3<f32>, ng: vec3<f32>) -> vec3<f32> {
+    let m = load_material(load_shading(tri).material);
+    let g = load_tri_tangents(tri);
+    let w = 1.0 - b1 - b2;
+    let t4 = w * g.t0 + b1 * g.t1 + b2 * g.t2;
+    let tr = t4.xyz - n * dot(n, t4.xyz);
+    let tlen2 = dot(tr, tr);
+    if !(tlen2 > 0.0) {
+        return n;
+    }
+    let t = tr * inverseSqrt(tlen2);
+    let b = select(cross(n, t), -cross(n, t), t4.w < 0.0);
+    let c = texture_lookup(m.normal_texture, uv).xyz * 2.0 - vec3<f32>(1.0);
+    let p = t * (c.x * m.normal_scale) + b * (c.y * m.normal_scale) + n * c.z;
+    let plen2 = dot(p, p);
+    if !(plen2 > 0.0) {
+        return n;
+    }
+    let mapped = p * inverseSqrt(plen2);
+    if dot(mapped, ng) <= 0.0 {
+        return n;
+    }
+    return mapped;
+}
+
 // mirror: src/render/texture.rs `alpha_test`
 fn alpha_test(tri: u32, b1: f32, b2: f32) -> bool {
     let m = load_material(load_shading(tri).material);

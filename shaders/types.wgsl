@@ -22,6 +22,14 @@ struct TriShading {
     flags: u32,
 }
 
+// mirror: src/render/mod.rs `TriTangents` (48 bytes): each corner's unit tangent and its
+// bitangent's handedness (w = ±1).
+struct TriTangents {
+    t0: vec4<f32>,
+    t1: vec4<f32>,
+    t2: vec4<f32>,
+}
+
 // mirror: src/render/mod.rs `TriUvs` (32 bytes): texture coordinates, v running down.
 struct TriUvs {
     uv0: vec2<f32>,

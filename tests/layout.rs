@@ -157,6 +157,7 @@ fn structs_match_their_rust_twins() {
             "TriShading",
             "Material",
             "TriUvs",
+            "TriTangents",
             "Texture",
             "Light",
             "Params"

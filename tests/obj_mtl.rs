@@ -692,9 +692,10 @@ fn malformed_mtl_lines_are_errors_naming_the_library_and_line() {
 fn mtl_values_are_read_as_before() {
     // `Ke` may be one grey number; extra words after `Kd`'s three numbers are ignored (as
     // tobj did); unused statements (Ka, Ns, Tr, maps not read, unknown ones) are not
-    // checked. (`map_Kd`, `map_Ke` and `map_Pr` are read: tests/textures.rs.)
+    // checked. (`map_Kd`, `map_Ke`, `map_Pr`, `map_Pm` and the normal maps are read:
+    // tests/textures.rs.)
     let mtl = b"newmtl grey_light\nKd 0.25 0.5 1 # comment\nKe 3\nKa x\nNs\nTr y\n\
-map_Ks\nbump\nfoo bar\n";
+map_Ks\nmap_Ns\nfoo bar\n";
     let obj = format!("mtllib m.mtl\n{TRI}usemtl grey_light\nf 1 2 3\n");
     let (_, result) = load_files("mtl-values", &[("m.obj", obj.as_bytes()), ("m.mtl", mtl)]);
     let m = result.unwrap();

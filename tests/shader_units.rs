@@ -28,8 +28,10 @@ use meshtrace::render::sampling::{
     cosine_hemisphere_pdf, power_heuristic, sample_cdf, sample_concentric_disk,
     sample_cosine_hemisphere, sample_uniform_triangle,
 };
-use meshtrace::render::texture::{material_at, texture_lookup};
-use meshtrace::render::{RenderScene, TRI_SMOOTH};
+use meshtrace::render::texture::{
+    alpha_test, material_at, normal_mapped, texture_lookup, triangle_uv,
+};
+use meshtrace::render::{RenderScene, TRI_SMOOTH, TRI_TANGENT};
 use meshtrace::scene::{
     Camera, Material, MaterialKind, Mesh, NO_NORMAL, RenderSettings, Sky, Triangle,
 };
@@ -1131,4 +1133,119 @@ fn texture_lookup_matches() {
     }
     lookup.check("test_texture");
     material.check("test_texture");
+}
+
+#[test]
+fn surface_maps_match() {
+    let Some(ctx) = common::gpu("surface_maps_match") else {
+        return;
+    };
+    let dir = common::fs::TempDir::new("surface-map-units");
+    let mut r = SplitMix::new(0x7e47_0003);
+    let ldr = |r: &mut SplitMix, n: usize| -> Vec<[u8; 4]> {
+        (0..n)
+            .map(|_| [0; 4].map(|_| (r.u32() >> 24) as u8))
+            .collect()
+    };
+    dir.write_png("base.png", 5, 6, &ldr(&mut r, 30));
+    dir.write_png("normal.png", 7, 3, &ldr(&mut r, 21));
+    dir.write_png("metal.png", 4, 4, &ldr(&mut r, 16));
+    dir.write_png("glass.png", 3, 5, &ldr(&mut r, 15));
+    // A curved patch with vertex normals and texture coordinates, some of them mirrored:
+    // MikkTSpace gives its tangents.
+    let mut obj = String::new();
+    for j in 0..4 {
+        for i in 0..4 {
+            let (x, y) = (i as f32 / 3.0, j as f32 / 3.0);
+            let z = 0.3 * (2.0 * x).sin() * (1.5 * y).cos();
+            obj += &format!(
+                "v {x} {y} {z}\nvn {} {} 1\nvt {} {}\n",
+                -0.6 * x,
+                0.4 * y,
+                if i % 2 == 0 { x } else { 1.0 - x },
+                y
+            );
+        }
+    }
+    for j in 0..3 {
+        for i in 0..3 {
+            let k = 1 + i + 4 * j;
+            let [a, b, c, d] = [k, k + 1, k + 5, k + 4];
+            obj += &format!("f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c} {d}/{d}/{d}\n");
+        }
+    }
+    dir.write("patch.obj", obj);
+    let toml = "[camera]\nposition = [0.0, 0.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\n\
+        [materials.a]\ntype = \"pbr\"\nbase_color = { texture = \"base.png\", scale = [1.5, 2.0] }\n\
+        metallic = { texture = \"metal.png\" }\ntransmission = { texture = \"glass.png\", scale = [3.0, 1.0] }\n\
+        normal_map = { texture = \"normal.png\", scale = [2.0, -1.0], strength = 0.7 }\n\
+        alpha = 0.9\nalpha_cutoff = 0.45\n\
+        [materials.b]\ntype = \"diffuse\"\nalbedo = [0.5, 0.5, 0.5]\n\
+        normal_map = { texture = \"normal.png\" }\n\
+        [[objects]]\nmesh = \"patch.obj\"\nmaterial = \"a\"\n\
+        [[objects]]\nmesh = \"patch.obj\"\nmaterial = \"b\"\ntranslate = [2.0, 0.0, 0.0]\n";
+    let scene = meshtrace::scene::load_scene(&dir.write("scene.toml", toml)).unwrap();
+    let rs = RenderScene::new(&scene, &BuildParams::default()).unwrap();
+    let tris = rs.tris.len() as u32;
+    assert!(rs.shading.iter().all(|s| s.flags & TRI_TANGENT != 0));
+    let settings = scene.settings;
+    let mut cases = Vec::new();
+    while cases.len() < 12_000 {
+        let tri = r.below(tris as usize) as u32;
+        let (b1, b2) = (r.range(0.0, 1.0), r.range(0.0, 1.0));
+        let (b1, b2) = if b1 + b2 > 1.0 {
+            (1.0 - b1, 1.0 - b2)
+        } else {
+            (b1, b2)
+        };
+        let ng = meshtrace::geometry::geometric_normal(&rs.tris[tri as usize]);
+        let n = (ng + Vec3::new(r.range(-0.5, 0.5), r.range(-0.5, 0.5), r.range(-0.5, 0.5)))
+            .normalize();
+        cases.push([[tri, b(b1), b(b2), 0], [b(n.x), b(n.y), b(n.z), 0]]);
+    }
+    let out = run(&ctx, &rs, &settings, "test_surface_maps", &cases);
+    let mut normal = Worst::new("normal_mapped (relative, floor 1e-3)", 1e-4);
+    // Texels decode alike, but bilinear weights may differ in the last bit: a case whose
+    // alpha lies within rounding of the cut-off may go either way.
+    let mut alpha = Tally::new("alpha_test disagrees", 1e-3);
+    let mut factors = Worst::new("material_at metallic, transmission (relative)", 1e-4);
+    for (c, o) in cases.iter().zip(&out) {
+        let [tri, b1, b2, _] = c[0];
+        let (b1, b2) = (f(b1), f(b2));
+        let n = v3(c[1]);
+        let uv = triangle_uv(&rs, tri, b1, b2);
+        let ng = meshtrace::geometry::geometric_normal(&rs.tris[tri as usize]);
+        let cpu = normal_mapped(&rs, tri, b1, b2, uv, n, ng);
+        let gpu = v3(o[0]);
+        normal.add(rel3(cpu, gpu, 1e-3), || {
+            format!("triangle {tri} at ({b1}, {b2}), n {n}: CPU {cpu}, GPU {gpu}")
+        });
+        let passes = alpha_test(&rs, tri, b1, b2);
+        if passes != (o[0][3] == 1) {
+            alpha.add(|| {
+                format!(
+                    "triangle {tri} at ({b1}, {b2}): CPU {passes}, GPU {}",
+                    o[0][3]
+                )
+            });
+        }
+        let m = material_at(
+            &rs,
+            &rs.materials[rs.shading[tri as usize].material as usize],
+            uv,
+        );
+        let (gm, gt) = (f(o[1][0]), f(o[1][1]));
+        factors.add(
+            rel(m.metallic, gm, 1e-3).max(rel(m.transmission, gt, 1e-3)),
+            || {
+                format!(
+                    "triangle {tri} at {uv}: CPU {} {}, GPU {gm} {gt}",
+                    m.metallic, m.transmission
+                )
+            },
+        );
+    }
+    normal.check("test_surface_maps");
+    alpha.check("test_surface_maps", cases.len());
+    factors.check("test_surface_maps");
 }

@@ -248,6 +248,23 @@ fn bad_texture_parameters_are_errors_naming_the_field() {
             "albedo = { texture = \"c.png\", scael = [1.0, 1.0] }",
             &["scene.toml:"],
         ),
+        (
+            "normal_map = { texture = \"gone.png\" }",
+            &["materials.m.normal_map.texture", "gone.png"],
+        ),
+        (
+            "normal_map = { texture = \"c.png\", strength = inf }",
+            &["materials.m.normal_map.strength", "finite"],
+        ),
+        ("alpha = 0.5", &["materials.m.alpha", "alpha_cutoff"]),
+        (
+            "alpha_cutoff = 1.5",
+            &["materials.m.alpha_cutoff", "in [0, 1]"],
+        ),
+        (
+            "alpha = -1.0\nalpha_cutoff = 0.5",
+            &["materials.m.alpha", "in [0, 1]"],
+        ),
     ] {
         let (_dir, result) = load_with("bad-texture", &material(param), files);
         let message = result.expect_err(param).to_string();
@@ -344,6 +361,52 @@ fn mtl_texture_maps_load_with_their_options() {
     assert!(warned(&["m.mtl:3", "-clamp"]), "{:?}", s.warnings);
     assert!(warned(&["m.mtl:4", "map_d"]), "{:?}", s.warnings);
     assert!(warned(&["missing.png", "falls back"]), "{:?}", s.warnings);
+}
+
+#[test]
+fn mtl_normal_and_metallic_maps_load() {
+    use meshtrace::scene::{MaterialKind, NO_TEXTURE, TextureFormat};
+    let dir = TempDir::new("mtl-normal-maps");
+    dir.write("c.png", png(2, 2, [200; 4]));
+    dir.write(
+        "m.mtl",
+        "newmtl bumpy\nKd 0.5 0.5 0.5\nbump -bm 0.3 c.png\n\
+         newmtl normal\nnorm c.png\n\
+         newmtl map\nmap_Bump c.png\n\
+         newmtl metal\nKd 0.9 0.8 0.7\nPr 0.25\nmap_Pm c.png\n",
+    );
+    let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n\
+         usemtl bumpy\nf 1/1 2/2 3/3\nusemtl normal\nf 1/1 2/2 3/3\n\
+         usemtl map\nf 1/1 2/2 3/3\nusemtl metal\nf 1/1 2/2 3/3\n";
+    let s = load_scene(&dir.write("m.obj", obj)).unwrap();
+    let by = |name: &str| {
+        let i = s.material_names.iter().position(|n| n == name).unwrap();
+        s.materials[i]
+    };
+    for name in ["bumpy", "normal", "map"] {
+        let m = by(name);
+        assert_ne!(m.normal_texture, NO_TEXTURE, "{name}");
+        // Normal maps are data: never sRGB-decoded.
+        let t = &s.textures.records[m.normal_texture as usize];
+        assert_eq!(t.format, TextureFormat::RGBA8_LINEAR, "{name}");
+    }
+    assert_eq!(by("bumpy").kind, MaterialKind::DIFFUSE);
+    let metal = by("metal");
+    assert_eq!(metal.kind, MaterialKind::PBR, "a metallic map needs pbr");
+    assert_eq!(metal.albedo, glam::Vec3::new(0.9, 0.8, 0.7));
+    assert_eq!((metal.metallic, metal.roughness), (1.0, 0.25));
+    assert_ne!(metal.metallic_texture, NO_TEXTURE);
+    // MikkTSpace gave the normal-mapped triangles tangents.
+    for i in 0..3 {
+        assert_ne!(s.mesh.tangent_indices(i)[0], meshtrace::scene::NO_TANGENT);
+    }
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("m.mtl:3") && w.contains("-bm")),
+        "{:?}",
+        s.warnings
+    );
 }
 
 #[test]

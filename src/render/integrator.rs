@@ -11,8 +11,8 @@ use super::bsdf::{bsdf_eval, bsdf_is_delta, bsdf_is_two_sided, bsdf_pdf, bsdf_sa
 use super::lights::{light_pdf, sample_light, sky_pdf, sky_radiance};
 use super::rng::{self, Rng};
 use super::sampling::power_heuristic;
-use super::texture::{alpha_test, material_at, triangle_uv};
-use super::{RenderScene, TRI_SMOOTH, TRI_UV};
+use super::texture::{alpha_test, material_at, normal_mapped, triangle_uv};
+use super::{RenderScene, TRI_SMOOTH, TRI_TANGENT, TRI_UV};
 use crate::bvh::{Hit, traverse_any, traverse_closest};
 use crate::geometry::{self, T_INF};
 use crate::math::{Ray, onb_from_normal};
@@ -55,6 +55,14 @@ pub fn surface_at(scene: &RenderScene, ray: &Ray, hit: &Hit) -> SurfaceHit {
             ns = ng;
         }
     }
+    let uv = if sh.flags & TRI_UV != 0 {
+        triangle_uv(scene, hit.tri, hit.u, hit.v)
+    } else {
+        Vec2::ZERO
+    };
+    if sh.flags & TRI_TANGENT != 0 {
+        ns = normal_mapped(scene, hit.tri, hit.u, hit.v, uv, ns, ng);
+    }
     SurfaceHit {
         p: ray.at(hit.t),
         ng,
@@ -62,11 +70,7 @@ pub fn surface_at(scene: &RenderScene, ray: &Ray, hit: &Hit) -> SurfaceHit {
         material: sh.material,
         front_face: ray.dir.dot(ng) < 0.0,
         tri: hit.tri,
-        uv: if sh.flags & TRI_UV != 0 {
-            triangle_uv(scene, hit.tri, hit.u, hit.v)
-        } else {
-            Vec2::ZERO
-        },
+        uv,
     }
 }
 

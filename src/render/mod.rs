@@ -22,8 +22,8 @@ use crate::geometry::{self, TriVerts};
 use crate::math::{Aabb, luminance};
 use crate::scene::material::MAT_ALPHA_MASK;
 use crate::scene::{
-    Camera, Material, NO_NORMAL, NO_TEXTURE, NO_UV, PunctualLight, RenderSettings, Scene, Sky,
-    Texture,
+    Camera, Material, NO_NORMAL, NO_TANGENT, NO_TEXTURE, NO_UV, PunctualLight, RenderSettings,
+    Scene, Sky, Texture,
 };
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -43,7 +43,7 @@ pub struct TriShading {
     /// Probability of choosing this triangle in next event estimation; 0 for non-emitters.
     pub emitter_pmf: f32,
     pub n2: [f32; 3],
-    /// [`TRI_SMOOTH`] and [`TRI_UV`] bits.
+    /// [`TRI_SMOOTH`], [`TRI_UV`] and [`TRI_TANGENT`] bits.
     pub flags: u32,
 }
 
@@ -51,6 +51,20 @@ pub struct TriShading {
 pub const TRI_SMOOTH: u32 = 1;
 /// [`TriShading::flags`]: the triangle has texture coordinates in [`RenderScene::tri_uvs`].
 pub const TRI_UV: u32 = 2;
+/// [`TriShading::flags`]: the triangle's material has a normal map, and the triangle has
+/// tangents in [`RenderScene::tri_tangents`].
+pub const TRI_TANGENT: u32 = 4;
+
+/// Per-triangle tangents in leaf order (48 bytes): each corner's unit tangent (xyz) and
+/// the handedness of its bitangent (w = ±1; bitangent = w · normal × tangent).
+/// mirror: shaders/types.wgsl `TriTangents`
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TriTangents {
+    pub t0: [f32; 4],
+    pub t1: [f32; 4],
+    pub t2: [f32; 4],
+}
 
 /// Per-triangle texture coordinates in leaf order (32 bytes), v running down an image
 /// from its top edge. mirror: shaders/types.wgsl `TriUvs`
@@ -154,6 +168,8 @@ pub struct RenderScene {
     pub shading: Vec<TriShading>,
     /// Texture coordinates of every triangle, or empty when the scene has no textures.
     pub tri_uvs: Vec<TriUvs>,
+    /// Tangents of every triangle, or empty when no triangle has a normal map.
+    pub tri_tangents: Vec<TriTangents>,
     pub materials: Vec<Material>,
     /// The textures material slots index, and their texels.
     pub textures: Vec<Texture>,
@@ -211,10 +227,31 @@ impl RenderScene {
                 }
                 if textured && t.t[0] != NO_UV {
                     s.flags |= TRI_UV;
+                    let normal_map = scene.materials[t.material as usize].normal_texture;
+                    if normal_map != NO_TEXTURE && mesh.tangent_indices(i as usize)[0] != NO_TANGENT
+                    {
+                        s.flags |= TRI_TANGENT;
+                    }
                 }
                 s
             })
             .collect();
+        // Only a scene with normal maps reads tangents.
+        let tri_tangents: Vec<TriTangents> = if shading.iter().any(|s| s.flags & TRI_TANGENT != 0) {
+            bvh.order
+                .iter()
+                .map(|&i| {
+                    let g = mesh.tangent_indices(i as usize);
+                    if g[0] == NO_TANGENT {
+                        return TriTangents::default();
+                    }
+                    let [t0, t1, t2] = g.map(|k| mesh.tangents[k as usize].to_array());
+                    TriTangents { t0, t1, t2 }
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
         // Only a scene with textures reads texture coordinates.
         let tri_uvs: Vec<TriUvs> = if textured {
             bvh.order
@@ -248,6 +285,7 @@ impl RenderScene {
             tris,
             shading,
             tri_uvs,
+            tri_tangents,
             materials: scene.materials.clone(),
             textures: scene.textures.records.clone(),
             texels: scene.textures.texels.clone(),

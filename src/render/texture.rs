@@ -111,6 +111,40 @@ pub fn material_at(scene: &RenderScene, m: &Material, uv: Vec2) -> Material {
     out
 }
 
+/// The shading normal that the normal map of triangle `tri`'s material gives at
+/// barycentrics (`b1`, `b2`) and texture coordinates `uv`, around the unit normal `n` (interpolated
+/// or geometric, on the side of `ng`): the map's tangent-space normal (2 · texel − 1, its
+/// x and y scaled by `normal_scale`) in the frame of the interpolated tangent made
+/// orthogonal to `n` and the bitangent w · n × tangent. `n` itself where that frame
+/// degenerates or the mapped normal would face away from `ng`.
+/// mirror: shaders/texture.wgsl `normal_mapped`
+pub fn normal_mapped(
+    scene: &RenderScene,
+    tri: u32,
+    b1: f32,
+    b2: f32,
+    uv: Vec2,
+    n: Vec3,
+    ng: Vec3,
+) -> Vec3 {
+    let m = &scene.materials[scene.shading[tri as usize].material as usize];
+    let g = &scene.tri_tangents[tri as usize];
+    let w = 1.0 - b1 - b2;
+    let t4 = w * Vec4::from(g.t0) + b1 * Vec4::from(g.t1) + b2 * Vec4::from(g.t2);
+    let t = (t4.truncate() - n * n.dot(t4.truncate())).normalize_or_zero();
+    if t == Vec3::ZERO {
+        return n;
+    }
+    let b = if t4.w < 0.0 { -n.cross(t) } else { n.cross(t) };
+    let c = texture_lookup(scene, m.normal_texture, uv).truncate() * 2.0 - Vec3::ONE;
+    let mapped =
+        (t * (c.x * m.normal_scale) + b * (c.y * m.normal_scale) + n * c.z).normalize_or_zero();
+    if mapped.dot(ng) <= 0.0 {
+        return n;
+    }
+    mapped
+}
+
 /// Whether a hit at barycentrics (`b1`, `b2`) of triangle `tri` counts: false where its
 /// material is an alpha mask and the base colour's alpha (factor times the base colour
 /// texture's alpha) is below the cut-off, as glTF's `alphaMode` MASK says.

@@ -121,6 +121,12 @@ pub struct MaterialFile {
     pub metallic: Option<ScalarFile>,
     pub specular: Option<f32>,
     pub transmission: Option<ScalarFile>,
+    /// Any kind: a tangent-space normal map (`strength` scales its x and y).
+    pub normal_map: Option<TextureFile>,
+    /// Any kind: an alpha mask, cutting out the surface where the base colour's alpha
+    /// (`alpha` times the albedo texture's alpha channel) is below `alpha_cutoff`.
+    pub alpha: Option<f32>,
+    pub alpha_cutoff: Option<f32>,
 }
 
 /// A colour parameter: an RGB triple, or an image texture.

@@ -7,6 +7,7 @@ use super::file::{
 };
 use super::gltf::{GltfAsset, is_gltf, load_gltf};
 use super::light::PunctualLight;
+use super::material::MAT_ALPHA_MASK;
 use super::obj::{FileSource, Fs, MeshPart, PartTriangle, load_obj};
 use super::sphere::{default_subdivisions, icosphere};
 use super::texture::{TextureError, TextureRef, TextureSource, Textures, Usage, UvTransform};
@@ -447,6 +448,13 @@ impl Builder {
         // A mesh used by several objects repeats its warnings; say each once.
         let mut seen = std::collections::HashSet::new();
         self.warnings.retain(|w| seen.insert(w.clone()));
+        let untangented = super::tangents::generate_missing(&mut self.mesh, &self.materials);
+        if untangented > 0 {
+            self.warnings.push(format!(
+                "{untangented} triangle{} with a normal map got no tangent (its texture coordinates collapse to a point or a line); the map is not applied there",
+                if untangented == 1 { "" } else { "s" }
+            ));
+        }
         if self.degenerate > 0 {
             self.warnings.push(format!(
                 "dropped {} degenerate (zero-area) triangle{}",
@@ -745,6 +753,31 @@ impl Ctx<'_> {
         }
         if let Some(ior) = m.ior {
             mat.ior = self.scalar(&field("ior"), ior, |v| v > 0.0, "positive")?;
+        }
+        if let Some(t) = &m.normal_map {
+            let key = field("normal_map");
+            if let Some(s) = t.strength {
+                mat.normal_scale =
+                    self.scalar(&format!("{key}.strength"), s, f32::is_finite, "finite")?;
+            }
+            mat.normal_texture = self.texture(&key, t, Usage::Linear, textures)?;
+        }
+        match (m.alpha, m.alpha_cutoff) {
+            (Some(_), None) => {
+                return Err(self.invalid(
+                    field("alpha"),
+                    "is read only by an alpha mask: set alpha_cutoff too (meshtrace does not blend)",
+                ));
+            }
+            (alpha, Some(cutoff)) => {
+                mat.alpha_cutoff =
+                    self.scalar(&field("alpha_cutoff"), cutoff, unit, "in [0, 1]")?;
+                if let Some(a) = alpha {
+                    mat.alpha = self.scalar(&field("alpha"), a, unit, "in [0, 1]")?;
+                }
+                mat.flags |= MAT_ALPHA_MASK;
+            }
+            (None, None) => {}
         }
         Ok(mat)
     }

@@ -5,9 +5,10 @@
 //! the same: `Kd`, `Ks` and `Ke` take their first three numbers (`Ke` also a single grey
 //! value), `Ni`, `d` and `illum` their first, and `Pm` and `Pr` exactly one. Where tobj
 //! failed or panicked on a line (`Kd 0.5`, a word that is not a number, a `newmtl` without
-//! a name) the library is an error naming that line. The texture maps `map_Kd`, `map_Ke`
-//! and `map_Pr` are read with their option flags (`-s` sets the UV scale; the others are
-//! ignored, with a warning), as is `map_d` (ignored, with a warning). Every other statement
+//! a name) the library is an error naming that line. The texture maps `map_Kd`, `map_Ke`,
+//! `map_Pr`, `map_Pm` and the normal maps `map_Bump`, `bump` and `norm` are read with their
+//! option flags (`-s` sets the UV scale; the others, `-bm` among them, are ignored with a
+//! warning), as is `map_d` (ignored, with a warning). Every other statement
 //! (`Ka`, `Ns`, `Tr`, unknown keywords) is ignored: nothing reads it.
 
 use super::obj::{BadLine, quoted, text_lines};
@@ -34,10 +35,13 @@ pub struct MtlMaterial {
     pub metallic: Option<f32>,
     /// `Pr` (PBR extension: roughness).
     pub roughness: Option<f32>,
-    /// `map_Kd`, `map_Ke`, `map_Pr`.
+    /// `map_Kd`, `map_Ke`, `map_Pr`, `map_Pm`.
     pub map_diffuse: Option<MtlMap>,
     pub map_emission: Option<MtlMap>,
     pub map_roughness: Option<MtlMap>,
+    pub map_metallic: Option<MtlMap>,
+    /// `map_Bump`, `bump` or `norm`: a tangent-space normal map.
+    pub map_normal: Option<MtlMap>,
 }
 
 /// A texture map statement: its image (relative to the library) and UV scale.
@@ -110,14 +114,17 @@ pub(super) fn parse_mtl(bytes: &[u8]) -> Result<Library, BadLine> {
             "d" => m.dissolve = Some(first_number(keyword, words).map_err(bad)?),
             "Pm" => m.metallic = Some(only_number(keyword, words).map_err(bad)?),
             "Pr" => m.roughness = Some(only_number(keyword, words).map_err(bad)?),
-            "map_Kd" | "map_Ke" | "map_Pr" => {
+            "map_Kd" | "map_Ke" | "map_Pr" | "map_Pm" | "map_Bump" | "map_bump" | "bump"
+            | "norm" => {
                 let rest = line[keyword.len()..].trim();
                 let map =
                     texture_map(keyword, rest, &mut |w| warnings.push((i + 1, w))).map_err(bad)?;
                 match keyword {
                     "map_Kd" => m.map_diffuse = Some(map),
                     "map_Ke" => m.map_emission = Some(map),
-                    _ => m.map_roughness = Some(map),
+                    "map_Pr" => m.map_roughness = Some(map),
+                    "map_Pm" => m.map_metallic = Some(map),
+                    _ => m.map_normal = Some(map),
                 }
             }
             "map_d" => warnings.push((

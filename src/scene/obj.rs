@@ -556,9 +556,12 @@ fn continuation_hint(word: &str) -> &'static str {
 }
 
 /// The MTL mapping of the scene format: Kd, Ke, illum 3 / Pm (conductors, rough with Pr),
-/// illum 7 / d < 1 with Ni > 1 (dielectric); `map_Kd`, `map_Ke` and `map_Pr` (relative to
-/// `dir`, the library's folder) multiply their statement's value, or 1 where it is absent.
-/// The maps are appended to `textures`, which the material's slots index.
+/// illum 7 / d < 1 with Ni > 1 (dielectric); `map_Kd`, `map_Ke`, `map_Pr` and `map_Pm`
+/// (relative to `dir`, the library's folder) multiply their statement's value, or 1 where
+/// it is absent. A metallic map makes the material `pbr` (base colour Kd, metallic Pm,
+/// roughness Pr, 0.5 without it), as only `pbr` varies metalness over a surface. A normal
+/// map (`map_Bump`, `bump`, `norm`) applies to any kind. The maps are appended to
+/// `textures`, which the material's slots index.
 pub fn map_mtl(m: &MtlMaterial, dir: &Path, textures: &mut Vec<TextureRef>) -> Material {
     let kd = m.diffuse.unwrap_or(Vec3::splat(0.8));
     let ks = m.specular;
@@ -587,6 +590,18 @@ pub fn map_mtl(m: &MtlMaterial, dir: &Path, textures: &mut Vec<TextureRef>) -> M
         mat.kind = MaterialKind::DIELECTRIC;
         mat.albedo = Vec3::ONE;
         mat.ior = if ior > 0.0 { ior } else { 1.5 };
+    } else if let Some(map) = &m.map_metallic {
+        mat.kind = MaterialKind::PBR;
+        albedo_map(&mut mat, &mut slot);
+        mat.metallic = m.metallic.unwrap_or(1.0).clamp(0.0, 1.0);
+        mat.metallic_texture = slot(map, Usage::Scalar { channel: 0 });
+        match (m.roughness, &m.map_roughness) {
+            (r, Some(map)) => {
+                mat.roughness = r.unwrap_or(1.0).clamp(0.0, 1.0);
+                mat.roughness_texture = slot(map, Usage::Scalar { channel: 0 });
+            }
+            (r, None) => mat.roughness = r.unwrap_or(0.5).clamp(0.0, 1.0),
+        }
     } else if metallic {
         match ks {
             Some(ks) => mat.albedo = ks,
@@ -611,6 +626,9 @@ pub fn map_mtl(m: &MtlMaterial, dir: &Path, textures: &mut Vec<TextureRef>) -> M
     if let Some(map) = &m.map_emission {
         mat.emission = m.emission.unwrap_or(Vec3::ONE).max(Vec3::ZERO);
         mat.emission_texture = slot(map, Usage::Colour);
+    }
+    if let Some(map) = &m.map_normal {
+        mat.normal_texture = slot(map, Usage::Linear);
     }
     mat
 }

@@ -13,7 +13,8 @@ use crate::render::integrator::RR_DEPTH;
 use crate::render::rng;
 use crate::render::sampling::UNIFORM_SPHERE_PDF;
 use crate::render::{
-    LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_POINT, LIGHT_SPOT, SKY_EMITTER, TRI_SMOOTH, TRI_UV,
+    LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_POINT, LIGHT_SPOT, SKY_EMITTER, TRI_SMOOTH,
+    TRI_TANGENT, TRI_UV,
 };
 use crate::scene::material::{MAT_ALPHA_MASK, MAT_THIN_WALLED};
 use crate::scene::{MaterialKind, NO_TEXTURE, TextureFormat};
@@ -47,6 +48,7 @@ pub fn shared_constants() -> Vec<(String, Value)> {
         ("RR_DEPTH", U32(RR_DEPTH)),
         ("TRI_SMOOTH", U32(TRI_SMOOTH)),
         ("TRI_UV", U32(TRI_UV)),
+        ("TRI_TANGENT", U32(TRI_TANGENT)),
         ("LIGHT_POINT", U32(LIGHT_POINT)),
         ("LIGHT_SPOT", U32(LIGHT_SPOT)),
         ("LIGHT_DIRECTIONAL", U32(LIGHT_DIRECTIONAL)),

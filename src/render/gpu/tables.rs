@@ -9,7 +9,7 @@ use super::params::Params;
 use super::{GpuContext, GpuError};
 use crate::bvh::BvhNode;
 use crate::geometry::TriVerts;
-use crate::render::{Light, RenderScene, TriShading, TriUvs};
+use crate::render::{Light, RenderScene, TriShading, TriTangents, TriUvs};
 use crate::scene::{Material, Texture};
 
 /// Texels per row of the table textures (the shaders get its log2 from `shader::shared_constants`).
@@ -123,6 +123,13 @@ pub const TABLES: &[Table] = &[
             }))
         },
         bytes: |s| bytemuck::cast_slice(&s.tri_uvs),
+    },
+    Table {
+        what: "tangents",
+        texture: "tri_tangents_tex",
+        loader: "load_tri_tangents",
+        element: || Element::Struct(struct_layout!(TriTangents { t0, t1, t2 })),
+        bytes: |s| bytemuck::cast_slice(&s.tri_tangents),
     },
     Table {
         what: "textures",
