@@ -444,3 +444,53 @@ fn uv_transforms_scale_then_rotate() {
     assert!((x - 3.0).abs() < 1e-6 && y.abs() < 1e-6, "({x}, {y})");
     assert_eq!(UvTransform::scale(2.0, 3.0).matrix(), [2.0, 0.0, 0.0, 3.0]);
 }
+
+/// CRC-32 (IEEE) of PNG chunks.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &b in bytes {
+        crc ^= b as u32;
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xedb8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    !crc
+}
+
+/// A texture whose image is larger than the machine's free memory is an error that says
+/// how large it is and how much memory there is, before anything is allocated: a PNG
+/// whose header claims 200000² RGBA texels (160 GB decoded).
+#[test]
+fn a_texture_larger_than_memory_is_an_error_naming_its_size() {
+    if !std::path::Path::new("/proc/meminfo").exists() {
+        eprintln!("skipped: no /proc/meminfo, so meshtrace cannot know the free memory here");
+        return;
+    }
+    let dir = TempDir::new("huge-texture");
+    let mut png = png(1, 1, [200; 4]);
+    // IHDR's data starts after the 8-byte signature and the chunk's length and type.
+    png[16..20].copy_from_slice(&200_000u32.to_be_bytes());
+    png[20..24].copy_from_slice(&200_000u32.to_be_bytes());
+    let crc = crc32(&png[12..29]);
+    png[29..33].copy_from_slice(&crc.to_be_bytes());
+    dir.write("huge.png", &png);
+    dir.write("t.obj", TRI_UV);
+    let toml = "[camera]\nposition = [0.0, 0.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\n\
+                [materials.m]\ntype = \"diffuse\"\nalbedo = { texture = \"huge.png\" }\n\
+                [[objects]]\nmesh = \"t.obj\"\nmaterial = \"m\"\n";
+    let err = load_scene(&dir.write("scene.toml", toml)).expect_err("the texture cannot fit");
+    let message = err.to_string();
+    assert!(!message.contains('\n'), "{message}");
+    for needle in [
+        "materials.m.albedo.texture",
+        "huge.png",
+        "200000×200000",
+        "GiB of memory free",
+    ] {
+        assert!(message.contains(needle), "{message:?} lacks {needle:?}");
+    }
+}

@@ -322,18 +322,46 @@ impl Decoded {
 }
 
 /// Decodes an image's bytes, in `format` where its extension or MIME type names one (TGA
-/// has no magic number), or else in the format guessed from its first bytes.
+/// has no magic number), or else in the format guessed from its first bytes. Before it
+/// allocates, the image's size is checked against the memory the machine has free: an
+/// image that cannot fit is an error that says how much it needs and how much there is.
 fn decode(format: Option<ImageFormat>, bytes: &[u8]) -> Result<(Kind, Decoded), String> {
+    use image::ImageDecoder;
     let format = format
         .map_or_else(|| image::guess_format(bytes), Ok)
         .map_err(|_| {
             "not an image format meshtrace reads (PNG, JPEG, BMP, TGA, HDR, EXR)".to_string()
         })?;
-    let image = image::load_from_memory_with_format(bytes, format)
-        .map_err(|e| format!("cannot decode the image: {e}"))?;
-    if image.width() == 0 || image.height() == 0 {
+    let cannot = |e: image::ImageError| format!("cannot decode the image: {e}");
+    let mut reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
+    // The image crate's default cap (512 MiB) would refuse an 16384² texture that fits;
+    // the check below against the free memory replaces it.
+    reader.no_limits();
+    let decoder = reader.into_decoder().map_err(cannot)?;
+    let (width, height) = decoder.dimensions();
+    if width == 0 || height == 0 {
         return Err("the image has no pixels".into());
     }
+    // Decoded, then packed at 4 bytes a texel (8-bit images) or 16 (the others).
+    let texels = width as u64 * height as u64;
+    use image::ColorType as C;
+    let packed = match decoder.color_type() {
+        C::L8 | C::La8 | C::Rgb8 | C::Rgba8 => 4,
+        _ => 16,
+    };
+    let need = decoder
+        .total_bytes()
+        .saturating_add(texels.saturating_mul(packed));
+    if let Some(free) = available_memory() {
+        if need > free {
+            return Err(format!(
+                "the image is {width}×{height} texels: decoding and packing it needs {}, more than the {} of memory free",
+                gibibytes(need),
+                gibibytes(free)
+            ));
+        }
+    }
+    let image = image::DynamicImage::from_decoder(decoder).map_err(cannot)?;
     use image::DynamicImage as D;
     Ok(match image {
         D::ImageLuma8(_) | D::ImageLumaA8(_) | D::ImageRgb8(_) | D::ImageRgba8(_) => {
@@ -344,6 +372,19 @@ fn decode(format: Option<ImageFormat>, bytes: &[u8]) -> Result<(Kind, Decoded), 
         }
         other => (Kind::FloatSrgb, Decoded::Float(other.to_rgba32f())),
     })
+}
+
+/// Memory the system can give without swapping (Linux's MemAvailable), in bytes; `None`
+/// where it does not say.
+fn available_memory() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+fn gibibytes(bytes: u64) -> String {
+    format!("{:.2} GiB", bytes as f64 / (1u64 << 30) as f64)
 }
 
 /// The sRGB transfer function's inverse on a value in [0, 1].
