@@ -494,3 +494,38 @@ fn a_texture_larger_than_memory_is_an_error_naming_its_size() {
         assert!(message.contains(needle), "{message:?} lacks {needle:?}");
     }
 }
+
+/// Textures that do not fit the adapter's limits are an error that names the limit, before
+/// anything is uploaded: here an adapter of 2-row tables (128 KiB) and a 256² texture.
+#[test]
+fn textures_beyond_the_adapter_limits_are_an_error_naming_the_limit() {
+    let Some(ctx) = common::gpu("textures beyond the limits") else {
+        return;
+    };
+    let mut small = ctx.clone();
+    small.limits.max_texture_dimension_2d = 2;
+    let dir = TempDir::new("texture-limit");
+    let texels: Vec<[u8; 4]> = (0..256 * 256)
+        .map(|i| [(i % 251) as u8, 0, 0, 255])
+        .collect();
+    dir.write_png("big.png", 256, 256, &texels);
+    dir.write("t.obj", TRI_UV);
+    let toml = "[camera]\nposition = [0.0, 0.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\n\
+                [materials.m]\ntype = \"diffuse\"\nalbedo = { texture = \"big.png\" }\n\
+                [[objects]]\nmesh = \"t.obj\"\nmaterial = \"m\"\n";
+    let scene = load_scene(&dir.write("scene.toml", toml)).unwrap();
+    let rs = RenderScene::new(&scene, &BuildParams::default()).unwrap();
+    let err = match meshtrace::render::gpu::GpuRenderer::new(&small, &rs) {
+        Ok(_) => panic!("256 KiB of texels fit a 128 KiB table"),
+        Err(e) => e.to_string(),
+    };
+    for needle in [
+        "texels need 262144 bytes",
+        "max_texture_dimension_2d = 2",
+        "--device cpu",
+    ] {
+        assert!(err.contains(needle), "{err:?} lacks {needle:?}");
+    }
+    // With the adapter's own limits it fits.
+    assert!(meshtrace::render::gpu::GpuRenderer::new(&ctx, &rs).is_ok());
+}

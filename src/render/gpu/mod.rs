@@ -33,12 +33,14 @@ pub enum GpuError {
     #[error("cannot open the GPU device: {0}")]
     Device(String),
     #[error(
-        "the {what} need {bytes} bytes but this adapter allows {limit} per binding; use --device cpu or a smaller scene"
+        "the {what} need {bytes} bytes but this adapter holds at most {limit} ({rule}); use --device cpu or a smaller scene"
     )]
     TooLarge {
         what: &'static str,
         bytes: u64,
         limit: u64,
+        /// The adapter limit that sets `limit`, as wgpu names it, with its value.
+        rule: String,
     },
     #[error("GPU error: {0}")]
     Fault(String),

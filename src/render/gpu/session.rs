@@ -96,6 +96,7 @@ impl GpuRenderer {
                 what: "film",
                 bytes,
                 limit,
+                rule: format!("max_storage_buffer_binding_size = {limit}"),
             });
         }
         self.base = Params {

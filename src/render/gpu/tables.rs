@@ -371,6 +371,9 @@ fn table_texture(
             what,
             bytes: data.len() as u64,
             limit: max_rows * TABLE_WIDTH as u64 * 16,
+            rule: format!(
+                "a table is a texture of at most max_texture_dimension_2d = {max_rows} rows of {TABLE_WIDTH} 16-byte texels"
+            ),
         });
     }
     let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
