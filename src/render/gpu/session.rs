@@ -18,11 +18,29 @@ pub const PATHS_PER_DISPATCH: u64 = 1 << 21;
 /// Invocations per workgroup side of the render kernel. mirror: shaders/render.wgsl `render`
 const WORKGROUP: u32 = 8;
 
+/// Samples per pixel a dispatch asks of each invocation at most on a software adapter, to
+/// begin with: Mesa's lavapipe ends an invocation's loops after 65535 iterations in all,
+/// which a few dozen paths of a large scene can reach. (The kernel detects a cut and the
+/// renderer then halves the step, so this only saves the first failed tries.)
+const SOFTWARE_SAMPLES_PER_DISPATCH: u32 = 16;
+
+/// The render kernel's status words (`status` in shaders/render.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct Status {
+    /// Invocations that a driver's loop limit cut short, leaving their pixels unchanged.
+    cut: u32,
+    /// Always 0: the kernel's canary loop reads its bound from here.
+    zero: u32,
+}
+
 /// The film being accumulated on the device: one texel per pixel for radiance, then one per
 /// film channel ([`Film::texels_per_pixel`]).
 struct DeviceFilm {
     template: Film,
     buffer: wgpu::Buffer,
+    /// The kernel's [`Status`].
+    status: wgpu::Buffer,
     io_group: wgpu::BindGroup,
     /// The first sample of the render, and how many samples every pixel has received.
     first_sample: u32,
@@ -47,6 +65,9 @@ pub struct GpuRenderer {
     /// The scene's part of the parameters and its camera, for the films of any settings.
     scene_params: Params,
     camera: Camera,
+    /// The most samples per pixel one dispatch traces: unbounded on hardware, halved each
+    /// time the kernel reports a cut (see [`SOFTWARE_SAMPLES_PER_DISPATCH`]).
+    max_step: u32,
 }
 
 impl GpuRenderer {
@@ -66,7 +87,20 @@ impl GpuRenderer {
             film: None,
             scene_params,
             camera: scene.camera.clone(),
+            max_step: if ctx.adapter.software {
+                SOFTWARE_SAMPLES_PER_DISPATCH
+            } else {
+                u32::MAX
+            },
         })
+    }
+
+    /// Sets the most samples per pixel one dispatch traces (by default unbounded on a
+    /// hardware adapter, [`SOFTWARE_SAMPLES_PER_DISPATCH`] on a software one). More let a
+    /// lane run more paths back to back; the renderer still halves the step wherever the
+    /// driver cuts an invocation short.
+    pub fn set_max_samples_per_dispatch(&mut self, samples: u32) {
+        self.max_step = samples.max(1);
     }
 
     /// The device this renderer runs on.
@@ -109,6 +143,14 @@ impl GpuRenderer {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
+        let status = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("status"),
+            size: size_of::<Status>() as u64,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let render = match self.render.take() {
             Some(render) => render,
             None => Pipeline::new(
@@ -117,14 +159,15 @@ impl GpuRenderer {
                 &shader::render_source(),
                 "render",
                 0,
-                1,
+                2,
             )?,
         };
-        let io_group = render.io_group(&self.ctx, &[&buffer]);
+        let io_group = render.io_group(&self.ctx, &[&buffer, &status]);
         self.render = Some(render);
         self.film = Some(DeviceFilm {
             template,
             buffer,
+            status,
             io_group,
             first_sample,
             samples: 0,
@@ -133,9 +176,48 @@ impl GpuRenderer {
     }
 
     /// Traces samples `samples` of the pixels of rows `rows` into the film and waits for
-    /// them. A pixel's samples must be dispatched in order, as the CPU adds them.
+    /// them. A pixel's samples must be dispatched in order, as the CPU adds them. The range
+    /// goes out in parts of at most [`GpuRenderer::max_step`] samples; a part that a
+    /// driver's loop limit cut short (the kernel says so, leaving the cut pixels as they
+    /// were) is sent again in halves, and the step halves for the rest of the session. A
+    /// single sample that is still cut is an error.
     pub fn dispatch(&mut self, samples: Range<u32>, rows: Range<u32>) -> Result<(), GpuError> {
-        let (Some(film), Some(render)) = (&mut self.film, &self.render) else {
+        let mut start = samples.start;
+        while start < samples.end {
+            let end = samples.end.min(start.saturating_add(self.max_step));
+            self.dispatch_part(start..end, rows.clone())?;
+            start = end;
+        }
+        if rows.end == self.base.height {
+            if let Some(film) = &mut self.film {
+                film.samples = samples.end - film.first_sample;
+            }
+        }
+        Ok(())
+    }
+
+    /// One part of [`GpuRenderer::dispatch`], split further where the kernel reports cuts.
+    fn dispatch_part(&mut self, samples: Range<u32>, rows: Range<u32>) -> Result<(), GpuError> {
+        if self.run_kernel(samples.clone(), rows.clone())? == 0 {
+            return Ok(());
+        }
+        let n = samples.end - samples.start;
+        if n == 1 {
+            return Err(GpuError::Fault(format!(
+                "{}: one path of sample {} ran past the driver's limit on loop iterations (lavapipe's is 65535 per invocation); use --device cpu",
+                self.ctx.adapter.name, samples.start
+            )));
+        }
+        self.max_step = self.max_step.min(n / 2);
+        let mid = samples.start + n / 2;
+        self.dispatch_part(samples.start..mid, rows.clone())?;
+        self.dispatch_part(mid..samples.end, rows)
+    }
+
+    /// Runs the render kernel once over `samples` of `rows`, waits for it and returns how
+    /// many invocations were cut short (their pixels keep what they had).
+    fn run_kernel(&mut self, samples: Range<u32>, rows: Range<u32>) -> Result<u32, GpuError> {
+        let (Some(film), Some(render)) = (&self.film, &self.render) else {
             return Err(GpuError::Fault("dispatch before begin".into()));
         };
         let p = Params {
@@ -148,6 +230,9 @@ impl GpuRenderer {
         self.ctx
             .queue
             .write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
+        self.ctx
+            .queue
+            .write_buffer(&film.status, 0, bytemuck::bytes_of(&Status::default()));
         let mut enc = self.ctx.device.create_command_encoder(&Default::default());
         {
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -164,11 +249,9 @@ impl GpuRenderer {
             );
         }
         self.ctx.queue.submit([enc.finish()]);
-        self.ctx.wait()?;
-        if rows.end == p.height {
-            film.samples = samples.end - film.first_sample;
-        }
-        Ok(())
+        let status = self.ctx.read_buffer(&film.status)?;
+        let status: Status = bytemuck::pod_read_unaligned(&status);
+        Ok(status.cut)
     }
 
     /// The film so far, with the samples that every pixel has received.
