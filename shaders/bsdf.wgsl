@@ -32,6 +32,14 @@ fn bsdf_is_two_sided(m: Material) -> bool {
     return true;
 }
 
+// mirror: src/render/bsdf.rs `bsdf_transmits`
+fn bsdf_transmits(m: Material) -> bool {
+    if m.kind == MAT_DIELECTRIC {
+        return true;
+    }
+    return m.kind == MAT_PBR && m.transmission > 0.0;
+}
+
 // f(wo, wi) |cos(wi)|. mirror: src/render/bsdf.rs `bsdf_eval`
 fn bsdf_eval(m: Material, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     if m.kind == MAT_DIFFUSE {

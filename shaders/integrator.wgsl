@@ -104,7 +104,9 @@ fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
     // Next event estimation.
     if !bsdf_is_delta(mat) && params.num_emitters > 0u {
         let ls = sample_light(si.p, ng, rng, (*st).depth);
-        if ls.valid && dot(ls.wi, ng) > 0.0 {
+        let cos_i = dot(ls.wi, ng);
+        let usable = select(cos_i > 0.0, cos_i != 0.0, bsdf_transmits(mat));
+        if ls.valid && usable {
             let wi = ls.wi * frame;
             let f = bsdf_eval(mat, wo, wi);
             if any(f != vec3<f32>(0.0)) {

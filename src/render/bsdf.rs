@@ -48,6 +48,17 @@ pub fn bsdf_is_two_sided(m: &Material) -> bool {
     }
 }
 
+/// Whether light may cross the surface: a dielectric, or a `pbr` material with
+/// transmission. Next event estimation then samples lights on both sides of it.
+/// mirror: shaders/bsdf.wgsl `bsdf_transmits`
+pub fn bsdf_transmits(m: &Material) -> bool {
+    match m.kind {
+        MaterialKind::DIELECTRIC => true,
+        MaterialKind::PBR => m.transmission > 0.0,
+        _ => false,
+    }
+}
+
 /// f(wo, wi) |cos(wi)|. mirror: shaders/bsdf.wgsl `bsdf_eval`
 pub fn bsdf_eval(m: &Material, wo: Vec3, wi: Vec3) -> Vec3 {
     match m.kind {

@@ -7,7 +7,9 @@
 //! name), drawing every random number from the same counter-based [`Rng`], so a path traced
 //! on either device is the same path.
 
-use super::bsdf::{bsdf_eval, bsdf_is_delta, bsdf_is_two_sided, bsdf_pdf, bsdf_sample};
+use super::bsdf::{
+    bsdf_eval, bsdf_is_delta, bsdf_is_two_sided, bsdf_pdf, bsdf_sample, bsdf_transmits,
+};
 use super::lights::{light_pdf, sample_light, sky_pdf, sky_radiance};
 use super::rng::{self, Rng};
 use super::sampling::power_heuristic;
@@ -181,7 +183,15 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
     // Next event estimation.
     if !bsdf_is_delta(mat) && !scene.emitters.is_empty() {
         if let Some(ls) = sample_light(scene, si.p, ng, rng, st.depth) {
-            if ls.wi.dot(ng) > 0.0 {
+            // A surface that light crosses sees lights on both sides; bsdf_eval says which
+            // of them it passes. Others only see those on the side of ng.
+            let cos_i = ls.wi.dot(ng);
+            let usable = if bsdf_transmits(mat) {
+                cos_i != 0.0
+            } else {
+                cos_i > 0.0
+            };
+            if usable {
                 let wi = to_local(ls.wi);
                 let f = bsdf_eval(mat, wo, wi);
                 if f != Vec3::ZERO {
