@@ -907,6 +907,10 @@ class GltfMaterials:
             path = os.path.join(self.tmpdir, "%s_image%d%s" % (self.stem, source, ext))
             with open(path, "wb") as fh:
                 fh.write(data)
+            # a file of this name read before (another scene in this process) is stale
+            _raw_images.pop(path, None)
+            _images.pop((path, False), None)
+            _images.pop((path, True), None)
         self.images[source] = path
         return path
 
