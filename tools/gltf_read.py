@@ -108,6 +108,21 @@ class Doc:
                 path, "GLB JSON chunk" if data[:4] == b"glTF" else "JSON", e))
         if not isinstance(self.json, dict):
             raise self.error("JSON", "the document is not a JSON object")
+        # the schema's shapes that the reader relies on: arrays of objects, objects
+        for key in ("accessors", "bufferViews", "buffers", "cameras", "images", "materials",
+                    "meshes", "nodes", "samplers", "scenes", "textures"):
+            arr = self.json.get(key, [])
+            if not isinstance(arr, list):
+                raise self.error(key, "must be an array")
+            for i, x in enumerate(arr):
+                if not isinstance(x, dict):
+                    raise self.error("%s[%d]" % (key, i), "must be an object")
+        for key in ("asset", "extensions"):
+            if not isinstance(self.json.get(key, {}), dict):
+                raise self.error(key, "must be an object")
+        for key in ("extensionsUsed", "extensionsRequired"):
+            if not isinstance(self.json.get(key, []), list):
+                raise self.error(key, "must be an array")
         version = self.json.get("asset", {}).get("version")
         if not isinstance(version, str) or not version.startswith("2."):
             raise self.error("asset.version", "is %r; glTF 2.x is read" % (version,))
@@ -133,7 +148,8 @@ class Doc:
         """self.json[key][i], or an error at `at` naming the missing element."""
         arr = self.json.get(key, [])
         if not isinstance(i, int) or isinstance(i, bool) or not 0 <= i < len(arr):
-            raise self.error(at, "%s %r does not exist (the file has %d)" % (key, i, len(arr)))
+            one = "mesh" if key == "meshes" else key[:-1]
+            raise self.error(at, "%s %r does not exist (the file has %d)" % (one, i, len(arr)))
         return arr[i]
 
     # ------------------------------------------------------------ containers and buffers

@@ -1178,6 +1178,15 @@ def gltf_geometry(mi, path, M, override, tmpdir, stem, shape_with):
     non-degenerate triangles, or None), emissive (whether a triangle's material emits),
     warnings printed."""
     doc = gr.Doc(path)
+    try:
+        return _gltf_geometry(mi, doc, M, override, tmpdir, stem, shape_with)
+    except (AttributeError, TypeError, KeyError, ValueError, IndexError) as e:
+        # a value of the wrong JSON type deeper than gltf_read.Doc checks
+        raise gr.GltfError("%s: the JSON does not follow the glTF 2.0 schema (%s: %s)"
+                           % (doc.shown, type(e).__name__, e))
+
+
+def _gltf_geometry(mi, doc, M, override, tmpdir, stem, shape_with):
     sc = gr.read_scene(doc)
     mats = GltfMaterials(mi, doc, tmpdir, stem)
     groups = {}     # (material key, has normals, has uvs, mirrored) -> [P, N, UV] lists
@@ -1207,11 +1216,11 @@ def gltf_geometry(mi, path, M, override, tmpdir, stem, shape_with):
             hi = np.maximum(hi, Pt[keep].reshape(-1, 3).max(axis=0))
         if override is None:
             emissive |= bool(keep.any() and mat["emissive"])
-            if not mat["visible"]:
-                continue
             if mat["textured"] and part.uvs is None:
                 raise gr.GltfError("%s: %s: material %s uses a texture, but the primitive has "
                                    "no TEXCOORD_0" % (doc.shown, part.at, mat["name"]))
+            if not mat["visible"]:
+                continue
         elif uses_texture(mat) and part.uvs is None:
             raise gr.GltfError("%s: %s: material '%s' uses a texture, but the primitive has "
                                "no TEXCOORD_0" % (doc.shown, part.at, override[0]))
