@@ -8,16 +8,17 @@ l = normalize(0.6, 0.3, 1) under a black sky; the camera looks at it head-on. Ev
 on the quad then has the radiance rho / pi * E * dot(n', l), where n' is the tilted normal
 in world space: +u and image-up are known from the quad's UVs. The scenes go through the
 script's whole path (build_scene_dict: a TOML scene with an OBJ quad and `normal_map`, and
-a bare glTF file with normalTexture and a KHR_lights_punctual directional light), with UVs
-as authored and mirrored (u running to -X: the script flips the map's green channel for
+a bare glTF file with normalTexture and a KHR_lights_punctual directional light, also with
+a TANGENT attribute that agrees with the UVs), with UVs as authored and mirrored (u running to -X: the script flips the map's green channel for
 such triangles, see normal_map_bsdf); a control renders the mirrored quad without the
 flip. The map is an 8-bit PNG, decoded as data (n = 2 c / 255 - 1, normalised).
 
 Result (Mitsuba 3.9.1, llvm_ad_rgb): every case, TOML and glTF, plain and mirrored UVs,
 equals the expected radiance to 0.01% (the 8-bit encoding included in the expectation);
 the control is off by 29.5% for the tilt towards image-up (its y goes the wrong way; 0.4%
-for the tilt towards +u, whose 8-bit y is not quite 0). The refusals are checked too: a TOML normal_map strength other
-than 1 and a glTF normalTexture scale other than 1 are errors.
+for the tilt towards +u, whose 8-bit y is not quite 0). The refusals are checked too: a TOML
+normal_map strength other than 1, a glTF normalTexture scale other than 1, and TANGENT
+attributes that disagree with the UVs' frame (rotated, or of the wrong handedness) are errors.
 
 Usage: python3 tools/check_normal_map.py [--variant V]
 Exits with status 1 if a check fails.
@@ -98,16 +99,18 @@ irradiance = [%g, %g, %g]
     return path
 
 
-def gltf_scene(tmp, png_path, mirrored, scale=1.0):
+def gltf_scene(tmp, png_path, mirrored, scale=1.0, tangent=None):
     """A bare glTF: the quad [-1, 1]^2 facing +Z with glTF UVs (v down: image-up along +Y;
     u along +X, or -X when mirrored), a specular-0 diffuse material with the normal map,
-    a directional light (lux = E x 683) travelling along -l, a camera at z = 3."""
+    a directional light (lux = E x 683) travelling along -l, a camera at z = 3; with
+    `tangent` (4 numbers), a TANGENT attribute holding it at every vertex."""
     pos = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], dtype="<f4")
     us = [1, 0, 0, 1] if mirrored else [0, 1, 1, 0]
     uv = np.array([[us[0], 1], [us[1], 1], [us[2], 0], [us[3], 0]], dtype="<f4")
     nrm = np.tile(np.array([0, 0, 1], dtype="<f4"), (4, 1))
     idx = np.array([0, 1, 2, 0, 2, 3], dtype="<u2")
     data = pos.tobytes() + nrm.tobytes() + uv.tobytes() + idx.tobytes()
+    tan = np.tile(np.array(tangent or [1, 0, 0, 1], dtype="<f4"), (4, 1)).tobytes()
     # the light's node turns -Z onto -l
     z = np.array([0.0, 0.0, -1.0])
     axis = np.cross(z, -L_DIR)
@@ -135,17 +138,21 @@ def gltf_scene(tmp, png_path, mirrored, scale=1.0):
         "textures": [{"source": 0}],
         "images": [{"uri": "data:image/png;base64," + base64.b64encode(png).decode()}],
         "buffers": [{"uri": "data:application/octet-stream;base64,"
-                     + base64.b64encode(data).decode(), "byteLength": len(data)}],
+                     + base64.b64encode(data + tan).decode(), "byteLength": len(data) + 64}],
         "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
                         {"buffer": 0, "byteOffset": 48, "byteLength": 48},
                         {"buffer": 0, "byteOffset": 96, "byteLength": 32},
-                        {"buffer": 0, "byteOffset": 128, "byteLength": 12}],
+                        {"buffer": 0, "byteOffset": 128, "byteLength": 12},
+                        {"buffer": 0, "byteOffset": 140, "byteLength": 64}],
         "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
                        "min": [-1, -1, 0], "max": [1, 1, 0]},
                       {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3"},
                       {"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC2"},
-                      {"bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR"}],
+                      {"bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR"},
+                      {"bufferView": 4, "componentType": 5126, "count": 4, "type": "VEC4"}],
     }
+    if tangent is not None:
+        doc["meshes"][0]["primitives"][0]["attributes"]["TANGENT"] = 4
     path = os.path.join(tmp, "nm.gltf")
     with open(path, "w") as fh:
         json.dump(doc, fh)
@@ -164,16 +171,20 @@ def main():
             c, d = encode(n_t)
             png = "n_%s.png" % ("u" if tilt_name == "+u" else "up")
             write_png(os.path.join(tmp, png), np.tile(c, (4, 4, 1)))
-            for fmt in ("TOML", "glTF"):
+            for fmt in ("TOML", "glTF", "glTF+TANGENT"):
                 for mirrored in (False, True):
                     # world: +u along +X (or -X when mirrored), image-up along +Y
                     n_w = np.array([-d[0] if mirrored else d[0], d[1], d[2]])
                     want = RHO / math.pi * E * max(0.0, float(np.dot(n_w, L_DIR)))
                     mr._warned.clear()
+                    # the TANGENT that agrees: +X with w = 1 (B = n x T = +Y, image-up);
+                    # mirrored: -X, and w = -1 keeps B = +Y
+                    tangent = None if fmt != "glTF+TANGENT" else \
+                        ([-1, 0, 0, -1] if mirrored else [1, 0, 0, 1])
                     path = toml_scene(tmp, png, mirrored) if fmt == "TOML" else \
-                        gltf_scene(tmp, os.path.join(tmp, png), mirrored)
+                        gltf_scene(tmp, os.path.join(tmp, png), mirrored, tangent=tangent)
                     a = Args()
-                    if fmt == "glTF":
+                    if fmt != "TOML":
                         a.width = a.height = 16
                     scene, _ = mr.build_scene_dict(mi, path, a, tmp)
                     got = render(mi, scene)
@@ -194,7 +205,17 @@ def main():
                         ctrl = render(mi, scene)
                         line += " | without the green flip %+.1f%%" % (100 * (ctrl - want) / want)
                     print(line)
-        # refusals
+        # refusals: tangents that disagree with the UVs' frame
+        for tangent in ([0, 1, 0, 1], [1, 0, 0, -1]):
+            a = Args()
+            a.width = a.height = 16
+            try:
+                mr.build_scene_dict(mi, gltf_scene(tmp, os.path.join(tmp, "n_u.png"), False,
+                                                   tangent=tangent), a, tmp)
+                print("glTF: TANGENT %s was translated: FAIL" % tangent)
+                ok = False
+            except mr.gr.GltfError as e:
+                print("glTF: TANGENT %s is refused: ok (%s)" % (tangent, str(e)[:110] + "..."))
         for fmt in ("TOML", "glTF"):
             try:
                 if fmt == "TOML":

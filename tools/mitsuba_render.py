@@ -636,7 +636,7 @@ def rgb_spec(v):
 def mitsuba_bsdf(mi, mat, where):
     """Mitsuba BSDF of a material (TOML values, or TexRefs for textured parameters)."""
     t = mat.get("type", "diffuse")
-    allowed = {"type", "emission", "normal_map"}
+    allowed = {"type", "emission", "normal_map", "alpha", "alpha_cutoff"}
     if t == "diffuse":
         allowed |= {"albedo"}
         b = {"type": "twosided", "bsdf": {
@@ -668,6 +668,30 @@ def mitsuba_bsdf(mi, mat, where):
     if mat.get("normal_map") is not None:
         b = normal_map_bsdf(mi, b, mat["normal_map"])
     return b
+
+
+def alpha_visible(mi, mat, where):
+    """A TOML alpha mask (`alpha_cutoff`, with `alpha` as its factor, default 1): whether
+    the surface is there. Only a constant alpha translates (no texture, or an albedo /
+    base_color texture whose alpha is 1 everywhere): the surface is then whole or cut out
+    entirely; a varying texture alpha is refused (meshtrace cuts where the bilinear alpha is
+    below the cut-off, which no Mitsuba texture reproduces). `alpha` alone is an error, as
+    in meshtrace (it does not blend)."""
+    if "alpha_cutoff" not in mat:
+        if "alpha" in mat:
+            raise SceneError("%s.alpha: is read only by an alpha mask: set alpha_cutoff too "
+                             "(meshtrace does not blend)" % where)
+        return True
+    cutoff = float(mat["alpha_cutoff"])
+    alpha = float(mat.get("alpha", 1.0))
+    for key in ("albedo", "base_color"):
+        ref = mat.get(key)
+        if isinstance(ref, TexRef):
+            raw, _ = load_raw(mi, ref.path, ref.where)
+            if raw.shape[2] in (2, 4) and not np.all(raw[:, :, -1] >= 1.0):
+                raise SceneError("%s.alpha_cutoff: the %s texture's alpha varies: an alpha mask "
+                                 "that follows a texture has no exact Mitsuba twin" % (where, key))
+    return alpha >= cutoff
 
 
 def normal_map_bsdf(mi, b, ref):
@@ -1252,6 +1276,8 @@ def _gltf_geometry(mi, doc, M, override, tmpdir, stem, shape_with):
         if nmap is not None and UVt is not None:
             ns = np.where(has_n[:, None], Nt.mean(axis=1) if Nt is not None else face, face)
             mirrored = mirrored_uvs(Pt, UVt, ns, gltf=True)
+            if part.tangents is not None:
+                check_tangents(doc, part, tris, Pt, UVt, Nt, has_n, face, mirrored, L)
         for hn in (False, True):
             for mir in (False, True):
                 sel = (has_n == hn) & (mirrored == mir)
@@ -1273,7 +1299,9 @@ def _gltf_geometry(mi, doc, M, override, tmpdir, stem, shape_with):
             if mir:
                 m = dict(mat)
                 m["normal_map"] = mat["normal_map"].flipped()
-            shapes.append(shape_with(shape, m, override[2]))
+            shape = shape_with(shape, m, override[2])
+            if shape is not None:
+                shapes.append(shape)
             continue
         bsdf = mat["bsdf"]
         if mat["normal_map"] is not None:
@@ -1295,6 +1323,43 @@ def _gltf_geometry(mi, doc, M, override, tmpdir, stem, shape_with):
         warn(w)
     bounds = (lo, hi) if np.all(np.isfinite(lo)) else None
     return shapes, lights, {"camera": sc.camera, "bounds": bounds, "emissive": emissive}
+
+
+def check_tangents(doc, part, tris, Pt, UVt, Nt, has_n, face, mirrored, L):
+    """A normal-mapped primitive with its own TANGENT attribute: meshtrace uses those
+    tangents, Mitsuba builds its frame from dp/du (normal_map_bsdf). The translation is
+    exact only where they agree: at every corner, the file's tangent made perpendicular to
+    the shading normal must be Mitsuba's s (to 1e-3), and its bitangent w (n x t) (w
+    flipped by a mirroring transform) must point the way the map's y is read (t, or -t
+    where the green channel is flipped). Anything else is refused."""
+    T = part.tangents[tris]                                      # (n, 3, 4)
+    sign = -1.0 if np.linalg.det(L) < 0 else 1.0
+    Tw = T[:, :, :3] @ L.T
+    n = np.where(has_n[:, None, None], Nt if Nt is not None else 0.0, face[:, None, :])
+    n = n / np.linalg.norm(n, axis=2, keepdims=True)
+    Tw = Tw - n * np.einsum("tkj,tkj->tk", Tw, n)[..., None]
+    lt = np.linalg.norm(Tw, axis=2, keepdims=True)
+    given = (lt[..., 0] > 0) & np.all(T[:, :, 3:] != 0, axis=2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        Tw = Tw / lt
+    dp0, dp1 = Pt[:, 1] - Pt[:, 0], Pt[:, 2] - Pt[:, 0]
+    d0, d1 = UVt[:, 1] - UVt[:, 0], UVt[:, 2] - UVt[:, 0]
+    det = d0[:, 0] * d1[:, 1] - d0[:, 1] * d1[:, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dp_du = (d1[:, 1:2] * dp0 - d0[:, 1:2] * dp1) / det[:, None]
+    sm = dp_du[:, None, :] - n * np.einsum("tj,tkj->tk", dp_du, n)[..., None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sm = sm / np.linalg.norm(sm, axis=2, keepdims=True)
+    y_axis = np.cross(n, sm) * np.where(mirrored, -1.0, 1.0)[:, None, None]
+    bw = (T[:, :, 3] * sign)[..., None] * np.cross(n, Tw)
+    bad = given & ((np.linalg.norm(Tw - sm, axis=2) > 1e-3) |
+                   (np.einsum("tkj,tkj->tk", bw, y_axis) <= 0))
+    if bad.any():
+        raise gr.GltfError(
+            "%s: %s.attributes[\"TANGENT\"]: the file's tangents differ from the frame Mitsuba's "
+            "normalmap builds from the UVs (dp/du) at %d of %d corners; meshtrace uses the "
+            "file's tangents, so the normal map has no exact Mitsuba twin here"
+            % (doc.shown, part.at, int(bad.sum()), bad.size))
 
 
 def framing_camera(lo, hi):
@@ -1443,11 +1508,20 @@ def build_scene_dict(mi, path, args, tmpdir):
         mitsuba_bsdf(mi, materials[name], where)  # validate early
 
     def shape_with(shape, mat, where):
+        """The shape with its material; None where a constant alpha mask cuts it out."""
         shape["bsdf"] = mitsuba_bsdf(mi, mat, where)
+        if not alpha_visible(mi, mat, where):
+            return None
         em = emission_of(mi, mat, where)
         if em is not None:
             shape["emitter"] = em
         return shape
+
+    def add_shape(shape):
+        nonlocal n_shapes
+        if shape is not None:
+            scene["shape_%d" % n_shapes] = shape
+            n_shapes += 1
 
     n_shapes = 0
     for oi, obj in enumerate(doc.get("objects", [])):
@@ -1487,8 +1561,7 @@ def build_scene_dict(mi, path, args, tmpdir):
             if uses_texture(mat):
                 raise SceneError("%s: material '%s' uses a texture, but a sphere has no "
                                  "UVs" % (where, mname))
-            scene["shape_%d" % n_shapes] = shape_with(shape, mat, where)
-            n_shapes += 1
+            add_shape(shape_with(shape, mat, where))
             continue
         mesh_path = os.path.join(base, obj["mesh"])
         if not os.path.exists(mesh_path):
@@ -1502,8 +1575,7 @@ def build_scene_dict(mi, path, args, tmpdir):
             except gr.GltfError as e:
                 raise SceneError("%s: %s" % (where, e))
             for shape in shapes:
-                scene["shape_%d" % n_shapes] = shape
-                n_shapes += 1
+                add_shape(shape)
             for li in lights:
                 scene["light_%d" % n_lights] = li
                 n_lights += 1
@@ -1530,8 +1602,7 @@ def build_scene_dict(mi, path, args, tmpdir):
             shape = {"type": "obj", "filename": fn, "face_normals": not has_vn,
                      "flip_tex_coords": False,
                      "to_world": mi.ScalarTransform4f(M.tolist())}
-            scene["shape_%d" % n_shapes] = shape_with(shape, mat, where)
-            n_shapes += 1
+            add_shape(shape_with(shape, mat, where))
     return scene, dict(width=width, height=height, spp=spp, seed=seed, max_depth=max_depth)
 
 
