@@ -990,10 +990,18 @@ class GltfMaterials:
 
     def all_max(self, ref, channels):
         """Whether the image of `ref` is 1 (the format's maximum) in every texel of
-        `channels` (grey images: their one channel)."""
+        `channels` (0-3: R, G, B, A; a grey image's one channel stands for R, G and B, and
+        an image without alpha has alpha 1)."""
         raw, _ = load_raw(self.mi, ref.path, ref.where)
-        ch = [min(c, raw.shape[2] - 1) if raw.shape[2] < 3 else c for c in channels]
-        return bool(np.all(raw[:, :, ch] >= 1.0))
+        n = raw.shape[2]
+        for c in channels:
+            if c == 3:
+                k = {2: 1, 4: 3}.get(n)
+            else:
+                k = 0 if n < 3 else c
+            if k is not None and not np.all(raw[:, :, k] >= 1.0):
+                return False
+        return True
 
     def get(self, i, prim_at):
         if i in self.cache:
@@ -1099,8 +1107,7 @@ class GltfMaterials:
         if mode not in ("OPAQUE", "MASK", "BLEND"):
             raise self.error(at + ".alphaMode", "is not OPAQUE, MASK or BLEND")
         if mode != "OPAQUE":
-            tex_alpha_one = base_tex is None or self.all_max(base_tex, [3]) or \
-                load_raw(self.mi, base_tex.path, base_tex.where)[0].shape[2] in (1, 3)
+            tex_alpha_one = base_tex is None or self.all_max(base_tex, [3])
             if mode == "BLEND":
                 if not (base[3] == 1.0 and tex_alpha_one):
                     raise self.error(at + ".alphaMode", "BLEND with an alpha below 1 " +
