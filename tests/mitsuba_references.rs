@@ -15,6 +15,11 @@
 //! - `box_area`: an open box lit by a ceiling area light and a dim gradient sky (light
 //!   sampling picks between triangles and the sky); rough_conductor, conductor and
 //!   dielectric spheres among diffuse walls.
+//! - `gltf_room_bare` and `gltf_room`: the glTF room of tests/scenes/gltf_room/ (its node
+//!   tree, primitive modes, accessor forms, materials, emissive texture and punctual
+//!   lights), loaded as a bare file through its own camera and placed by gltf_room.toml as
+//!   an object with a transform of its own. Mitsuba's side reads the glTF with the tools'
+//!   own reader (tools/gltf_read.py), not meshtrace's.
 //!
 //! The references and Mitsuba's own numbers come from
 //! `python3 tools/make_references.py --materials` (tests/references/<scene>.json).
@@ -72,10 +77,17 @@ fn relmse(film: &Film, reference: &[Vec3]) -> f64 {
 fn check(scene_name: &str, device: &str, render: &dyn Fn(&RenderScene, &RenderJob) -> Film) {
     let file = match scene_name {
         "cornell" => "assets/cornell/cornell.toml".to_string(),
+        "gltf_room_bare" => "tests/scenes/gltf_room/room.gltf".to_string(),
         name => format!("tests/scenes/{name}.toml"),
     };
-    let scene = load_scene(&root().join(file)).unwrap();
+    let mut scene = load_scene(&root().join(&file)).unwrap();
     let json = reference_json(scene_name);
+    if file.ends_with(".gltf") {
+        // A bare glTF file has no [render] table: the size is the reference's, as
+        // `meshtrace render room.gltf --width W --height H` sets it.
+        scene.settings.width = json_number(&json, "width") as u32;
+        scene.settings.height = json_number(&json, "height") as u32;
+    }
     let (w, h, reference) =
         read_linear(&root().join(format!("tests/references/{scene_name}_ref.exr"))).unwrap();
     assert_eq!((w, h), (scene.settings.width, scene.settings.height));
@@ -191,4 +203,28 @@ fn cpu_matches_mitsuba_lights() {
 #[test]
 fn gpu_matches_mitsuba_lights() {
     check_gpu("lights");
+}
+
+/// A glTF file as a bare scene: its own camera (deep in its node tree), its emissive quad
+/// and punctual lights under a black sky.
+#[test]
+fn cpu_matches_mitsuba_gltf_room_bare() {
+    check_cpu("gltf_room_bare");
+}
+
+#[test]
+fn gpu_matches_mitsuba_gltf_room_bare() {
+    check_gpu("gltf_room_bare");
+}
+
+/// The same glTF file as a scene-file object: the object's transform on top of the
+/// file's nodes and lights.
+#[test]
+fn cpu_matches_mitsuba_gltf_room() {
+    check_cpu("gltf_room");
+}
+
+#[test]
+fn gpu_matches_mitsuba_gltf_room() {
+    check_gpu("gltf_room");
 }

@@ -15,7 +15,9 @@ Usage:
 
 --materials regenerates the references of the material scenes in tests/scenes/ (all of
 MATERIAL_SCENES below, or the ones named), each with the settings listed there; they are
-checked by tests/material_references.rs.
+checked by tests/mitsuba_references.rs. A scene may be a bare glTF file, which has no
+[render] table: its entry gives the image size (meshtrace's bare-glTF defaults are used
+for the rest: max_depth 8).
 """
 import argparse
 import json
@@ -29,8 +31,8 @@ from compare import relmse  # noqa: E402
 
 REF_SEED = 1_000_000_007 % (1 << 32)
 
-# The material scenes: name -> (scene file, reference spp). Sizes, max_depth and the
-# rest come from the scene files; each reference is budgeted at about 6 minutes of
+# The material scenes: name -> (scene file, reference spp[, (width, height)]). Sizes,
+# max_depth and the rest come from the scene files (a bare glTF file: the size given here); each reference is budgeted at about 6 minutes of
 # Mitsuba (llvm_ad_rgb) on 2 cores. Spheres are Mitsuba's analytic spheres: rendering
 # meshtrace's own icospheres instead (--spheres mesh) changed the images by a relMSE of
 # 2e-5 to 4e-5 at 512 spp with the same seed, below 1% of Mitsuba's relMSE at 64 spp.
@@ -44,6 +46,10 @@ MATERIAL_SCENES = {
     "pbr_subcases": ("tests/scenes/pbr_subcases.toml", 8192),
     # point, spot and directional lights beside an area light
     "lights": ("tests/scenes/lights.toml", 16384),
+    # glTF: the room of tests/scenes/gltf_room/ (tools/gen_gltf_room.py) as a bare file,
+    # seen through its own camera, and placed by gltf_room.toml as an object
+    "gltf_room_bare": ("tests/scenes/gltf_room/room.gltf", 32768, (96, 72)),
+    "gltf_room": ("tests/scenes/gltf_room.toml", 32768),
 }
 
 
@@ -132,10 +138,11 @@ def main():
                          % (n, ", ".join(MATERIAL_SCENES)))
         mi = mr.setup_mitsuba(args.variant)
         for n in names:
-            path, ref_spp = MATERIAL_SCENES[n]
+            path, ref_spp, *size = MATERIAL_SCENES[n]
+            width, height = size[0] if size else (args.width, args.height)
             make_reference(mi, path, n, args.ref_spp or ref_spp, args.spp, args.seeds or 8,
-                           args.out_dir, args.lanes, args.width, args.height,
-                           args.max_depth, args.spheres)
+                           args.out_dir, args.lanes, args.width or width,
+                           args.height or height, args.max_depth, args.spheres)
         return
     if len(args.scene) != 1 or not args.name:
         ap.error("give one scene file and --name (or --materials)")
