@@ -286,7 +286,9 @@ fn rotations_with_general_angles_follow_spec_order() {
     let s = parse_ok("general_trs", &text);
     let t = s.mesh.triangles[0];
     let v = s.mesh.vertices(&t);
-    let corners = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    // The negative scale mirrors, so the loader swaps the last two corners to keep the
+    // front face in front.
+    let corners = [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]];
     for k in 0..3 {
         let r = trs(
             corners[k],
@@ -1050,5 +1052,59 @@ fn builtin_unknown_lists_names() {
     assert!(msg.contains("there are: cornell"), "{msg}");
     for (name, _) in meshtrace::scene::builtin::SCENES {
         assert!(msg.contains(name), "{msg}");
+    }
+}
+
+/// A mirroring object transform keeps the faces the file winds counter-clockwise in front
+/// (so an emitter keeps emitting outwards and a dielectric keeps its inside), for an OBJ
+/// and for a glTF file, whose own mirroring nodes count too: two mirrors cancel.
+#[test]
+fn a_mirroring_object_transform_keeps_front_faces_in_front() {
+    use common::gltf::Asset;
+    let dir = TempDir::new("mirror-object");
+    dir.write("t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let mut a = Asset::new();
+    let mesh = a.triangle(serde_json::json!({}));
+    let plain = a.node(serde_json::json!({ "mesh": mesh, "translation": [0, 0, 1] }));
+    let mirrored = a.node(serde_json::json!({ "mesh": mesh, "scale": [1, -1, 1] }));
+    a.scene(&[plain, mirrored]);
+    dir.write("t.gltf", a.embedded());
+    for (mesh, transform) in [
+        ("t.obj", "scale = [-1.0, 1.0, 1.0]"),
+        ("t.obj", "scale = [2.0, -3.0, 1.0]"),
+        (
+            "t.obj",
+            "matrix = [-1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]",
+        ),
+        ("t.gltf", "scale = [1.0, 1.0, 1.0]"),
+        ("t.gltf", "scale = [-1.0, 1.0, 1.0]"),
+    ] {
+        let toml = format!(
+            "[camera]\nposition = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\n\
+             [[objects]]\nmesh = \"{mesh}\"\n{transform}\n"
+        );
+        let scene = load_scene(&dir.write("scene.toml", toml)).unwrap();
+        for t in &scene.mesh.triangles {
+            let [p0, p1, p2] = scene.mesh.vertices(t);
+            let n = (p1 - p0).cross(p2 - p0);
+            assert!(
+                n.z > 0.0,
+                "{mesh} with {transform}: the front face turned to {n}"
+            );
+        }
+    }
+}
+
+/// An object's mesh must be a format meshtrace reads; the error names the field and file.
+#[test]
+fn an_object_mesh_of_another_format_is_an_error_naming_the_field() {
+    for mesh in ["bunny.ply", "bunny", "scene.toml"] {
+        let text = with_cam(&format!("[[objects]]\nmesh = \"{mesh}\"\n"));
+        let message = invalid("mesh-format", &text, "objects[0].mesh");
+        assert!(message.contains(mesh), "{message}");
+        assert!(
+            message.contains(".obj") && message.contains(".glb"),
+            "{message}"
+        );
     }
 }

@@ -223,14 +223,21 @@ fn bad_texture_parameters_are_errors_naming_the_field() {
         ("t.obj", TRI_UV.as_bytes()),
     ];
     let material = |param: &str| {
-        format!(
-            "[materials.m]\ntype = \"diffuse\"\n{param}\n[[objects]]\nmesh = \"t.obj\"\nmaterial = \"m\"\n"
-        )
+        let kind = if param.starts_with("type") {
+            ""
+        } else {
+            "type = \"diffuse\"\n"
+        };
+        format!("[materials.m]\n{kind}{param}\n[[objects]]\nmesh = \"t.obj\"\nmaterial = \"m\"\n")
     };
     for (param, needles) in [
         (
             "albedo = { texture = \"c.png\", strength = 2.0 }",
             &["materials.m.albedo.strength", "only emission"][..],
+        ),
+        (
+            "type = \"pbr\"\nroughness = { texture = \"c.png\", strength = 2.0 }",
+            &["materials.m.roughness.strength", "only emission"],
         ),
         (
             "albedo = { texture = \"c.png\", scale = [0.0, 1.0] }",

@@ -25,6 +25,13 @@ pub const MAX_PIXELS: u64 = 1 << 26;
 /// Deepest sphere subdivision accepted: 20 * 4^10 = 21M triangles.
 pub const MAX_SPHERE_SUBDIVISIONS: u32 = 10;
 
+/// Whether a path names an OBJ mesh (by its extension, in any case).
+fn is_obj(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+}
+
 /// Loads a scene file (`.toml`), a bare mesh (`.obj`, framed by an automatic camera) or a
 /// glTF file (`.gltf`, `.glb`: its own camera, else framed as a bare mesh).
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
@@ -376,7 +383,17 @@ impl Builder {
                 .normalize_or_zero()
                 .extend(t.w * handedness)
         }));
-        for t in part.triangles {
+        // A mirroring transform turns the winding: swapping two corners keeps the faces
+        // that the file winds counter-clockwise the front ones (emitters keep emitting
+        // outwards, dielectrics keep their inside), as glTF specifies for its nodes.
+        let mirrored = linear.determinant() < 0.0;
+        for mut t in part.triangles {
+            if mirrored {
+                t.p.swap(1, 2);
+                t.n.swap(1, 2);
+                t.t.swap(1, 2);
+                t.g.swap(1, 2);
+            }
             let material = match (material, t.material) {
                 (Some(m), _) => m,
                 (None, Some(i)) => local[i as usize],
@@ -625,7 +642,7 @@ impl Ctx<'_> {
                     (Some(_), false) => {
                         return Err(self.invalid(
                             format!("{field}.strength"),
-                            "only emission textures have a strength",
+                            "only emission textures and normal maps have a strength",
                         ));
                     }
                 };
@@ -795,6 +812,10 @@ impl Ctx<'_> {
                 self.scalar(field, *v, |r| (0.0..=1.0).contains(&r), "in [0, 1]")?,
                 NO_TEXTURE,
             )),
+            ScalarFile::Texture(t) if t.strength.is_some() => Err(self.invalid(
+                format!("{field}.strength"),
+                "only emission textures and normal maps have a strength",
+            )),
             ScalarFile::Texture(t) => Ok((
                 1.0,
                 self.texture(field, t, Usage::Scalar { channel: 0 }, textures)?,
@@ -910,12 +931,21 @@ impl Ctx<'_> {
                         object_error(format!("{shown}: {at}: {message}"))
                     };
                     builder.append_gltf(asset, transform, material, self.files, &error)?;
-                } else {
+                } else if is_obj(&path) {
                     let part = load_obj(&path, self.files)?;
                     if part.triangles.is_empty() {
                         return Err(no_faces());
                     }
                     builder.append_part(part, transform, material, self.files, &object_error)?;
+                } else {
+                    return Err(self.invalid(
+                        field("mesh"),
+                        format!(
+                            "{} is not a mesh meshtrace reads: give an OBJ (.obj) or glTF \
+                             (.gltf, .glb) file",
+                            super::shown(&path).escape_debug()
+                        ),
+                    ));
                 }
             }
             (None, Some(s)) => {

@@ -8,7 +8,7 @@ use super::primitive::read_primitive;
 use super::{Doc, GltfAsset, GltfPart};
 use crate::scene::obj::MeshPart;
 use crate::scene::{Camera, PunctualLight, SceneError};
-use glam::{Mat3, Mat4, Quat, Vec3};
+use glam::{Mat4, Quat, Vec3};
 use gltf::json;
 use gltf::json::extensions::scene::khr_lights_punctual as lights;
 use gltf::json::validation::Checked;
@@ -81,19 +81,11 @@ pub(super) fn load_scene(doc: &Doc, buffers: &Buffers) -> Result<GltfAsset, Scen
             if let Entry::Vacant(e) = meshes.entry(m) {
                 e.insert(read_mesh(buffers, m, &mut materials, &at)?);
             }
-            // Negative determinant: the front faces wind clockwise (the specification's
-            // rule), so the corners are swapped to keep meshtrace's counter-clockwise.
-            let mirrored = Mat3::from_mat4(world).determinant() < 0.0;
+            // A node that mirrors (negative determinant) turns its faces' winding, which
+            // the loader undoes for every transform (`Builder::append_geometry`), as glTF
+            // asks: the faces authored counter-clockwise stay the front ones.
             for (p, part) in meshes.get(&m).into_iter().flatten() {
-                let mut part = clone_part(part);
-                if mirrored {
-                    for t in &mut part.triangles {
-                        t.p.swap(1, 2);
-                        t.n.swap(1, 2);
-                        t.t.swap(1, 2);
-                        t.g.swap(1, 2);
-                    }
-                }
+                let part = clone_part(part);
                 asset.parts.push(GltfPart {
                     part,
                     matrix: world,
