@@ -842,3 +842,27 @@ fn bare_obj_is_framed_by_the_vertices_its_faces_use() {
     assert_eq!(padded.mesh.triangles.len(), 12);
     assert_eq!(padded.camera, plain.camera);
 }
+
+/// Glass (`illum 7`) without `Ni` has index 1.5, not the 1 that would make it vanish; a
+/// negative `Kd` is read as 0 with a warning naming the library's line.
+#[test]
+fn mtl_glass_without_ni_and_negative_colours() {
+    let dir = TempDir::new("mtl-defaults");
+    dir.write(
+        "m.mtl",
+        "newmtl glass\nillum 7\nnewmtl dark\nKd -0.5 0.25 0.5\n",
+    );
+    let obj = dir.write(
+        "m.obj",
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl glass\nf 1 2 3\nusemtl dark\nf 1 3 2\n",
+    );
+    let s = load_scene(&obj).unwrap();
+    let material = |k: usize| s.materials[s.mesh.triangles[k].material as usize];
+    let glass = material(0);
+    assert_eq!(glass.kind, MaterialKind::DIELECTRIC);
+    assert_eq!(glass.ior, 1.5);
+    assert_eq!(material(1).albedo, Vec3::new(0.0, 0.25, 0.5));
+    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+    let w = &s.warnings[0];
+    assert!(w.contains("m.mtl:4") && w.contains("Kd"), "{w}");
+}

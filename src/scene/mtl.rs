@@ -107,9 +107,21 @@ pub(super) fn parse_mtl(bytes: &[u8]) -> Result<Library, BadLine> {
                     ..MtlMaterial::default()
                 });
             }
-            "Kd" => m.diffuse = Some(color(keyword, words, false).map_err(bad)?),
-            "Ks" => m.specular = Some(color(keyword, words, false).map_err(bad)?),
-            "Ke" => m.emission = Some(color(keyword, words, true).map_err(bad)?),
+            "Kd" | "Ks" | "Ke" => {
+                let c = color(keyword, words, keyword == "Ke").map_err(bad)?;
+                if c.min_element() < 0.0 {
+                    warnings.push((
+                        i + 1,
+                        format!("`{keyword}` {c} has negative values; they are read as 0"),
+                    ));
+                }
+                let c = Some(c.max(Vec3::ZERO));
+                match keyword {
+                    "Kd" => m.diffuse = c,
+                    "Ks" => m.specular = c,
+                    _ => m.emission = c,
+                }
+            }
             "Ni" => m.optical_density = Some(first_number(keyword, words).map_err(bad)?),
             "d" => m.dissolve = Some(first_number(keyword, words).map_err(bad)?),
             "Pm" => m.metallic = Some(only_number(keyword, words).map_err(bad)?),

@@ -589,7 +589,11 @@ pub fn map_mtl(m: &MtlMaterial, dir: &Path, textures: &mut Vec<TextureRef>) -> M
     if glass {
         mat.kind = MaterialKind::DIELECTRIC;
         mat.albedo = Vec3::ONE;
-        mat.ior = if ior > 0.0 { ior } else { 1.5 };
+        // Without a usable `Ni`, glass of index 1.5 (index 1 would be invisible).
+        mat.ior = match m.optical_density {
+            Some(n) if n > 0.0 => n,
+            _ => 1.5,
+        };
     } else if let Some(map) = &m.map_metallic {
         mat.kind = MaterialKind::PBR;
         albedo_map(&mut mat, &mut slot);
