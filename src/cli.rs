@@ -18,6 +18,15 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+/// `println!` that returns an error instead of panicking when standard output is closed
+/// (`meshtrace info scene.toml | head`); `main` ends quietly on a broken pipe.
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout(), $($arg)*)?
+    }};
+}
+
 #[derive(Parser)]
 #[command(
     name = "meshtrace",
@@ -279,18 +288,18 @@ pub fn info(path: &Path) -> Result<()> {
     let rs = RenderScene::new(&scene, &BuildParams::default())?;
     let st = &rs.bvh.stats;
     let name = scene.path.as_deref().unwrap_or(path).display();
-    println!("scene        {name}");
-    println!("triangles    {}", st.triangles);
-    println!("vertices     {}", scene.mesh.positions.len());
-    println!("materials    {}", scene.materials.len());
+    out!("scene        {name}");
+    out!("triangles    {}", st.triangles);
+    out!("vertices     {}", scene.mesh.positions.len());
+    out!("materials    {}", scene.materials.len());
     let bounds = rs.bvh.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds());
     if bounds.is_empty() {
-        println!("bounds       empty");
+        out!("bounds       empty");
     } else {
         let v = |p: Vec3| format!("({:.4}, {:.4}, {:.4})", p.x, p.y, p.z);
-        println!("bounds       {} to {}", v(bounds.min), v(bounds.max));
-        println!("centre       {}", v(bounds.center()));
-        println!("size         {}", v(bounds.extent()));
+        out!("bounds       {} to {}", v(bounds.min), v(bounds.max));
+        out!("centre       {}", v(bounds.center()));
+        out!("size         {}", v(bounds.extent()));
     }
     let sky = rs.sky_pmf > 0.0;
     let punctual = rs
@@ -299,25 +308,25 @@ pub fn info(path: &Path) -> Result<()> {
         .filter(|&&e| e & LIGHT_EMITTER != 0 && e != SKY_EMITTER)
         .count();
     let tris = rs.emitters.len() - punctual - sky as usize;
-    println!(
+    out!(
         "emitters     {tris} triangles, {} point, spot or directional lights{}",
         punctual,
         if sky { " and the sky" } else { "" }
     );
-    print_textures(&scene);
-    println!(
+    print_textures(&scene)?;
+    out!(
         "bvh build    {:.2} ms ({:.2} M triangles/s)",
         st.build_seconds * 1e3,
         st.triangles as f64 / st.build_seconds.max(1e-9) / 1e6
     );
-    println!("sah cost     {:.3}", st.sah_cost);
-    println!(
+    out!("sah cost     {:.3}", st.sah_cost);
+    out!(
         "nodes        {} ({} leaves, {} bytes)",
         st.nodes,
         st.leaves,
         st.nodes * 32
     );
-    println!("depth        {}", st.depth);
+    out!("depth        {}", st.depth);
     let hist: Vec<String> = st
         .leaf_sizes
         .iter()
@@ -325,16 +334,16 @@ pub fn info(path: &Path) -> Result<()> {
         .filter(|(_, n)| **n > 0)
         .map(|(k, n)| format!("{k}:{n}"))
         .collect();
-    println!("leaf sizes   {}", hist.join(" "));
+    out!("leaf sizes   {}", hist.join(" "));
     if let Some(kib) = peak_memory_kib() {
-        println!("peak memory  {:.1} MiB", kib as f64 / 1024.0);
+        out!("peak memory  {:.1} MiB", kib as f64 / 1024.0);
     }
     Ok(())
 }
 
 /// The scene's textures: how many, the distinct images they read, and the memory their
 /// texels take (the same on the host and the device), then one line per image.
-fn print_textures(scene: &Scene) {
+fn print_textures(scene: &Scene) -> Result<()> {
     let t = &scene.textures;
     let mut images: Vec<(u32, usize)> = Vec::new();
     for (k, r) in t.records.iter().enumerate() {
@@ -342,7 +351,7 @@ fn print_textures(scene: &Scene) {
             images.push((r.offset, k));
         }
     }
-    println!(
+    out!(
         "textures     {} ({} images, {})",
         t.records.len(),
         images.len(),
@@ -355,7 +364,7 @@ fn print_textures(scene: &Scene) {
         } else {
             ("RGBA 8-bit", 4)
         };
-        println!(
+        out!(
             "  {}  {}x{} {kind}, {}",
             t.names[k],
             r.width,
@@ -363,6 +372,7 @@ fn print_textures(scene: &Scene) {
             mebibytes(r.width as u64 * r.height as u64 * bytes)
         );
     }
+    Ok(())
 }
 
 fn mebibytes(bytes: u64) -> String {
@@ -382,9 +392,13 @@ pub fn adapters() -> Result<()> {
         bail!("{}", GpuError::NoAdapter);
     }
     for a in list {
-        println!(
+        out!(
             "{}  {}  ({}, {}, {})",
-            a.index, a.name, a.backend, a.device_type, a.driver
+            a.index,
+            a.name,
+            a.backend,
+            a.device_type,
+            a.driver
         );
     }
     Ok(())
@@ -433,9 +447,13 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
             gpu.as_ref()
                 .map_or(String::new(), |g| format!("; GPU: {}", g.adapter.name))
         );
-        println!(
+        out!(
             "{:<22} {:<6} {:<16} {:>12} {:>18}  unit",
-            "scene", "device", "measure", "median", "min..max"
+            "scene",
+            "device",
+            "measure",
+            "median",
+            "min..max"
         );
     }
     let mut all = Vec::new();
@@ -461,7 +479,7 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
         )?;
         if !args.json {
             for m in &measures {
-                println!(
+                out!(
                     "{:<22} {:<6} {:<16} {:>12.3} {:>18}  {}",
                     m.scene,
                     m.device,
@@ -477,7 +495,7 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
                     .iter()
                     .find(|c| c.device == "cpu" && c.measure == g.measure && c.median > 0.0)
                 {
-                    println!(
+                    out!(
                         "{:<22} {:<6} {:<16} {:>12.3} {:>18}  GPU/CPU",
                         g.scene,
                         "ratio",
@@ -491,7 +509,7 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
         all.extend(measures);
     }
     if args.json {
-        println!("{}", meshtrace::bench::to_json(&all));
+        out!("{}", meshtrace::bench::to_json(&all));
     }
     Ok(())
 }

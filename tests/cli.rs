@@ -425,3 +425,23 @@ fn bench_reports_every_measure() {
     assert_eq!(ratios.len(), 5, "{table}");
     assert!(ratios.iter().all(|l| l.ends_with("GPU/CPU")), "{table}");
 }
+
+/// A reader that stops early (`meshtrace info scene | head -1`) ends `info` quietly: exit 0
+/// and nothing on stderr, where `println!` would panic on the broken pipe.
+#[test]
+fn info_into_a_closed_pipe_ends_quietly() {
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_meshtrace"))
+        .args(["info", "builtin:cornell"])
+        .env("NODEVICE_SELECT", "1")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Closing the read end before the scene has loaded makes every write fail with EPIPE.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.is_empty(), "stderr: {stderr}");
+    assert_eq!(out.status.code(), Some(0), "stderr: {stderr}");
+}
