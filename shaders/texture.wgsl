@@ -23,27 +23,49 @@ fn texel(t: Texture, x: u32, y: u32) -> vec4<f32> {
     );
 }
 
+// The texels a bilinear lookup blends along one axis, and the weight of the second.
+struct TexelSpan {
+    a: u32,
+    b: u32,
+    f: f32,
+}
+
+// mirror: src/render/texture.rs `texel_span`
+fn texel_span(s: f32, size: u32, mode: u32) -> TexelSpan {
+    let n = i32(size);
+    if mode == WRAP_CLAMP {
+        let x = clamp(s, 0.0, 1.0) * f32(size) - 0.5;
+        let x0 = floor(x);
+        let i = i32(x0);
+        return TexelSpan(u32(clamp(i, 0, n - 1)), u32(clamp(i + 1, 0, n - 1)), x - x0);
+    }
+    if mode == WRAP_MIRROR {
+        let f = s - 2.0 * floor(s * 0.5);
+        let x = f * f32(size) - 0.5;
+        let x0 = floor(x);
+        let a = (i32(x0) + 2 * n) % (2 * n);
+        let b = (a + 1) % (2 * n);
+        let ma = select(2 * n - 1 - a, a, a < n);
+        let mb = select(2 * n - 1 - b, b, b < n);
+        return TexelSpan(u32(ma), u32(mb), x - x0);
+    }
+    let f = s - floor(s);
+    let x = f * f32(size) - 0.5;
+    let x0 = floor(x);
+    let a = u32((i32(x0) + n) % n);
+    return TexelSpan(a, (a + 1u) % size, x - x0);
+}
+
 // mirror: src/render/texture.rs `texture_lookup`
 fn texture_lookup(index: u32, uv: vec2<f32>) -> vec4<f32> {
     let t = load_texture(index);
     let m = t.uv_matrix;
     let s = vec2<f32>(m.x * uv.x + m.y * uv.y + t.uv_offset.x, m.z * uv.x + m.w * uv.y + t.uv_offset.y);
-    let f = s - floor(s);
-    let x = f.x * f32(t.width) - 0.5;
-    let y = f.y * f32(t.height) - 0.5;
-    let x0 = floor(x);
-    let y0 = floor(y);
-    let fx = x - x0;
-    let fy = y - y0;
-    let w = i32(t.width);
-    let h = i32(t.height);
-    let xa = u32((i32(x0) + w) % w);
-    let ya = u32((i32(y0) + h) % h);
-    let xb = (xa + 1u) % t.width;
-    let yb = (ya + 1u) % t.height;
-    let top = texel(t, xa, ya) * (1.0 - fx) + texel(t, xb, ya) * fx;
-    let bottom = texel(t, xa, yb) * (1.0 - fx) + texel(t, xb, yb) * fx;
-    return top * (1.0 - fy) + bottom * fy;
+    let x = texel_span(s.x, t.width, t.wrap & 255u);
+    let y = texel_span(s.y, t.height, t.wrap >> 8u);
+    let top = texel(t, x.a, y.a) * (1.0 - x.f) + texel(t, x.b, y.a) * x.f;
+    let bottom = texel(t, x.a, y.b) * (1.0 - x.f) + texel(t, x.b, y.b) * x.f;
+    return top * (1.0 - y.f) + bottom * y.f;
 }
 
 // mirror: src/render/texture.rs `triangle_uv`

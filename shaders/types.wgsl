@@ -40,8 +40,8 @@ struct TriUvs {
 }
 
 // mirror: src/scene/texture.rs `Texture` (48 bytes): an image in the texel table, its
-// format (a TEX_* code), the UV map uv_matrix (rows: xy, zw) · uv + uv_offset, and the
-// channel a scalar parameter reads.
+// format (a TEX_* code), the UV map uv_matrix (rows: xy, zw) · uv + uv_offset, the
+// channel a scalar parameter reads, and the WRAP_* codes along u (low byte) and v.
 struct Texture {
     offset: u32,
     width: u32,
@@ -50,7 +50,7 @@ struct Texture {
     uv_matrix: vec4<f32>,
     uv_offset: vec2<f32>,
     channel: u32,
-    _pad: u32,
+    wrap: u32,
 }
 
 // mirror: src/render/mod.rs `Light` (64 bytes): a punctual light; kind is a LIGHT_* code.

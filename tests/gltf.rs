@@ -11,7 +11,7 @@ use common::gltf::*;
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use meshtrace::scene::material::{MAT_ALPHA_MASK, MAT_THIN_WALLED};
 use meshtrace::scene::{
-    Camera, MaterialKind, NO_TANGENT, NO_TEXTURE, PunctualLight, Scene, Sky, TextureFormat,
+    Camera, MaterialKind, NO_TANGENT, NO_TEXTURE, PunctualLight, Scene, Sky, TextureFormat, Wrap,
     load_scene,
 };
 use serde_json::json;
@@ -337,7 +337,9 @@ fn materials_become_pbr_with_every_extension() {
         "images",
         json!({ "bufferView": image_view, "mimeType": "image/png" }),
     );
-    a.push("textures", json!({ "source": 0 }));
+    // CLAMP_TO_EDGE along u, MIRRORED_REPEAT along v.
+    a.push("samplers", json!({ "wrapS": 33071, "wrapT": 33648 }));
+    a.push("textures", json!({ "source": 0, "sampler": 0 }));
     let t = a.floats(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0], "VEC2");
     let mesh = a.triangle(json!({ "attributes": { "TEXCOORD_0": t }, "material": 0 }));
     let prim = a.json["meshes"][mesh]["primitives"][0].clone();
@@ -426,6 +428,11 @@ fn materials_become_pbr_with_every_extension() {
         records
             .iter()
             .all(|r| r.offset == records[0].offset && r.width == 2)
+    );
+    assert!(
+        records
+            .iter()
+            .all(|r| r.wrap == Wrap::pack(Wrap::CLAMP, Wrap::MIRROR))
     );
     assert_eq!(scene.textures.texels.len(), 2, "the image is packed once");
     assert_eq!(

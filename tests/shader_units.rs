@@ -1067,7 +1067,8 @@ fn trace_path_matches_on_mesh_scene() {
 
 /// `texture_lookup` and `material_at` against their Rust twins over 12,000 random texture
 /// coordinates (far outside [0, 1] too, so wrapping is exercised), on an sRGB PNG, a linear
-/// PNG read as roughness and an EXR emission, each with its own UV scale.
+/// PNG read as roughness and an EXR emission, each with its own UV scale, and on textures
+/// that clamp or mirror along u or v.
 #[test]
 fn texture_lookup_matches() {
     let Some(ctx) = common::gpu("texture_lookup_matches") else {
@@ -1095,17 +1096,22 @@ fn texture_lookup_matches() {
         [materials.b]\ntype = \"rough_conductor\"\nalbedo = [0.9, 0.8, 0.7]\n\
         roughness = { texture = \"rough.png\", scale = [-1.0, 0.75] }\n\
         [materials.c]\ntype = \"diffuse\"\nemission = { texture = \"light.exr\", strength = 3.0 }\n\
+        [materials.d]\ntype = \"diffuse\"\n\
+        albedo = { texture = \"albedo.png\", scale = [1.5, -2.0], wrap = [\"mirror\", \"clamp\"] }\n\
+        [materials.e]\ntype = \"diffuse\"\nalbedo = { texture = \"rough.png\", wrap = [\"clamp\", \"mirror\"] }\n\
         [[objects]]\nmesh = \"quad.obj\"\nmaterial = \"a\"\n\
         [[objects]]\nmesh = \"quad.obj\"\nmaterial = \"b\"\n\
-        [[objects]]\nmesh = \"quad.obj\"\nmaterial = \"c\"\n";
+        [[objects]]\nmesh = \"quad.obj\"\nmaterial = \"c\"\n\
+        [[objects]]\nmesh = \"quad.obj\"\nmaterial = \"d\"\n\
+        [[objects]]\nmesh = \"quad.obj\"\nmaterial = \"e\"\n";
     let scene = meshtrace::scene::load_scene(&dir.write("scene.toml", toml)).unwrap();
     let rs = RenderScene::new(&scene, &BuildParams::default()).unwrap();
-    assert_eq!(rs.textures.len(), 3);
+    assert_eq!(rs.textures.len(), 5);
     let settings = scene.settings;
     let mut cases = Vec::new();
     while cases.len() < 12_000 {
         let uv = Vec2::new(r.range(-20.0, 20.0), r.range(-20.0, 20.0));
-        let (t, m) = (r.below(3) as u32, r.below(3) as u32);
+        let (t, m) = (r.below(5) as u32, r.below(5) as u32);
         cases.push([[b(uv.x), b(uv.y), t, m], [0; 4]]);
     }
     let out = run(&ctx, &rs, &settings, "test_texture", &cases);

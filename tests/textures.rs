@@ -256,6 +256,10 @@ fn bad_texture_parameters_are_errors_naming_the_field() {
             &["scene.toml:"],
         ),
         (
+            "albedo = { texture = \"c.png\", wrap = \"tile\" }",
+            &["materials.m.albedo.wrap", "unknown wrap mode `tile`"],
+        ),
+        (
             "normal_map = { texture = \"gone.png\" }",
             &["materials.m.normal_map.texture", "gone.png"],
         ),
@@ -365,7 +369,14 @@ fn mtl_texture_maps_load_with_their_options() {
             .any(|w| needles.iter().all(|n| w.contains(n)))
     };
     assert!(warned(&["m.mtl:3", "-o"]), "{:?}", s.warnings);
-    assert!(warned(&["m.mtl:3", "-clamp"]), "{:?}", s.warnings);
+    assert!(!warned(&["-clamp"]), "{:?}", s.warnings);
+    let clamp = meshtrace::scene::Wrap::CLAMP;
+    assert_eq!(
+        t[wood.albedo_texture as usize].wrap,
+        meshtrace::scene::Wrap::pack(clamp, clamp),
+        "-clamp on"
+    );
+    assert_eq!(t[lamp.emission_texture as usize].wrap, 0, "repeats");
     assert!(warned(&["m.mtl:4", "map_d"]), "{:?}", s.warnings);
     assert!(warned(&["missing.png", "falls back"]), "{:?}", s.warnings);
 }
@@ -423,6 +434,10 @@ fn a_malformed_map_option_is_an_error_naming_the_library_line() {
         ("newmtl a\nmap_Kd -zz 1 c.png\n", "unknown option"),
         ("newmtl a\nmap_Kd -s c.png\n", "-s needs"),
         ("newmtl a\nmap_Kd -s 2 2\n", "names no image"),
+        (
+            "newmtl a\nmap_Kd -clamp yes c.png\n",
+            "-clamp takes on or off",
+        ),
     ] {
         dir.write("m.mtl", mtl);
         let obj = dir.write("m.obj", format!("mtllib m.mtl\n{TRI_UV}"));
@@ -535,4 +550,46 @@ fn textures_beyond_the_adapter_limits_are_an_error_naming_the_limit() {
     }
     // With the adapter's own limits it fits.
     assert!(meshtrace::render::gpu::GpuRenderer::new(&ctx, &rs).is_ok());
+}
+
+/// The wrap modes along u, on a 4 × 1 float image of texels 0, 1, 2, 3 (texel centres at
+/// u = 0.125, 0.375, ...): repeat tiles, clamp extends the edge texels, mirror reflects
+/// about every integer u. The expected values are worked out by hand from those rules.
+#[test]
+fn wrap_modes_repeat_clamp_and_mirror_as_glsl_does() {
+    use meshtrace::render::texture::texture_lookup;
+    let dir = TempDir::new("wrap-modes");
+    let texels: Vec<[f32; 4]> = (0..4).map(|i| [i as f32, 0.0, 0.0, 1.0]).collect();
+    dir.write_exr("ramp.exr", 4, 1, &texels);
+    dir.write("quad.obj", QUAD);
+    let cases: [(f32, [f32; 3]); 7] = [
+        // u: repeat, clamp, mirror
+        (0.125, [0.0, 0.0, 0.0]),
+        (0.0, [1.5, 0.0, 0.0]),
+        (1.0, [1.5, 3.0, 3.0]),
+        (1.125, [0.0, 3.0, 3.0]),
+        (-0.375, [2.0, 0.0, 1.0]),
+        (2.375, [1.0, 3.0, 1.0]),
+        (1.3, [0.7, 3.0, 2.3]),
+    ];
+    for (k, mode) in ["repeat", "clamp", "mirror"].into_iter().enumerate() {
+        let toml = format!(
+            "[camera]\nposition = [0.0, 0.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\n\
+             [materials.m]\ntype = \"diffuse\"\n\
+             emission = {{ texture = \"ramp.exr\", wrap = [\"{mode}\", \"clamp\"] }}\n\
+             [[objects]]\nmesh = \"quad.obj\"\nmaterial = \"m\"\n"
+        );
+        let scene = load_scene(&dir.write("scene.toml", toml)).unwrap();
+        let rs = RenderScene::new(&scene, &BuildParams::default()).unwrap();
+        for (u, expected) in cases {
+            for v in [0.5, -3.0, 7.25] {
+                let got = texture_lookup(&rs, 0, glam::Vec2::new(u, v)).x;
+                assert!(
+                    (got - expected[k]).abs() < 1e-5,
+                    "{mode} at u = {u}, v = {v}: got {got}, expected {}",
+                    expected[k]
+                );
+            }
+        }
+    }
 }

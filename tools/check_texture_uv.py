@@ -266,11 +266,12 @@ def check_texture_transform_test(mi, tmp):
 
 def check_parse_map():
     ok = True
-    cases = [("tex.png", ("tex.png", (1.0, 1.0))),
-             ("-s 3 3 tex.png", ("tex.png", (3.0, 3.0))),
-             ("-s 2 tex.png", ("tex.png", (2.0, 1.0))),
-             ("-s 2 0.5 1 -o 0.1 0.2 -clamp on my tex.png", ("my tex.png", (2.0, 0.5))),
-             ("-bm 0.5 -o -0.25 0 0 a.png", ("a.png", (1.0, 1.0)))]
+    cases = [("tex.png", ("tex.png", (1.0, 1.0), "repeat")),
+             ("-s 3 3 tex.png", ("tex.png", (3.0, 3.0), "repeat")),
+             ("-s 2 tex.png", ("tex.png", (2.0, 1.0), "repeat")),
+             ("-s 2 0.5 1 -o 0.1 0.2 -clamp on my tex.png", ("my tex.png", (2.0, 0.5), "clamp")),
+             ("-clamp off a.png", ("a.png", (1.0, 1.0), "repeat")),
+             ("-bm 0.5 -o -0.25 0 0 a.png", ("a.png", (1.0, 1.0), "repeat"))]
     for rest, want in cases:
         got = mr.parse_map(rest, "check")
         good = got == want

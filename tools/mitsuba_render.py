@@ -212,8 +212,11 @@ ROUGHNESS_TEXTURE_REFUSED = (
 
 
 def toml_texture(v, base, where, emission):
-    """{ texture = "file", scale = [su, sv], strength = s (emission only) } -> TexRef."""
-    check_keys(v, {"texture", "scale", "strength"} if emission else {"texture", "scale"}, where)
+    """{ texture = "file", scale = [su, sv], wrap = mode or [u, v], strength = s (emission
+    only) } -> TexRef. Mitsuba's bitmap has one wrap mode for both axes, so [u, v] must
+    agree; meshtrace's names (repeat, clamp, mirror) are Mitsuba's."""
+    keys = {"texture", "scale", "wrap"}
+    check_keys(v, keys | {"strength"} if emission else keys, where)
     if "texture" not in v:
         raise SceneError("%s: a texture table needs `texture`" % where)
     name = v["texture"]
@@ -229,7 +232,16 @@ def toml_texture(v, base, where, emission):
     strength = v.get("strength", 1.0)
     if not isinstance(strength, (int, float)) or isinstance(strength, bool):
         raise SceneError("%s.strength must be a number" % where)
-    return TexRef(path, (float(sc[0]), float(sc[1])), [float(strength)] * 3, where)
+    wrap = v.get("wrap", "repeat")
+    if isinstance(wrap, list) and len(wrap) == 2:
+        if wrap[0] != wrap[1]:
+            raise SceneError("%s.wrap: %s differs between u and v: Mitsuba's bitmap has one "
+                             "wrap mode for both axes (no exact twin)" % (where, wrap))
+        wrap = wrap[0]
+    if wrap not in ("repeat", "clamp", "mirror"):
+        raise SceneError("%s.wrap must be repeat, clamp or mirror, got %r" % (where, wrap))
+    return TexRef(path, (float(sc[0]), float(sc[1])), [float(strength)] * 3, where,
+                  wrap=wrap)
 
 
 def resolve_toml_material(mat, base, where):
@@ -363,10 +375,12 @@ def _is_number(t):
 
 
 def parse_map(rest, where):
-    """`[-flag args ...] file name` of an MTL map -> (file name, (su, sv)). `-s su [sv
-    [sw]]` sets the scale (missing ones 1); every other flag is ignored with a warning."""
+    """`[-flag args ...] file name` of an MTL map -> (file name, (su, sv), wrap mode).
+    `-s su [sv [sw]]` sets the scale (missing ones 1), `-clamp on` the wrap mode "clamp"
+    (else "repeat"); every other flag is ignored with a warning."""
     tok = rest.split()
     scale = (1.0, 1.0)
+    wrap = "repeat"
     i = 0
     while i < len(tok) and tok[i].startswith("-") and not _is_number(tok[i]):
         flag = tok[i]
@@ -383,13 +397,17 @@ def parse_map(rest, where):
         if flag == "-s":
             s = [float(x) for x in args] + [1.0, 1.0]
             scale = (s[0], s[1])
+        elif flag == "-clamp":
+            if args[0] not in ("on", "off"):
+                raise SceneError("%s: -clamp takes on or off, got %s" % (where, args[0]))
+            wrap = "clamp" if args[0] == "on" else "repeat"
         else:
             warn("%s: option %s%s ignored" % (where, flag,
                                               "" if flag in MTL_MAP_FLAGS else " (unknown)"))
     name = " ".join(tok[i:])
     if not name:
         raise SceneError("%s: no file name" % where)
-    return name, scale
+    return name, scale, wrap
 
 
 def read_mtl(path):
@@ -428,7 +446,8 @@ def mtl_to_material(m, name="?"):
         v = m.get(key)
         if v is None:
             return default
-        return [v[0]] * 3 if len(v) < 3 else v[:3]
+        # negative values are read as 0, as meshtrace does (with a warning there)
+        return [max(0.0, x) for x in ([v[0]] * 3 if len(v) < 3 else v[:3])]
     kd = rgb("Kd", [0.8, 0.8, 0.8])
     ke = rgb("Ke", [0.0, 0.0, 0.0])
     illum = int(m["illum"][0]) if "illum" in m else None
@@ -444,12 +463,12 @@ def mtl_to_material(m, name="?"):
         if key not in m:
             return None
         w = "%s: %s" % (where, key)
-        fname, scale = parse_map(m[key], w)
+        fname, scale, wrap = parse_map(m[key], w)
         path = os.path.join(os.path.dirname(mtl_path), fname)
         if not os.path.isfile(path):
             warn("%s: texture file not found: %s (the constant factor is used)" % (w, path))
             return None
-        return TexRef(path, scale, [float(x) for x in factor], w)
+        return TexRef(path, scale, [float(x) for x in factor], w, wrap=wrap)
 
     if "map_Pm" in m:
         raise SceneError("%s: map_Pm is not translated to Mitsuba (metallic texture)" % where)

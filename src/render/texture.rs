@@ -1,11 +1,12 @@
 //! Texture lookups, the same on both renderers: texels decoded through one table
-//! ([`RenderScene::texel_lut`]) for 8-bit images, bilinear filtering with repeat wrapping,
+//! ([`RenderScene::texel_lut`]) for 8-bit images, bilinear filtering with repeat, clamp or
+//! mirror wrapping,
 //! and materials whose textured parameters are evaluated at a surface point. Every
 //! function has a WGSL twin of the same name in `shaders/texture.wgsl`.
 
 use super::{RenderScene, TRI_UV};
 use crate::scene::material::MAT_ALPHA_MASK;
-use crate::scene::{Material, NO_TEXTURE, Texture, TextureFormat};
+use crate::scene::{Material, NO_TEXTURE, Texture, TextureFormat, Wrap};
 use glam::{Vec2, Vec3, Vec4};
 
 /// Texel (`x`, `y`) of texture `t`, decoded to linear RGBA: 8-bit channels through the
@@ -38,9 +39,46 @@ pub fn texel(scene: &RenderScene, t: &Texture, x: u32, y: u32) -> Vec4 {
     )
 }
 
+/// The two texels a bilinear lookup blends along one axis of `size` texels, and the
+/// weight of the second, at coordinate `s` (1 spans the image) wrapped by `mode`:
+/// repeating, clamped to the edge texels, or repeating with every other copy mirrored.
+/// mirror: shaders/texture.wgsl `texel_span`
+pub fn texel_span(s: f32, size: u32, mode: u32) -> (u32, u32, f32) {
+    let n = size as i32;
+    if mode == Wrap::CLAMP.0 {
+        // Beyond the edge every coordinate reads the edge texel, so clamping first also
+        // keeps the integer conversion in range.
+        let x = s.clamp(0.0, 1.0) * size as f32 - 0.5;
+        let x0 = x.floor();
+        let i = x0 as i32;
+        return (
+            i.clamp(0, n - 1) as u32,
+            (i + 1).clamp(0, n - 1) as u32,
+            x - x0,
+        );
+    }
+    if mode == Wrap::MIRROR.0 {
+        // One period is the image and its mirror image: 2 · size texels.
+        let f = s - 2.0 * (s * 0.5).floor();
+        let x = f * size as f32 - 0.5;
+        let x0 = x.floor();
+        let a = (x0 as i32 + 2 * n) % (2 * n);
+        let b = (a + 1) % (2 * n);
+        let mirror = |i: i32| (if i < n { i } else { 2 * n - 1 - i }) as u32;
+        return (mirror(a), mirror(b), x - x0);
+    }
+    // Only the fractional part matters, which also keeps the integer conversions in range
+    // for any finite coordinate.
+    let f = s - s.floor();
+    let x = f * size as f32 - 0.5;
+    let x0 = x.floor();
+    let a = ((x0 as i32 + n) % n) as u32;
+    (a, (a + 1) % size, x - x0)
+}
+
 /// Texture `index` at `uv` (v running down from the image's top edge), mapped by the
-/// texture's UV transform: bilinear between the four nearest texel centres, wrapping
-/// around the edges.
+/// texture's UV transform: bilinear between the four nearest texel centres, wrapped along
+/// u and v by the texture's modes.
 /// mirror: shaders/texture.wgsl `texture_lookup`
 pub fn texture_lookup(scene: &RenderScene, index: u32, uv: Vec2) -> Vec4 {
     let t = &scene.textures[index as usize];
@@ -49,18 +87,8 @@ pub fn texture_lookup(scene: &RenderScene, index: u32, uv: Vec2) -> Vec4 {
         m[0] * uv.x + m[1] * uv.y + t.uv_offset[0],
         m[2] * uv.x + m[3] * uv.y + t.uv_offset[1],
     );
-    // The image repeats: only the fractional part matters, which also keeps the integer
-    // conversions below in range for any finite coordinate.
-    let f = s - s.floor();
-    let x = f.x * t.width as f32 - 0.5;
-    let y = f.y * t.height as f32 - 0.5;
-    let (x0, y0) = (x.floor(), y.floor());
-    let (fx, fy) = (x - x0, y - y0);
-    let (w, h) = (t.width as i32, t.height as i32);
-    let xa = ((x0 as i32 + w) % w) as u32;
-    let ya = ((y0 as i32 + h) % h) as u32;
-    let xb = (xa + 1) % t.width;
-    let yb = (ya + 1) % t.height;
+    let (xa, xb, fx) = texel_span(s.x, t.width, t.wrap & 255);
+    let (ya, yb, fy) = texel_span(s.y, t.height, t.wrap >> 8);
     let top = texel(scene, t, xa, ya) * (1.0 - fx) + texel(scene, t, xb, ya) * fx;
     let bottom = texel(scene, t, xa, yb) * (1.0 - fx) + texel(scene, t, xb, yb) * fx;
     top * (1.0 - fy) + bottom * fy

@@ -145,14 +145,24 @@ pub enum ScalarFile {
     Texture(TextureFile),
 }
 
-/// `{ texture = "file.png", scale = [su, sv], strength = s }`: an image file relative to
-/// the scene file, its UV tiling, and for emission a radiance scale.
+/// `{ texture = "file.png", scale = [su, sv], wrap = "clamp", strength = s }`: an image
+/// file relative to the scene file, its UV tiling, its wrap mode, and for emission a
+/// radiance scale.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TextureFile {
     pub texture: String,
     pub scale: Option<[f32; 2]>,
+    pub wrap: Option<WrapFile>,
     pub strength: Option<f32>,
+}
+
+/// A texture's wrap mode: one for both axes, or `[u, v]`.
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+pub enum WrapFile {
+    Both(String),
+    Each([String; 2]),
 }
 
 #[derive(Debug, Deserialize)]

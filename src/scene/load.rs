@@ -3,14 +3,14 @@
 
 use super::file::{
     ColorFile, LightFile, LightType, MaterialFile, MaterialType, ObjectFile, ScalarFile, ScaleFile,
-    SceneFile, TextureFile,
+    SceneFile, TextureFile, WrapFile,
 };
 use super::gltf::{GltfAsset, is_gltf, load_gltf};
 use super::light::PunctualLight;
 use super::material::MAT_ALPHA_MASK;
 use super::obj::{FileSource, Fs, MeshPart, PartTriangle, load_obj};
 use super::sphere::{default_subdivisions, icosphere};
-use super::texture::{TextureError, TextureRef, TextureSource, Textures, Usage, UvTransform};
+use super::texture::{TextureError, TextureRef, TextureSource, Textures, Usage, UvTransform, Wrap};
 use super::{
     Camera, Material, MaterialKind, Mesh, NO_NORMAL, NO_TANGENT, NO_TEXTURE, NO_UV, RenderSettings,
     Scene, SceneError, Sky, Triangle,
@@ -668,10 +668,16 @@ impl Ctx<'_> {
                 format!("must be finite and non-zero, got {scale:?}"),
             ));
         }
+        let wrap = match &t.wrap {
+            None => [Wrap::REPEAT; 2],
+            Some(WrapFile::Both(w)) => [self.wrap(field, w)?; 2],
+            Some(WrapFile::Each([u, v])) => [self.wrap(field, u)?, self.wrap(field, v)?],
+        };
         let r = TextureRef {
             source: TextureSource::File(self.dir.join(&t.texture)),
             usage,
             transform: UvTransform::scale(scale[0], scale[1]),
+            wrap,
             optional: false,
         };
         textures.add(&r, self.files).map_err(|e| {
@@ -681,6 +687,23 @@ impl Ctx<'_> {
             };
             self.invalid(format!("{field}.texture"), message)
         })
+    }
+
+    /// A wrap mode by its name.
+    fn wrap(&self, field: &str, name: &str) -> Result<Wrap, SceneError> {
+        Wrap::ALL
+            .iter()
+            .find(|(_, n)| *n == name)
+            .map(|&(w, _)| w)
+            .ok_or_else(|| {
+                self.invalid(
+                    format!("{field}.wrap"),
+                    format!(
+                        "unknown wrap mode `{}`; there is: repeat, clamp, mirror",
+                        name.escape_debug()
+                    ),
+                )
+            })
     }
 
     fn material(

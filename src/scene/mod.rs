@@ -22,7 +22,7 @@ pub use camera::Camera;
 pub use light::PunctualLight;
 pub use load::{load_scene, load_scene_from, parse_scene};
 pub use material::{Material, MaterialKind, NO_TEXTURE};
-pub use texture::{Texture, TextureFormat, Textures};
+pub use texture::{Texture, TextureFormat, Textures, Wrap};
 
 use glam::{Vec2, Vec3, Vec4};
 use std::path::PathBuf;

@@ -50,6 +50,8 @@ pub struct MtlMap {
     pub file: String,
     /// From `-s su sv`; (1, 1) without it.
     pub scale: [f32; 2],
+    /// `-clamp on`: the edge texels extend outwards instead of the image repeating.
+    pub clamp: bool,
 }
 
 /// The option flags of MTL texture maps and how many values each takes (`-o`, `-s`, `-t`
@@ -171,6 +173,7 @@ pub(super) fn parse_mtl(bytes: &[u8]) -> Result<Library, BadLine> {
 /// spaces). `-s` sets the scale; other options are ignored with a warning.
 fn texture_map(keyword: &str, rest: &str, warn: &mut dyn FnMut(String)) -> Result<MtlMap, String> {
     let mut scale = [1.0f32, 1.0];
+    let mut clamp = false;
     let mut rest = rest;
     while rest.starts_with('-') {
         let (flag, after) = rest.split_once(char::is_whitespace).unwrap_or((rest, ""));
@@ -215,6 +218,17 @@ fn texture_map(keyword: &str, rest: &str, warn: &mut dyn FnMut(String)) -> Resul
                 ));
             }
             scale = [su, sv];
+        } else if flag == "-clamp" {
+            clamp = match values[0] {
+                "on" => true,
+                "off" => false,
+                other => {
+                    return Err(format!(
+                        "malformed `{keyword}`: -clamp takes on or off, got {}",
+                        quoted(other)
+                    ));
+                }
+            };
         } else {
             warn(format!("option {flag} of `{keyword}` is ignored"));
         }
@@ -226,6 +240,7 @@ fn texture_map(keyword: &str, rest: &str, warn: &mut dyn FnMut(String)) -> Resul
     Ok(MtlMap {
         file: rest.to_string(),
         scale,
+        clamp,
     })
 }
 

@@ -9,7 +9,7 @@
 //! borrowing a neighbour's normal.
 
 use super::mtl::{MtlMap, MtlMaterial, parse_mtl};
-use super::texture::{TextureRef, TextureSource, Usage, UvTransform};
+use super::texture::{TextureRef, TextureSource, Usage, UvTransform, Wrap};
 use super::{Material, MaterialKind, NO_NORMAL, NO_TANGENT, NO_UV, SceneError};
 use glam::{Vec2, Vec3, Vec4};
 use std::collections::HashMap;
@@ -574,6 +574,7 @@ pub fn map_mtl(m: &MtlMaterial, dir: &Path, textures: &mut Vec<TextureRef>) -> M
             source: TextureSource::File(dir.join(&map.file)),
             usage,
             transform: UvTransform::scale(map.scale[0], map.scale[1]),
+            wrap: [if map.clamp { Wrap::CLAMP } else { Wrap::REPEAT }; 2],
             optional: true,
         });
         textures.len() as u32 - 1

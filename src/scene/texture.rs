@@ -38,10 +38,39 @@ impl TextureFormat {
     }
 }
 
+/// What a lookup outside [0, 1] reads, along one axis: a `u32` code, as the shaders
+/// compare it.
+#[repr(transparent)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Pod, Zeroable)]
+pub struct Wrap(pub u32);
+
+impl Wrap {
+    /// The image tiles (glTF's REPEAT; the default everywhere).
+    pub const REPEAT: Self = Self(0);
+    /// The edge texels extend outwards (glTF's CLAMP_TO_EDGE, MTL's `-clamp on`).
+    pub const CLAMP: Self = Self(1);
+    /// The image tiles, every other copy mirrored (glTF's MIRRORED_REPEAT).
+    pub const MIRROR: Self = Self(2);
+
+    /// Every mode with its name, as scene files spell it and the shaders' constants
+    /// (`WRAP_*`) are named.
+    pub const ALL: [(Self, &'static str); 3] = [
+        (Self::REPEAT, "repeat"),
+        (Self::CLAMP, "clamp"),
+        (Self::MIRROR, "mirror"),
+    ];
+
+    /// The modes along u and v as [`Texture::wrap`] packs them: u in the low byte, v in
+    /// the next.
+    pub fn pack(u: Wrap, v: Wrap) -> u32 {
+        u.0 | (v.0 << 8)
+    }
+}
+
 /// One texture as a material slot reads it (48 bytes): an image in the texel table, how
 /// its texels decode, the affine map applied to texture coordinates before the lookup
-/// (`uv_matrix · uv + uv_offset`: a tiling scale, and glTF's KHR_texture_transform), and
-/// for a scalar parameter the channel it reads.
+/// (`uv_matrix · uv + uv_offset`: a tiling scale, and glTF's KHR_texture_transform), for
+/// a scalar parameter the channel it reads, and the wrap modes along u and v.
 /// mirror: shaders/types.wgsl `Texture`
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
@@ -56,7 +85,8 @@ pub struct Texture {
     pub uv_offset: [f32; 2],
     /// The channel a scalar parameter reads (0 = red).
     pub channel: u32,
-    pub _pad: u32,
+    /// [`Wrap`] codes packed by [`Wrap::pack`].
+    pub wrap: u32,
 }
 
 /// An affine map of texture coordinates, as scene files and glTF's KHR_texture_transform
@@ -146,13 +176,14 @@ enum SourceKey {
 }
 
 /// A texture a material asks for before its image is read: the image, its use, its UV
-/// transform, and whether a missing file falls back to the parameter's constant factor (MTL
-/// and glTF files) or is an error (scene files).
+/// transform, its wrap modes along u and v, and whether a missing file falls back to the
+/// parameter's constant factor (MTL and glTF files) or is an error (scene files).
 #[derive(Clone, Debug, PartialEq)]
 pub struct TextureRef {
     pub source: TextureSource,
     pub usage: Usage,
     pub transform: UvTransform,
+    pub wrap: [Wrap; 2],
     pub optional: bool,
 }
 
@@ -203,7 +234,7 @@ impl Textures {
                 Usage::Colour | Usage::Linear => 0,
                 Usage::Scalar { channel } => channel,
             },
-            _pad: 0,
+            wrap: Wrap::pack(r.wrap[0], r.wrap[1]),
         };
         if let Some(i) = self.records.iter().position(|t| *t == record) {
             return Ok(i as u32);

@@ -17,7 +17,7 @@ use crate::render::{
     TRI_TANGENT, TRI_UV,
 };
 use crate::scene::material::{MAT_ALPHA_MASK, MAT_THIN_WALLED};
-use crate::scene::{MaterialKind, NO_TEXTURE, TextureFormat};
+use crate::scene::{MaterialKind, NO_TEXTURE, TextureFormat, Wrap};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4, PI};
 
 /// The value of a shared constant.
@@ -75,6 +75,9 @@ pub fn shared_constants() -> Vec<(String, Value)> {
     }
     for (format, name) in TextureFormat::ALL {
         list.push((format!("TEX_{}", name.to_uppercase()), U32(format.0)));
+    }
+    for (wrap, name) in Wrap::ALL {
+        list.push((format!("WRAP_{}", name.to_uppercase()), U32(wrap.0)));
     }
     list
 }

@@ -144,7 +144,7 @@ pub const TABLES: &[Table] = &[
                 uv_matrix,
                 uv_offset,
                 channel,
-                _pad,
+                wrap,
             }))
         },
         bytes: |s| bytemuck::cast_slice(&s.textures),

@@ -5,7 +5,7 @@
 
 use super::buffers::Buffers;
 use crate::scene::material::{MAT_ALPHA_MASK, MAT_THIN_WALLED};
-use crate::scene::texture::{TextureRef, Usage, UvTransform};
+use crate::scene::texture::{TextureRef, Usage, UvTransform, Wrap};
 use crate::scene::{Material, MaterialKind, NO_TEXTURE, SceneError};
 use glam::Vec3;
 use gltf::json;
@@ -279,9 +279,9 @@ impl<'b, 'a> Materials<'b, 'a> {
                 ),
             ));
         };
-        if let Some(s) = texture.sampler {
-            self.check_sampler(s.value());
-        }
+        let wrap = texture
+            .sampler
+            .map_or([Wrap::REPEAT; 2], |s| self.sampler_wrap(s.value()));
         let mut transform = UvTransform::scale(1.0, 1.0);
         let mut tex_coord = info.tex_coord;
         if let Some(t) = info.transform {
@@ -320,24 +320,24 @@ impl<'b, 'a> Materials<'b, 'a> {
             source,
             usage,
             transform,
+            wrap,
             optional: false,
         });
         Ok(self.textures.len() as u32 - 1)
     }
 
-    /// Warns of a sampler that does not repeat: meshtrace's lookups always do.
-    fn check_sampler(&self, s: usize) {
-        let doc = self.buffers.doc();
-        let Some(sampler) = doc.root.samplers.get(s) else {
-            return;
+    /// A sampler's wrap modes along u (`wrapS`) and v (`wrapT`). Its filters are not
+    /// read: lookups are always bilinear.
+    fn sampler_wrap(&self, s: usize) -> [Wrap; 2] {
+        use json::texture::WrappingMode as W;
+        let Some(sampler) = self.buffers.doc().root.samplers.get(s) else {
+            return [Wrap::REPEAT; 2];
         };
-        let repeat = Checked::Valid(json::texture::WrappingMode::Repeat);
-        if sampler.wrap_s != repeat || sampler.wrap_t != repeat {
-            doc.warn(
-                format!("samplers[{s}]"),
-                "wrap modes other than REPEAT are not supported; textures repeat",
-            );
-        }
+        [sampler.wrap_s, sampler.wrap_t].map(|w| match w {
+            Checked::Valid(W::ClampToEdge) => Wrap::CLAMP,
+            Checked::Valid(W::MirroredRepeat) => Wrap::MIRROR,
+            _ => Wrap::REPEAT,
+        })
     }
 }
 
