@@ -593,3 +593,53 @@ fn wrap_modes_repeat_clamp_and_mirror_as_glsl_does() {
         }
     }
 }
+
+/// On an OBJ mesh, the wrap modes work in the file's own terms, where the image spans
+/// v ∈ [0, 1] from its bottom edge: a 1 × 4 float image of rows 0 (top) to 3 (bottom),
+/// tiled twice along v, reads at OBJ coordinate v the row of 1 − wrap(2v), whether the
+/// texture clamps or mirrors (and the second image is a reflection of the first).
+#[test]
+fn wrap_modes_on_obj_texture_coordinates_work_in_the_files_terms() {
+    use meshtrace::render::texture::{material_at, triangle_uv};
+    let dir = TempDir::new("wrap-obj");
+    let texels: Vec<[f32; 4]> = (0..4).map(|i| [i as f32, 0.0, 0.0, 1.0]).collect();
+    dir.write_exr("rows.exr", 1, 4, &texels);
+    dir.write("quad.obj", QUAD);
+    let mut r = SplitMix::new(0x3a9_0001);
+    for mode in ["clamp", "mirror"] {
+        let toml = format!(
+            "[camera]\nposition = [0.0, 0.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\n\
+             [materials.m]\ntype = \"diffuse\"\n\
+             albedo = {{ texture = \"rows.exr\", scale = [1.0, 2.0], wrap = \"{mode}\" }}\n\
+             [[objects]]\nmesh = \"quad.obj\"\nmaterial = \"m\"\n"
+        );
+        let scene = load_scene(&dir.write("scene.toml", toml)).unwrap();
+        let rs = RenderScene::new(&scene, &BuildParams::default()).unwrap();
+        for tri in 0..rs.shading.len() as u32 {
+            let material = rs.materials[rs.shading[tri as usize].material as usize];
+            for _ in 0..200 {
+                let (b1, b2) = (r.range(0.0, 1.0), r.range(0.0, 1.0));
+                let (b1, b2) = if b1 + b2 > 1.0 {
+                    (1.0 - b1, 1.0 - b2)
+                } else {
+                    (b1, b2)
+                };
+                let uv = triangle_uv(&rs, tri, b1, b2);
+                // Stored as (u, −v); back to the file's v, tiled twice.
+                let t = -2.0 * uv.y;
+                let wrapped = match mode {
+                    "clamp" => t.clamp(0.0, 1.0),
+                    _ if t > 1.0 => 2.0 - t,
+                    _ => t,
+                };
+                let expected = ((1.0 - wrapped) * 4.0 - 0.5).clamp(0.0, 3.0);
+                let got = material_at(&rs, &material, uv).albedo.x;
+                assert!(
+                    (got - expected).abs() < 1e-4,
+                    "{mode} at OBJ v = {}: got {got}, expected {expected}",
+                    -uv.y
+                );
+            }
+        }
+    }
+}

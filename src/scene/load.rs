@@ -216,6 +216,8 @@ struct Builder {
     lights: Vec<PunctualLight>,
     degenerate: usize,
     warnings: Vec<String>,
+    /// [`Builder::obj_material`]'s answers so far.
+    obj_materials: HashMap<u32, u32>,
 }
 
 impl Builder {
@@ -224,6 +226,35 @@ impl Builder {
         self.materials.push(material);
         self.material_names.push(name.to_string());
         self.materials.len() as u32 - 1
+    }
+
+    /// The material an OBJ face reads for material `m`: `m` itself, or where one of its
+    /// textures clamps or mirrors along v, a copy whose such textures are shifted one image
+    /// along v. OBJ texture coordinates are stored as (u, −v) (`obj::parse_texcoord`),
+    /// which a repeating lookup reads as glTF's (u, 1 − v) but which puts the image at
+    /// v ∈ [−1, 0], where clamping and mirroring need it at [0, 1].
+    fn obj_material(&mut self, m: u32) -> u32 {
+        if let Some(&found) = self.obj_materials.get(&m) {
+            return found;
+        }
+        let mut material = self.materials[m as usize];
+        let mut shifted = false;
+        for slot in material.texture_slots_mut() {
+            if *slot != NO_TEXTURE
+                && self.textures.records[*slot as usize].wrap >> 8 != Wrap::REPEAT.0
+            {
+                *slot = self.textures.shifted(*slot, [0.0, 1.0]);
+                shifted = true;
+            }
+        }
+        let found = if shifted {
+            let name = self.material_names[m as usize].clone();
+            self.add_material(&name, material)
+        } else {
+            m
+        };
+        self.obj_materials.insert(m, found);
+        found
     }
 
     fn default_material(&mut self) -> u32 {
@@ -254,7 +285,7 @@ impl Builder {
         let materials = std::mem::take(&mut part.materials);
         let local =
             self.append_materials(materials, &part.material_names, &part.textures, files)?;
-        self.append_geometry(part, m, material, &local, error)
+        self.append_geometry(part, m, material, &local, true, error)
     }
 
     /// Appends what a glTF file brings, transformed by `m`: its primitives with their
@@ -280,7 +311,7 @@ impl Builder {
         };
         for p in asset.parts {
             let at = p.at;
-            self.append_geometry(p.part, m * p.matrix, material, &local, &|message| {
+            self.append_geometry(p.part, m * p.matrix, material, &local, false, &|message| {
                 error(&at, message)
             })?;
         }
@@ -346,14 +377,17 @@ impl Builder {
 
     /// Appends a part's geometry transformed by `m`: its triangles' materials index `local`
     /// (the table indices [`Builder::append_materials`] returned), unless `material`
-    /// overrides them. A triangle without texture coordinates whose material uses a texture
-    /// is an error, made by `error`. Degenerate triangles are dropped (and counted).
+    /// overrides them; `obj_uv` says that its texture coordinates are an OBJ file's, as
+    /// [`Builder::obj_material`] reads them. A triangle without texture coordinates whose
+    /// material uses a texture is an error, made by `error`. Degenerate triangles are
+    /// dropped (and counted).
     fn append_geometry(
         &mut self,
         part: MeshPart,
         m: Mat4,
         material: Option<u32>,
         local: &[u32],
+        obj_uv: bool,
         error: &dyn Fn(String) -> SceneError,
     ) -> Result<(), SceneError> {
         let base_p = self.mesh.positions.len() as u32;
@@ -398,6 +432,11 @@ impl Builder {
                 (Some(m), _) => m,
                 (None, Some(i)) => local[i as usize],
                 (None, None) => self.default_material(),
+            };
+            let material = if obj_uv {
+                self.obj_material(material)
+            } else {
+                material
             };
             let uv = if t.t[0] == NO_UV {
                 t.t

@@ -139,16 +139,20 @@ impl Material {
 
     /// Whether any parameter reads a texture.
     pub fn has_texture(&self) -> bool {
+        let mut m = *self;
+        m.texture_slots_mut().iter().any(|t| **t != NO_TEXTURE)
+    }
+
+    /// Every texture slot (`NO_TEXTURE` where the parameter reads none).
+    pub fn texture_slots_mut(&mut self) -> [&mut u32; 6] {
         [
-            self.albedo_texture,
-            self.emission_texture,
-            self.roughness_texture,
-            self.metallic_texture,
-            self.transmission_texture,
-            self.normal_texture,
+            &mut self.albedo_texture,
+            &mut self.emission_texture,
+            &mut self.roughness_texture,
+            &mut self.metallic_texture,
+            &mut self.transmission_texture,
+            &mut self.normal_texture,
         ]
-        .iter()
-        .any(|&t| t != NO_TEXTURE)
     }
 
     /// mirror: shaders/material.wgsl `is_emissive`

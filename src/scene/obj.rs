@@ -480,9 +480,10 @@ fn parse_normal(words: std::str::SplitWhitespace) -> Result<Vec3, String> {
 
 /// A `vt` line's u and v (an optional w is checked and ignored), finite, in meshtrace's
 /// convention, where v runs down the image from its top edge: (u, −v). OBJ runs v up from
-/// the bottom edge; a lookup wraps −v to 1 − v, and negating rather than subtracting from
-/// 1 keeps a UV scale (`-s`, `scale`) tiling from the bottom edge, as in the file's own
-/// terms.
+/// the bottom edge; a repeating lookup wraps −v to 1 − v, and negating rather than
+/// subtracting from 1 keeps a UV scale (`-s`, `scale`) tiling from the bottom edge, as in
+/// the file's own terms. Textures that clamp or mirror along v are shifted by one image to
+/// match (`Builder::obj_material`).
 fn parse_texcoord(words: std::str::SplitWhitespace) -> Result<Vec2, String> {
     let mut values = [0f32; 2];
     check_numbers_into(

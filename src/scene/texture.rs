@@ -210,6 +210,20 @@ pub enum TextureError {
 }
 
 impl Textures {
+    /// The index of a record like record `index` whose lookups are shifted by `offset` in
+    /// texture space (after its UV transform).
+    pub fn shifted(&mut self, index: u32, offset: [f32; 2]) -> u32 {
+        let mut record = self.records[index as usize];
+        record.uv_offset[0] += offset[0];
+        record.uv_offset[1] += offset[1];
+        if let Some(i) = self.records.iter().position(|t| *t == record) {
+            return i as u32;
+        }
+        self.records.push(record);
+        self.names.push(self.names[index as usize].clone());
+        self.records.len() as u32 - 1
+    }
+
     /// The index of a record reading `r`'s image as `r` says, reading and packing the image
     /// unless an earlier record already did. The image's path or name is shown in messages.
     pub fn add(&mut self, r: &TextureRef, files: &dyn FileSource) -> Result<u32, TextureError> {
