@@ -72,7 +72,7 @@ fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
     if hit.tri == NO_HIT {
         var w = 1.0;
         if !(*st).prev_delta && params.sky_pmf != 0.0 {
-            w = power_heuristic((*st).prev_pdf, sky_pdf());
+            w = power_heuristic((*st).prev_pdf, sky_pdf((*st).ray.dir));
         }
         (*st).radiance += (*st).beta * w * sky_radiance((*st).ray.dir);
         return true;

@@ -1,16 +1,22 @@
-// The lights next event estimation samples: emissive triangles and the sky.
+// The lights next event estimation samples: emissive triangles, punctual lights and the sky.
 // mirror: src/render/lights.rs — every function has a Rust twin of the same name.
 
 // mirror: src/render/lights.rs `sky_radiance`
 fn sky_radiance(dir: vec3<f32>) -> vec3<f32> {
-    if params.sky_gradient == 0u {
+    if params.sky_kind == SKY_CONSTANT {
         return params.sky_zenith;
+    }
+    if params.sky_kind == SKY_ENVIRONMENT {
+        return env_radiance(dir);
     }
     return mix(params.sky_horizon, params.sky_zenith, 0.5 * (dir.y + 1.0));
 }
 
 // mirror: src/render/lights.rs `sky_pdf`
-fn sky_pdf() -> f32 {
+fn sky_pdf(dir: vec3<f32>) -> f32 {
+    if params.sky_kind == SKY_ENVIRONMENT {
+        return params.sky_pmf * env_pdf(dir);
+    }
     return params.sky_pmf * UNIFORM_SPHERE_PDF;
 }
 
@@ -39,8 +45,17 @@ fn sample_light(p: vec3<f32>, ng: vec3<f32>, rng: Rng, depth: u32) -> LightSampl
     let light = load_emitter(k);
     let u = vec2<f32>(rng_1d(rng, depth, DIM_LIGHT_U), rng_1d(rng, depth, DIM_LIGHT_V));
     if light == SKY_EMITTER {
-        let wi = sample_uniform_sphere(u);
-        return LightSample(offset_ray_origin(p, ng, wi), wi, T_INF, sky_radiance(wi), sky_pdf(), false, true);
+        var wi = sample_uniform_sphere(u);
+        var pdf = UNIFORM_SPHERE_PDF;
+        if params.sky_kind == SKY_ENVIRONMENT {
+            let e = sample_env(u);
+            wi = e.dir;
+            pdf = e.pdf;
+        }
+        if pdf <= 0.0 {
+            return none;
+        }
+        return LightSample(offset_ray_origin(p, ng, wi), wi, T_INF, sky_radiance(wi), params.sky_pmf * pdf, false, true);
     }
     if (light & LIGHT_EMITTER) != 0u {
         var prev = 0.0;

@@ -183,3 +183,15 @@ fn test_surface_maps(@builtin(global_invocation_id) gid: vec3<u32>) {
     let m = material_at(load_material(load_shading(tri).material), uv);
     case_out(i, vec4<u32>(u4(vec4<f32>(mapped, 0.0)).xyz, passes), u4(vec4<f32>(m.metallic, m.transmission, 0.0, 0.0)));
 }
+
+// in: (dir.xyz, -), (u.x, u.y, -, -) | out: (env_radiance(dir), env_pdf(dir)),
+// (sample_env(u).dir, its pdf)
+@compute @workgroup_size(64)
+fn test_environment(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = case_index(gid);
+    if i >= case_count() { return; }
+    let dir = f4(case_in(i, 0u)).xyz;
+    let u = f4(case_in(i, 1u)).xy;
+    let e = sample_env(u);
+    case_out(i, u4(vec4<f32>(env_radiance(dir), env_pdf(dir))), u4(vec4<f32>(e.dir, e.pdf)));
+}

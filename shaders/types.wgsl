@@ -67,7 +67,7 @@ struct Light {
     _pad1: u32,
 }
 
-// mirror: src/render/gpu/params.rs `Params` (144 bytes): one dispatch's camera, sky and range.
+// mirror: src/render/gpu/params.rs `Params` (160 bytes): one dispatch's camera, sky and range.
 struct Params {
     cam_position: vec3<f32>,
     width: u32,
@@ -78,8 +78,9 @@ struct Params {
     cam_up: vec3<f32>,
     seed: u32,
     sky_zenith: vec3<f32>,
-    // 0: constant sky (`sky_zenith`), 1: gradient from `sky_horizon` to `sky_zenith`.
-    sky_gradient: u32,
+    // SKY_CONSTANT (`sky_zenith`), SKY_GRADIENT (from `sky_horizon` to `sky_zenith`) or
+    // SKY_ENVIRONMENT (the env_* fields).
+    sky_kind: u32,
     sky_horizon: vec3<f32>,
     num_emitters: u32,
     tan_half_vfov: f32,
@@ -95,8 +96,12 @@ struct Params {
     sky_pmf: f32,
     // Texels per pixel of the accumulation buffer: radiance, then one per film channel.
     film_texels: u32,
-    _pad0: u32,
-    _pad1: u32,
+    // The environment map: its texture record, strength, the cosine and sine of its
+    // rotation about +Y, and its cells along u and v (src/render/environment.rs).
+    env_texture: u32,
+    env_strength: f32,
+    env_rotation: vec2<f32>,
+    env_cells: vec2<u32>,
 }
 
 

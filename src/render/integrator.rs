@@ -135,7 +135,7 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
         let w = if st.prev_delta || scene.sky_pmf == 0.0 {
             1.0
         } else {
-            power_heuristic(st.prev_pdf, sky_pdf(scene))
+            power_heuristic(st.prev_pdf, sky_pdf(scene, st.ray.dir))
         };
         st.radiance += st.beta * w * sky_radiance(scene, st.ray.dir);
         return true;

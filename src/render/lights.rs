@@ -2,6 +2,7 @@
 //! chosen by power, and the sky. Every function has a WGSL twin of the same name in
 //! `shaders/lights.wgsl`.
 
+use super::environment::{env_pdf, env_radiance, sample_env};
 use super::integrator::offset_ray_origin;
 use super::rng::{self, Rng};
 use super::sampling::{
@@ -13,19 +14,24 @@ use crate::geometry::{self, T_INF};
 use crate::scene::{NO_TEXTURE, Sky};
 use glam::{Vec2, Vec3};
 
-/// Radiance arriving along `dir` from outside the scene.
+/// Radiance arriving along unit `dir` from outside the scene.
 /// mirror: shaders/lights.wgsl `sky_radiance`
 pub fn sky_radiance(scene: &RenderScene, dir: Vec3) -> Vec3 {
     match scene.sky {
         Sky::Constant(c) => c,
         Sky::Gradient { zenith, horizon } => horizon.lerp(zenith, 0.5 * (dir.y + 1.0)),
+        Sky::Environment { .. } => env_radiance(scene, dir),
     }
 }
 
-/// Solid-angle probability density of light sampling choosing a direction towards the
-/// sky, its pick included: uniform over the sphere. mirror: shaders/lights.wgsl `sky_pdf`
-pub fn sky_pdf(scene: &RenderScene) -> f32 {
-    scene.sky_pmf * UNIFORM_SPHERE_PDF
+/// Solid-angle probability density of light sampling choosing unit direction `dir`
+/// towards the sky, its pick included: an environment map's own distribution, otherwise
+/// uniform over the sphere. mirror: shaders/lights.wgsl `sky_pdf`
+pub fn sky_pdf(scene: &RenderScene, dir: Vec3) -> f32 {
+    match scene.sky {
+        Sky::Environment { .. } => scene.sky_pmf * env_pdf(scene, dir),
+        _ => scene.sky_pmf * UNIFORM_SPHERE_PDF,
+    }
 }
 
 /// Probability density, in solid angle at the shading point, of light sampling choosing the
@@ -72,13 +78,19 @@ pub fn sample_light(
         rng.rng_1d(depth, rng::DIM_LIGHT_V),
     );
     if light == SKY_EMITTER {
-        let wi = sample_uniform_sphere(u);
+        let (wi, pdf) = match scene.sky {
+            Sky::Environment { .. } => sample_env(scene, u),
+            _ => (sample_uniform_sphere(u), UNIFORM_SPHERE_PDF),
+        };
+        if pdf <= 0.0 {
+            return None;
+        }
         return Some(LightSample {
             origin: offset_ray_origin(p, ng, wi),
             wi,
             t_max: T_INF,
             le: sky_radiance(scene, wi),
-            pdf: sky_pdf(scene),
+            pdf: scene.sky_pmf * pdf,
             delta: false,
         });
     }

@@ -8,6 +8,7 @@ pub mod backend;
 pub mod bsdf;
 pub mod camera;
 pub mod cpu;
+pub mod environment;
 pub mod gpu;
 pub mod integrator;
 pub mod lights;
@@ -189,6 +190,21 @@ pub struct RenderScene {
     pub sky_pmf: f32,
     pub camera: Camera,
     pub sky: Sky,
+    /// The environment map's parameters (all zero for another sky).
+    pub env: Environment,
+    /// The environment's sampling distribution ([`environment::env_distribution`]); empty
+    /// for another sky.
+    pub env_cdf: Vec<f32>,
+}
+
+/// An environment map as both renderers read it: its texture record, strength, the cosine
+/// and sine of its rotation about +Y, and its cells ([`environment::env_cells`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Environment {
+    pub texture: u32,
+    pub strength: f32,
+    pub rotation: [f32; 2],
+    pub cells: [u32; 2],
 }
 
 impl RenderScene {
@@ -296,7 +312,23 @@ impl RenderScene {
             sky_pmf: 0.0,
             camera: scene.camera.clone(),
             sky: scene.sky,
+            env: Environment::default(),
+            env_cdf: Vec::new(),
         };
+        if let Sky::Environment {
+            texture,
+            strength,
+            rotation,
+        } = scene.sky
+        {
+            rs.env = Environment {
+                texture,
+                strength,
+                rotation: [rotation.cos(), rotation.sin()],
+                cells: environment::env_cells(&rs.textures[texture as usize]),
+            };
+            rs.env_cdf = environment::env_distribution(&rs, texture);
+        }
         rs.build_emitters(&scene.lights);
         Ok(rs)
     }
@@ -377,7 +409,11 @@ impl RenderScene {
                 total
             })
             .collect();
-        let sky_pmf = match (self.sky.is_black(), emitters.is_empty()) {
+        let black = match self.sky {
+            Sky::Environment { .. } => self.env.strength == 0.0 || self.env_cdf.is_empty(),
+            _ => self.sky.is_black(),
+        };
+        let sky_pmf = match (black, emitters.is_empty()) {
             (true, _) => 0.0,
             (false, true) => 1.0,
             (false, false) => 0.5,

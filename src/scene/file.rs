@@ -82,6 +82,12 @@ pub struct SkyFile {
     pub color: Option<[f32; 3]>,
     pub zenith: Option<[f32; 3]>,
     pub horizon: Option<[f32; 3]>,
+    /// An equirectangular image, relative to the scene file.
+    pub environment: Option<String>,
+    /// Degrees about +Y (environment only).
+    pub rotate: Option<f32>,
+    /// Radiance scale (environment only).
+    pub strength: Option<f32>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]

@@ -25,6 +25,27 @@ pub const MAX_PIXELS: u64 = 1 << 26;
 /// Deepest sphere subdivision accepted: 20 * 4^10 = 21M triangles.
 pub const MAX_SPHERE_SUBDIVISIONS: u32 = 10;
 
+/// Adds the equirectangular image at `path` to `textures` as an environment map reads it
+/// (linear, or sRGB-decoded for an 8-bit image; repeating around, clamped at the poles);
+/// its record's index, or why it cannot be read.
+pub fn load_environment(
+    path: &Path,
+    textures: &mut Textures,
+    files: &dyn FileSource,
+) -> Result<u32, String> {
+    let r = TextureRef {
+        source: TextureSource::File(path.to_path_buf()),
+        usage: Usage::Colour,
+        transform: UvTransform::scale(1.0, 1.0),
+        wrap: [Wrap::REPEAT, Wrap::CLAMP],
+        optional: false,
+    };
+    textures.add(&r, files).map_err(|e| match e {
+        TextureError::Fatal(e) => e.to_string(),
+        TextureError::Missing(file) => format!("cannot read {file}"),
+    })
+}
+
 /// Whether a path names an OBJ mesh (by its extension, in any case).
 fn is_obj(path: &Path) -> bool {
     path.extension()
@@ -83,8 +104,8 @@ fn parse_scene_from(text: &str, path: &Path, files: &dyn FileSource) -> Result<S
     let file: SceneFile = toml::from_str(text).map_err(|e| ctx.syntax(text, &e))?;
     let camera = ctx.camera(&file)?;
     let settings = ctx.settings(&file)?;
-    let sky = ctx.sky(&file)?;
     let mut builder = Builder::default();
+    let sky = ctx.sky(&file, &mut builder.textures)?;
     for (name, m) in &file.materials {
         let mat = ctx.material(name, m, &mut builder.textures)?;
         let index = builder.add_material(name, mat);
@@ -640,19 +661,48 @@ impl Ctx<'_> {
         Ok(s)
     }
 
-    fn sky(&self, file: &SceneFile) -> Result<Sky, SceneError> {
+    fn sky(&self, file: &SceneFile, textures: &mut Textures) -> Result<Sky, SceneError> {
         let Some(sky) = &file.sky else {
             return Ok(Sky::Constant(Vec3::ZERO));
         };
+        if let Some(image) = &sky.environment {
+            if sky.color.is_some() || sky.zenith.is_some() || sky.horizon.is_some() {
+                return Err(self.invalid(
+                    "sky.environment",
+                    "cannot be combined with `color`, `zenith` or `horizon`",
+                ));
+            }
+            let strength = match sky.strength {
+                Some(s) => self.scalar("sky.strength", s, |s| s >= 0.0, "at least 0")?,
+                None => 1.0,
+            };
+            let rotate = match sky.rotate {
+                Some(r) => self.scalar("sky.rotate", r, f32::is_finite, "finite")?,
+                None => 0.0,
+            };
+            let texture = load_environment(&self.dir.join(image), textures, self.files)
+                .map_err(|message| self.invalid("sky.environment", message))?;
+            return Ok(Sky::Environment {
+                texture,
+                strength,
+                rotation: rotate.to_radians(),
+            });
+        }
+        for (key, given) in [("rotate", sky.rotate), ("strength", sky.strength)] {
+            if given.is_some() {
+                return Err(self.invalid(format!("sky.{key}"), "is read only with `environment`"));
+            }
+        }
         match (sky.color, sky.zenith, sky.horizon) {
             (Some(c), None, None) => Ok(Sky::Constant(self.color("sky.color", c)?)),
             (None, Some(z), Some(h)) => Ok(Sky::Gradient {
                 zenith: self.color("sky.zenith", z)?,
                 horizon: self.color("sky.horizon", h)?,
             }),
-            (None, None, None) => {
-                Err(self.invalid("sky", "needs `color`, or `zenith` and `horizon`"))
-            }
+            (None, None, None) => Err(self.invalid(
+                "sky",
+                "needs `color`, `zenith` and `horizon`, or `environment`",
+            )),
             (Some(_), _, _) => {
                 Err(self.invalid("sky.color", "cannot be combined with `zenith` or `horizon`"))
             }

@@ -88,13 +88,25 @@ pub enum Sky {
         zenith: Vec3,
         horizon: Vec3,
     },
+    /// An equirectangular image of incoming radiance (`texture`, an index into the scene's
+    /// texture records) times `strength`, turned by `rotation` radians about +Y: the
+    /// direction d reads the image at d' = R_y(−rotation) d, as Mitsuba 3's `envmap`.
+    Environment {
+        texture: u32,
+        strength: f32,
+        rotation: f32,
+    },
 }
 
 impl Sky {
+    /// Whether the sky sends no light at all. An environment whose image is black is
+    /// found so only once its sampling distribution is built
+    /// (`render::RenderScene::sky_pmf`).
     pub fn is_black(&self) -> bool {
         match *self {
             Sky::Constant(c) => c == Vec3::ZERO,
             Sky::Gradient { zenith, horizon } => zenith == Vec3::ZERO && horizon == Vec3::ZERO,
+            Sky::Environment { strength, .. } => strength == 0.0,
         }
     }
 }

@@ -7,8 +7,15 @@ use crate::render::RenderScene;
 use crate::render::camera::CameraRays;
 use crate::scene::{Camera, RenderSettings, Sky};
 use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
 
-/// One dispatch's parameters (144 bytes). mirror: shaders/types.wgsl `Params`
+/// What [`Params::sky_kind`] says the sky is. The shaders get these from
+/// `shader::shared_constants`.
+pub const SKY_CONSTANT: u32 = 0;
+pub const SKY_GRADIENT: u32 = 1;
+pub const SKY_ENVIRONMENT: u32 = 2;
+
+/// One dispatch's parameters (160 bytes). mirror: shaders/types.wgsl `Params`
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Params {
@@ -21,7 +28,8 @@ pub struct Params {
     pub cam_up: [f32; 3],
     pub seed: u32,
     pub sky_zenith: [f32; 3],
-    pub sky_gradient: u32,
+    /// A `SKY_*` code.
+    pub sky_kind: u32,
     pub sky_horizon: [f32; 3],
     pub num_emitters: u32,
     pub tan_half_vfov: f32,
@@ -36,7 +44,11 @@ pub struct Params {
     /// Texels per pixel of the accumulation buffer
     /// ([`Film::texels_per_pixel`](crate::film::Film::texels_per_pixel)); set with the film.
     pub film_texels: u32,
-    pub _pad: [u32; 2],
+    /// The environment map ([`crate::render::Environment`]), for `SKY_ENVIRONMENT`.
+    pub env_texture: u32,
+    pub env_strength: f32,
+    pub env_rotation: [f32; 2],
+    pub env_cells: [u32; 2],
 }
 
 impl Params {
@@ -52,7 +64,7 @@ impl Params {
             cam_up,
             seed,
             sky_zenith,
-            sky_gradient,
+            sky_kind,
             sky_horizon,
             num_emitters,
             tan_half_vfov,
@@ -65,7 +77,10 @@ impl Params {
             row_end,
             sky_pmf,
             film_texels,
-            _pad,
+            env_texture,
+            env_strength,
+            env_rotation,
+            env_cells,
         })
     }
 
@@ -77,14 +92,20 @@ impl Params {
 
     /// The scene's own part: its sky and lights.
     pub fn for_scene(scene: &RenderScene) -> Self {
-        let (zenith, horizon, gradient) = match scene.sky {
-            Sky::Constant(c) => (c, c, 0),
-            Sky::Gradient { zenith, horizon } => (zenith, horizon, 1),
+        let (zenith, horizon, kind) = match scene.sky {
+            Sky::Constant(c) => (c, c, SKY_CONSTANT),
+            Sky::Gradient { zenith, horizon } => (zenith, horizon, SKY_GRADIENT),
+            Sky::Environment { .. } => (Vec3::ZERO, Vec3::ZERO, SKY_ENVIRONMENT),
         };
+        let env = &scene.env;
         Self {
             sky_zenith: zenith.into(),
-            sky_gradient: gradient,
+            sky_kind: kind,
             sky_horizon: horizon.into(),
+            env_texture: env.texture,
+            env_strength: env.strength,
+            env_rotation: env.rotation,
+            env_cells: env.cells,
             num_emitters: scene.emitters.len() as u32,
             sky_pmf: scene.sky_pmf,
             ..Self::default()

@@ -5,7 +5,7 @@
 //! ray-throughput kernels).
 
 use super::layout::StructLayout;
-use super::params::Params;
+use super::params::{Params, SKY_CONSTANT, SKY_ENVIRONMENT, SKY_GRADIENT};
 use super::tables::{Element, TABLE_WIDTH, TABLES, wgsl_tables};
 use crate::bvh::STACK_SIZE;
 use crate::geometry::{GAMMA_2, GAMMA_3, SLAB_SLACK, T_INF};
@@ -54,6 +54,9 @@ pub fn shared_constants() -> Vec<(String, Value)> {
         ("LIGHT_DIRECTIONAL", U32(LIGHT_DIRECTIONAL)),
         ("LIGHT_EMITTER", U32(LIGHT_EMITTER)),
         ("SKY_EMITTER", U32(SKY_EMITTER)),
+        ("SKY_CONSTANT", U32(SKY_CONSTANT)),
+        ("SKY_GRADIENT", U32(SKY_GRADIENT)),
+        ("SKY_ENVIRONMENT", U32(SKY_ENVIRONMENT)),
         ("NO_TEXTURE", U32(NO_TEXTURE)),
         ("MAT_THIN_WALLED", U32(MAT_THIN_WALLED)),
         ("MAT_ALPHA_MASK", U32(MAT_ALPHA_MASK)),
@@ -130,6 +133,7 @@ const LIBRARY: &[Source] = &[
     shader!("bsdf.wgsl"),
     shader!("camera.wgsl"),
     shader!("texture.wgsl"),
+    shader!("environment.wgsl"),
     shader!("lights.wgsl"),
     shader!("integrator.wgsl"),
 ];

@@ -196,6 +196,13 @@ pub const TABLES: &[Table] = &[
         element: || Element::F32,
         bytes: |s| bytemuck::cast_slice(&s.emitter_cdf),
     },
+    Table {
+        what: "environment CDF",
+        texture: "env_cdf_tex",
+        loader: "load_env_cdf",
+        element: || Element::F32,
+        bytes: |s| bytemuck::cast_slice(&s.env_cdf),
+    },
 ];
 
 /// The WGSL bindings of the tables and their loaders: `fn load_node(i: u32) -> BvhNode`

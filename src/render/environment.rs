@@ -1,0 +1,185 @@
+//! The environment map: radiance arriving from an equirectangular image around the scene,
+//! and its importance sampling by a piecewise-constant distribution over cells of the
+//! image, weighed by luminance × sin θ and built once on the host. Every function but the
+//! builder has a WGSL twin of the same name in `shaders/environment.wgsl`.
+//!
+//! The image is read as Mitsuba 3's `envmap` reads it, so that the two agree pixel for
+//! pixel: bilinearly between texel centres along u (wrapping around), and along v between
+//! rows placed at v = row / (height − 1), the first row at the zenith and the last at the
+//! nadir. A cell spans the texel centres of two neighbouring columns and two neighbouring
+//! rows, over which the radiance is bilinear.
+
+use super::RenderScene;
+use super::texture::{texel, texel_span};
+use crate::scene::{Texture, Wrap};
+use glam::{DVec3, Vec2, Vec3};
+use std::f32::consts::PI;
+
+/// The environment's cells along u and v: one per column (between its texel centre and
+/// the next, around), and one between each two rows (one for an image of one row).
+pub fn env_cells(t: &Texture) -> [u32; 2] {
+    [t.width, t.height.saturating_sub(1).max(1)]
+}
+
+/// The sampling distribution of texture `index` as an environment map: for its
+/// [`env_cells`] [nx, ny], the inclusive
+/// CDF over the ny rows of cells, then each row's inclusive CDF over its nx cells, each
+/// normalised to end at 1; empty when the environment sends no light. A cell weighs the
+/// mean luminance of its four corners times sin θ at its centre, which is positive wherever
+/// the radiance in the cell is.
+pub fn env_distribution(scene: &RenderScene, index: u32) -> Vec<f32> {
+    let t = &scene.textures[index as usize];
+    let [nx, ny] = env_cells(t);
+    let luminance = |x: u32, y: u32| {
+        let c = texel(scene, t, x, y.min(t.height - 1))
+            .truncate()
+            .as_dvec3();
+        let l = c.dot(DVec3::new(0.2126, 0.7152, 0.0722));
+        if l.is_finite() { l.max(0.0) } else { 0.0 }
+    };
+    let mut rows = Vec::with_capacity(ny as usize);
+    let mut cdf = vec![0.0f32; (ny + nx * ny) as usize];
+    for i in 0..ny {
+        let sin_theta = (std::f64::consts::PI * (i as f64 + 0.5) / ny as f64).sin();
+        let row = &mut cdf[(ny + i * nx) as usize..(ny + (i + 1) * nx) as usize];
+        let mut total = 0.0f64;
+        let mut sums = Vec::with_capacity(nx as usize);
+        for j in 0..nx {
+            let k = (j + 1) % nx;
+            let corners =
+                luminance(j, i) + luminance(k, i) + luminance(j, i + 1) + luminance(k, i + 1);
+            total += 0.25 * corners * sin_theta;
+            sums.push(total);
+        }
+        for (c, s) in row.iter_mut().zip(&sums) {
+            // A row that sends nothing is never picked; a uniform CDF keeps it well formed.
+            *c = if total > 0.0 {
+                (s / total) as f32
+            } else {
+                (sums.len() as f64).recip() as f32
+            };
+        }
+        if let Some(last) = row.last_mut() {
+            *last = 1.0;
+        }
+        rows.push(total);
+    }
+    let all: f64 = rows.iter().sum();
+    if !(all > 0.0 && all.is_finite()) {
+        return Vec::new();
+    }
+    let mut running = 0.0f64;
+    for (c, r) in cdf.iter_mut().zip(&rows) {
+        running += r;
+        *c = (running / all) as f32;
+    }
+    cdf[ny as usize - 1] = 1.0;
+    cdf
+}
+
+/// Where unit direction `dir` reads the environment's image: (u, v), u from the left edge
+/// around and v from the zenith (the top row) down, after the environment's rotation.
+/// mirror: shaders/environment.wgsl `env_uv`
+pub fn env_uv(scene: &RenderScene, dir: Vec3) -> Vec2 {
+    let [c, s] = scene.env.rotation;
+    let x = c * dir.x - s * dir.z;
+    let z = s * dir.x + c * dir.z;
+    let mut u = x.atan2(-z) * (0.5 / PI);
+    if u < 0.0 {
+        u += 1.0;
+    }
+    // θ = acos(y), as atan2: GPUs' acos may be off by 1e-4, which a sun 10⁴ times
+    // brighter than its sky turns into visible differences.
+    let theta = (x * x + z * z).sqrt().atan2(dir.y);
+    Vec2::new(u, theta * (1.0 / PI))
+}
+
+/// Radiance arriving along unit `dir` from the environment: its image read bilinearly
+/// (between texel centres along u, between rows at v = row / (height − 1) along v), times
+/// its strength.
+/// mirror: shaders/environment.wgsl `env_radiance`
+pub fn env_radiance(scene: &RenderScene, dir: Vec3) -> Vec3 {
+    let t = &scene.textures[scene.env.texture as usize];
+    let uv = env_uv(scene, dir);
+    let (xa, xb, fx) = texel_span(uv.x, t.width, Wrap::REPEAT.0);
+    let y = uv.y * (t.height - 1) as f32;
+    let y0 = y.floor();
+    let fy = y - y0;
+    let ya = (y0.max(0.0) as u32).min(t.height - 1);
+    let yb = (ya + 1).min(t.height - 1);
+    let top = texel(scene, t, xa, ya) * (1.0 - fx) + texel(scene, t, xb, ya) * fx;
+    let bottom = texel(scene, t, xa, yb) * (1.0 - fx) + texel(scene, t, xb, yb) * fx;
+    scene.env.strength * (top * (1.0 - fy) + bottom * fy).truncate()
+}
+
+/// Solid-angle probability density of [`sample_env`] drawing unit direction `dir` (0 at
+/// the poles, where no cell has area).
+/// mirror: shaders/environment.wgsl `env_pdf`
+pub fn env_pdf(scene: &RenderScene, dir: Vec3) -> f32 {
+    let [nx, ny] = scene.env.cells;
+    let uv = env_uv(scene, dir);
+    let sin_theta = (1.0 - dir.y * dir.y).max(0.0).sqrt();
+    if sin_theta <= 0.0 {
+        return 0.0;
+    }
+    let mut x = uv.x * nx as f32 - 0.5;
+    if x < 0.0 {
+        x += nx as f32;
+    }
+    let j = (x.max(0.0) as u32).min(nx - 1);
+    let i = ((uv.y * ny as f32).max(0.0) as u32).min(ny - 1);
+    let p = cdf_step(scene, 0, i) * cdf_step(scene, ny + i * nx, j);
+    p * (nx * ny) as f32 / (2.0 * PI * PI * sin_theta)
+}
+
+/// The probability of bucket `k` of the inclusive CDF that starts at `env_cdf[start]`.
+/// mirror: shaders/environment.wgsl `cdf_step`
+pub fn cdf_step(scene: &RenderScene, start: u32, k: u32) -> f32 {
+    let at = (start + k) as usize;
+    let prev = if k > 0 { scene.env_cdf[at - 1] } else { 0.0 };
+    scene.env_cdf[at] - prev
+}
+
+/// The bucket of the inclusive CDF `env_cdf[start..start + n]` that holds `u`, and where
+/// in the bucket `u` falls, in [0, 1).
+/// mirror: shaders/environment.wgsl `search_cdf`
+pub fn search_cdf(scene: &RenderScene, start: u32, n: u32, u: f32) -> (u32, f32) {
+    let (mut lo, mut hi) = (0u32, n - 1);
+    while lo < hi {
+        let mid = (lo + hi) / 2;
+        if scene.env_cdf[(start + mid) as usize] <= u {
+            lo = mid + 1;
+        } else {
+            hi = mid;
+        }
+    }
+    let p = cdf_step(scene, start, lo);
+    let prev = scene.env_cdf[(start + lo) as usize] - p;
+    let within = if p > 0.0 { (u - prev) / p } else { 0.5 };
+    (lo, within.clamp(0.0, 0.99999994))
+}
+
+/// A direction drawn from the environment's distribution with the uniform numbers `u`,
+/// and its solid-angle density ([`env_pdf`]; 0 where the draw lands on a pole).
+/// mirror: shaders/environment.wgsl `sample_env`
+pub fn sample_env(scene: &RenderScene, u: Vec2) -> (Vec3, f32) {
+    let [nx, ny] = scene.env.cells;
+    let (i, fy) = search_cdf(scene, 0, ny, u.y);
+    let (j, fx) = search_cdf(scene, ny + i * nx, nx, u.x);
+    let mut eu = (j as f32 + fx + 0.5) / nx as f32;
+    if eu >= 1.0 {
+        eu -= 1.0;
+    }
+    let ev = (i as f32 + fy) / ny as f32;
+    let (sin_theta, cos_theta) = (PI * ev).sin_cos();
+    let (sin_phi, cos_phi) = (2.0 * PI * eu).sin_cos();
+    let x = sin_theta * sin_phi;
+    let z = -sin_theta * cos_phi;
+    let [c, s] = scene.env.rotation;
+    let dir = Vec3::new(c * x + s * z, cos_theta, -s * x + c * z);
+    if sin_theta <= 0.0 {
+        return (dir, 0.0);
+    }
+    let p = cdf_step(scene, 0, i) * cdf_step(scene, ny + i * nx, j);
+    (dir, p * (nx * ny) as f32 / (2.0 * PI * PI * sin_theta))
+}
