@@ -18,7 +18,8 @@ directions, for several maps, rotations and strengths, through the script's own
 environment_envmap(), and compares with a numpy evaluation of the rule with that lookup;
 it also prints how far off the texel-centre reading of v would be, and checks the cases
 measured by hand (a 4x3 map: u = 0.125 gives column 0 exactly, v = 0.25 the halfway point
-between rows 0 and 1), the rotation's direction (rotate = 90 puts the image centre at
+between rows 0 and 1), that Mitsuba decodes the shipped .hdr maps exactly as rgbe.py does
+(and test_16x8.exr to the same values as test_16x8.hdr), the rotation's direction (rotate = 90 puts the image centre at
 +X), and that invalid [sky] tables are refused with an error naming the field.
 
 Usage: python3 tools/check_envmap.py   (scalar_rgb; about 10 s; exit status 1 on failure)
@@ -159,6 +160,22 @@ def main():
         want = spec_eval(img, d, 35.0, 0.8)
         report("assets/env/test_16x8.hdr rotate 35 strength 0.8", float(np.max(
             np.abs(m - want) / np.maximum(want, 1e-6))), 1e-4)
+
+        # 3b. the shipped maps: Mitsuba's RGBE reading equals rgbe.py's, bit for bit
+        for name in sorted(os.listdir(os.path.join(ROOT, "assets/env"))):
+            if not name.endswith((".hdr", ".exr")):
+                continue
+            path = os.path.join(ROOT, "assets/env", name)
+            m = np.array(mi.Bitmap(path), dtype=np.float64)[:, :, :3]
+            twin = path[:-4] + ".hdr"          # an .exr is compared with its .hdr twin
+            if not os.path.exists(twin):
+                continue
+            ours = rgbe.read_hdr(twin)
+            good = m.shape == ours.shape and np.array_equal(m, ours)
+            ok &= good
+            print("%-58s %s" % ("assets/env/%s: Mitsuba reads %s" % (
+                name, "rgbe.py's values" if name.endswith(".hdr") else "the .hdr's values"),
+                "ok" if good else "FAIL"))
 
         # 4. the rotation's direction: a map bright at its centre column only
         img = np.full((9, 16, 3), 0.01)

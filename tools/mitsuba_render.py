@@ -24,6 +24,16 @@ shared/specs/scene-format.md):
   * sky colour -> `constant`; sky gradient -> `envmap` of a lat-long bitmap whose rows
     hold lerp(horizon, zenith, 0.5 * (dir.y + 1)) (depends on dir.y only, so Mitsuba's
     azimuth convention does not matter);
+  * sky environment map (`[sky] environment = "f.hdr" | "f.exr"`, `rotate` in degrees
+    about +Y, `strength`) -> `envmap` with the image read here (as textures, HDR/EXR as
+    stored) as its `bitmap`, `scale` = strength, to_world = rotate([0, 1, 0], rotate):
+    exactly the format's d' = R_y(-rotate) d, u = atan2(d'.x, -d'.z) / 2 pi,
+    v = acos(d'.y) / pi. Mitsuba interpolates bilinearly with the columns at texel centres
+    (u = (j + 0.5) / W, wrapping) but the rows at v = i / (H - 1) (row 0 exactly at +Y),
+    which is how meshtrace must read the map to match (tools/check_envmap.py). Refused:
+    environment with color/zenith/horizon, rotate/strength without environment, a
+    strength < 0, non-finite numbers, other extensions, a missing file; strength 0 (or an
+    all-black map) is a black sky;
   * normal maps (`normal_map = { texture, scale, strength = 1 }` on any material, MTL
     map_Bump / bump / norm, glTF normalTexture with scale 1) -> Mitsuba's `normalmap`
     around the BSDF, the map read raw (see normal_map_bsdf for where this is exact);
