@@ -20,7 +20,10 @@ it also prints how far off the texel-centre reading of v would be, and checks th
 measured by hand (a 4x3 map: u = 0.125 gives column 0 exactly, v = 0.25 the halfway point
 between rows 0 and 1), that Mitsuba decodes the shipped .hdr maps exactly as rgbe.py does
 (and test_16x8.exr to the same values as test_16x8.hdr), the rotation's direction (rotate = 90 puts the image centre at
-+X), and that invalid [sky] tables are refused with an error naming the field.
++X), that invalid [sky] tables are refused with an error naming the field, and, end to
+end, that the pixels of tests/references/env_sun_ref.exr which see the sky directly equal
+the rule's lookup averaged over each pixel (8x8 rays through the scene's camera), which
+a negated rotation fails by far.
 
 Usage: python3 tools/check_envmap.py   (scalar_rgb; about 10 s; exit status 1 on failure)
 """
@@ -101,6 +104,61 @@ def random_dirs(rng, n):
     d = rng.normal(size=(n, 3))
     d /= np.linalg.norm(d, axis=1)[:, None]
     return d[np.abs(d[:, 1]) < 0.995]        # away from the poles (u undefined there)
+
+
+def check_reference_sky(mi, scene="tests/scenes/env_sun.toml",
+                        ref="tests/references/env_sun_ref.exr", n=8):
+    import tomllib
+    scene, ref = os.path.join(ROOT, scene), os.path.join(ROOT, ref)
+    if not os.path.exists(ref):
+        print("(no %s: end-to-end check skipped)" % ref)
+        return True
+    with open(scene, "rb") as fh:
+        doc = tomllib.load(fh)
+    cam, sky, r = doc["camera"], doc["sky"], doc["render"]
+    w, h = r["width"], r["height"]
+    img = load_map(mi, os.path.join(os.path.dirname(scene), sky["environment"]))
+    pos, at = np.array(cam["position"], float), np.array(cam["look_at"], float)
+    f = (at - pos) / np.linalg.norm(at - pos)
+    right = np.cross(f, [0.0, 1.0, 0.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, f)
+    t = math.tan(math.radians(cam.get("vfov", 40.0)) / 2)
+    s = (np.arange(n) + 0.5) / n
+    sx, sy = np.meshgrid(s, s)
+    refimg = np.array(mi.Bitmap(ref), dtype=np.float64)[:, :, :3]
+    rows = []
+    for i in range(h):
+        for j in range(w):
+            x = ((j + sx.ravel()) / w * 2 - 1) * t * w / h
+            y = (1 - (i + sy.ravel()) / h * 2) * t
+            d = f[None, :] + x[:, None] * right[None, :] + y[:, None] * up[None, :]
+            d /= np.linalg.norm(d, axis=1)[:, None]
+            if d[:, 1].min() > 0.0 and pos[1] > 1.0:      # above every object, going up
+                rows.append((i, j, d))
+    if not rows:
+        print("end to end: no sky pixels in %s" % ref)
+        return False
+    strength, rot = sky.get("strength", 1.0), sky.get("rotate", 0.0)
+    errs = {}
+    for name, kw in (("rule", dict(rotate=rot)), ("v at texel centres", dict(rotate=rot, v_centres=True)),
+                     ("rotate negated", dict(rotate=-rot))):
+        e = []
+        for i, j, d in rows:
+            want = spec_eval(img, d, kw["rotate"], strength, kw.get("v_centres", False)).mean(axis=0)
+            e.append(np.abs(refimg[i, j] - want) / want)
+        errs[name] = (np.mean(e), np.max(e))
+    good = errs["rule"][1] < 0.01 and errs["rotate negated"][1] > 0.05
+    print("%-58s %s" % ("env_sun reference, %d sky pixels vs the rule:" % len(rows),
+                        "ok" if good else "FAIL"))
+    for name, (mean, mx) in errs.items():
+        print("    %-20s mean rel. error %.2e, max %.2e" % (name, mean, mx))
+    return good
+
+
+def load_map(mi, path):
+    mr._images.clear()
+    return mr.load_texture(mi, path, "map")
 
 
 def main():
@@ -232,6 +290,10 @@ def main():
             good = ("sky" in d) == has_sky
             ok &= good
             print("%-58s %s" % ("accepted: " + body.replace("\n", "; "), "ok" if good else "FAIL"))
+    # 6. end to end: the pixels of the committed env_sun reference that see the sky directly
+    #    (every ray through them goes upwards from above the scene) against the rule,
+    #    supersampled over each pixel (the film's box filter); a wrong rotation's sign shows
+    ok &= check_reference_sky(mi)
     print("all ok" if ok else "FAILED")
     sys.exit(0 if ok else 1)
 
