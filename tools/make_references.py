@@ -50,6 +50,9 @@ MATERIAL_SCENES = {
     # seen through its own camera, and placed by gltf_room.toml as an object
     "gltf_room_bare": ("tests/scenes/gltf_room/room.gltf", 32768, (96, 72)),
     "gltf_room": ("tests/scenes/gltf_room.toml", 32768),
+    # lit only by an environment map with a real sun (assets/env/rooitou_park_256x128.hdr,
+    # rotate 35, strength 0.8); cheap per sample (~1.3 ms per spp), hence the high count
+    "env_sun": ("tests/scenes/env_sun.toml", 65536),
 }
 
 

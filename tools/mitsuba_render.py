@@ -24,6 +24,16 @@ shared/specs/scene-format.md):
   * sky colour -> `constant`; sky gradient -> `envmap` of a lat-long bitmap whose rows
     hold lerp(horizon, zenith, 0.5 * (dir.y + 1)) (depends on dir.y only, so Mitsuba's
     azimuth convention does not matter);
+  * sky environment map (`[sky] environment = "f.hdr" | "f.exr"`, `rotate` in degrees
+    about +Y, `strength`) -> `envmap` with the image read here (as textures, HDR/EXR as
+    stored) as its `bitmap`, `scale` = strength, to_world = rotate([0, 1, 0], rotate):
+    exactly the format's d' = R_y(-rotate) d, u = atan2(d'.x, -d'.z) / 2 pi,
+    v = acos(d'.y) / pi. Mitsuba interpolates bilinearly with the columns at texel centres
+    (u = (j + 0.5) / W, wrapping) but the rows at v = i / (H - 1) (row 0 exactly at +Y),
+    which is how meshtrace must read the map to match (tools/check_envmap.py). Refused:
+    environment with color/zenith/horizon, rotate/strength without environment, a
+    strength < 0, non-finite numbers, other extensions, a missing file; strength 0 (or an
+    all-black map) is a black sky;
   * normal maps (`normal_map = { texture, scale, strength = 1 }` on any material, MTL
     map_Bump / bump / norm, glTF normalTexture with scale 1) -> Mitsuba's `normalmap`
     around the BSDF, the map read raw (see normal_map_bsdf for where this is exact);
@@ -828,6 +838,51 @@ def gradient_envmap(mi, zenith, horizon, width=64, height=1024):
     return {"type": "envmap", "bitmap": mi.Bitmap(img, mi.Bitmap.PixelFormat.RGB)}
 
 
+def _sky_number(sky, key, default):
+    v = sky.get(key, default)
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise SceneError("[sky].%s must be a number, got %r" % (key, v))
+    v = float(v)
+    if not math.isfinite(v):
+        raise SceneError("[sky].%s must be finite, got %r" % (key, v))
+    return v
+
+
+def environment_envmap(mi, sky, base):
+    """[sky] environment = "f.hdr" | "f.exr", rotate (degrees about +Y), strength -> Mitsuba
+    `envmap` (None where strength is 0: a black sky). The scene format reads the map at
+    d' = R_y(-rotate) d, u = atan2(d'.x, -d'.z) / 2 pi, v = acos(d'.y) / pi (u = 0 the left
+    edge, v = 0 the top row), which is Mitsuba's envmap with to_world = rotate(+Y, rotate),
+    scale = strength (checked by tools/check_envmap.py). The image is read here
+    (load_texture: HDR and EXR as stored, RGB) and handed over as a float bitmap, so that
+    Mitsuba sees exactly the numbers our reader decodes."""
+    for key in ("color", "zenith", "horizon"):
+        if key in sky:
+            raise SceneError("[sky].environment cannot be combined with `%s`" % key)
+    name = sky["environment"]
+    if not isinstance(name, str) or not name:
+        raise SceneError("[sky].environment must be a file name, got %r" % (name,))
+    ext = os.path.splitext(name)[1].lower()
+    if ext not in (".hdr", ".exr"):
+        raise SceneError("[sky].environment: %s: an environment map must be a .hdr or .exr "
+                         "file" % name)
+    path = os.path.join(base, name)
+    if not os.path.isfile(path):
+        raise SceneError("[sky].environment: file not found: %s" % path)
+    rotate = _sky_number(sky, "rotate", 0.0)
+    strength = _sky_number(sky, "strength", 1.0)
+    if strength < 0:
+        raise SceneError("[sky].strength must be >= 0, got %r" % strength)
+    img = load_texture(mi, path, "[sky].environment")
+    if not np.all(np.isfinite(img)) or np.any(img < 0):
+        raise SceneError("[sky].environment: %s has negative or non-finite texels" % path)
+    if strength == 0 or not np.any(img > 0):
+        return None
+    bmp = mi.Bitmap(np.ascontiguousarray(img, dtype=np.float32), mi.Bitmap.PixelFormat.RGB)
+    return {"type": "envmap", "bitmap": bmp, "scale": strength,
+            "to_world": mi.ScalarTransform4f().rotate([0.0, 1.0, 0.0], rotate)}
+
+
 def icosphere(level):
     """Unit-sphere vertices and counter-clockwise triangles of an icosahedron subdivided
     `level` times: the algorithm, vertex and face order of meshtrace's src/scene/sphere.rs."""
@@ -1506,8 +1561,16 @@ def build_scene_dict(mi, path, args, tmpdir):
 
     sky = doc.get("sky")
     if sky is not None:
-        check_keys(sky, {"color", "zenith", "horizon"}, "[sky]")
-        if "color" in sky:
+        check_keys(sky, {"color", "zenith", "horizon", "environment", "rotate", "strength"},
+                   "[sky]")
+        if "environment" in sky:
+            env = environment_envmap(mi, sky, base)
+            if env is not None:
+                scene["sky"] = env
+        elif "rotate" in sky or "strength" in sky:
+            raise SceneError("[sky].%s: only valid with `environment`"
+                             % ("rotate" if "rotate" in sky else "strength"))
+        elif "color" in sky:
             if "zenith" in sky or "horizon" in sky:
                 raise SceneError("[sky]: `color` excludes zenith/horizon")
             c = vec3(sky["color"], "sky.color")
