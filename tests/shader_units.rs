@@ -1107,12 +1107,15 @@ fn texture_lookup_matches() {
         [[objects]]\nmesh = \"quad.obj\"\nmaterial = \"e\"\n";
     let scene = meshtrace::scene::load_scene(&dir.write("scene.toml", toml)).unwrap();
     let rs = RenderScene::new(&scene, &BuildParams::default()).unwrap();
-    assert_eq!(rs.textures.len(), 5);
+    // Five textures, and copies of the two that clamp or mirror along v shifted for the
+    // OBJ's texture coordinates, with their materials.
+    assert_eq!(rs.textures.len(), 7);
+    let (textures, materials) = (rs.textures.len(), rs.materials.len());
     let settings = scene.settings;
     let mut cases = Vec::new();
     while cases.len() < 12_000 {
         let uv = Vec2::new(r.range(-20.0, 20.0), r.range(-20.0, 20.0));
-        let (t, m) = (r.below(5) as u32, r.below(5) as u32);
+        let (t, m) = (r.below(textures) as u32, r.below(materials) as u32);
         cases.push([[b(uv.x), b(uv.y), t, m], [0; 4]]);
     }
     let out = run(&ctx, &rs, &settings, "test_texture", &cases);
