@@ -32,8 +32,48 @@ fn env_radiance(dir: vec3<f32>) -> vec3<f32> {
     return params.env_strength * (top * (1.0 - fy) + bottom * fy).xyz;
 }
 
+// mirror: src/render/environment.rs `texel_luminance`
+fn texel_luminance(t: Texture, x: u32, y: u32) -> f32 {
+    let c = texel(t, x, y);
+    let l = 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+    return select(0.0, l, l > 0.0);
+}
+
+// mirror: src/render/environment.rs `cell_corners`
+fn cell_corners(t: Texture, i: u32, j: u32) -> vec4<f32> {
+    let k = (j + 1u) % t.width;
+    let below = min(i + 1u, t.height - 1u);
+    return vec4<f32>(
+        texel_luminance(t, j, i),
+        texel_luminance(t, k, i),
+        texel_luminance(t, j, below),
+        texel_luminance(t, k, below),
+    );
+}
+
+// mirror: src/render/environment.rs `sample_linear`
+fn sample_linear(u: f32, a: f32, b: f32) -> f32 {
+    if a + b <= 0.0 {
+        return u;
+    }
+    let x = u * (a + b) / (a + sqrt(max(a * a + u * (b * b - a * a), 0.0)));
+    return clamp(x, 0.0, 0.99999994);
+}
+
+// mirror: src/render/environment.rs `cell_density`
+fn cell_density(c: vec4<f32>, x: f32, y: f32) -> f32 {
+    let mean = 0.25 * (c.x + c.y + c.z + c.w);
+    if mean <= 0.0 {
+        return 0.0;
+    }
+    let top = c.x + x * (c.y - c.x);
+    let bottom = c.z + x * (c.w - c.z);
+    return (top + y * (bottom - top)) / mean;
+}
+
 // mirror: src/render/environment.rs `env_pdf`
 fn env_pdf(dir: vec3<f32>) -> f32 {
+    let t = load_texture(params.env_texture);
     let nx = params.env_cells.x;
     let ny = params.env_cells.y;
     let uv = env_uv(dir);
@@ -45,9 +85,11 @@ fn env_pdf(dir: vec3<f32>) -> f32 {
     if x < 0.0 {
         x += f32(nx);
     }
+    let y = uv.y * f32(ny);
     let j = min(u32(max(x, 0.0)), nx - 1u);
-    let i = min(u32(max(uv.y * f32(ny), 0.0)), ny - 1u);
-    let p = cdf_step(0u, i) * cdf_step(ny + i * nx, j);
+    let i = min(u32(max(y, 0.0)), ny - 1u);
+    let within = cell_density(cell_corners(t, i, j), clamp(x - f32(j), 0.0, 1.0), clamp(y - f32(i), 0.0, 1.0));
+    let p = cdf_step(0u, i) * cdf_step(ny + i * nx, j) * within;
     return p * f32(nx * ny) / (2.0 * PI * PI * sin_theta);
 }
 
@@ -96,29 +138,33 @@ struct EnvSample {
 
 // mirror: src/render/environment.rs `sample_env`
 fn sample_env(u: vec2<f32>) -> EnvSample {
+    let t = load_texture(params.env_texture);
     let nx = params.env_cells.x;
     let ny = params.env_cells.y;
     let row = search_cdf(0u, ny, u.y);
     let i = row.k;
     let col = search_cdf(ny + i * nx, nx, u.x);
     let j = col.k;
-    var eu = (f32(j) + col.within + 0.5) / f32(nx);
+    let c = cell_corners(t, i, j);
+    let y = sample_linear(row.within, c.x + c.y, c.z + c.w);
+    let x = sample_linear(col.within, c.x + y * (c.z - c.x), c.y + y * (c.w - c.y));
+    var eu = (f32(j) + x + 0.5) / f32(nx);
     if eu >= 1.0 {
         eu -= 1.0;
     }
-    let ev = (f32(i) + row.within) / f32(ny);
+    let ev = (f32(i) + y) / f32(ny);
     let sin_theta = sin(PI * ev);
     let cos_theta = cos(PI * ev);
     let sin_phi = sin(2.0 * PI * eu);
     let cos_phi = cos(2.0 * PI * eu);
-    let x = sin_theta * sin_phi;
-    let z = -sin_theta * cos_phi;
-    let c = params.env_rotation.x;
-    let s = params.env_rotation.y;
-    let dir = vec3<f32>(c * x + s * z, cos_theta, -s * x + c * z);
+    let dx = sin_theta * sin_phi;
+    let dz = -sin_theta * cos_phi;
+    let rc = params.env_rotation.x;
+    let rs = params.env_rotation.y;
+    let dir = vec3<f32>(rc * dx + rs * dz, cos_theta, -rs * dx + rc * dz);
     if sin_theta <= 0.0 {
         return EnvSample(dir, 0.0);
     }
-    let p = cdf_step(0u, i) * cdf_step(ny + i * nx, j);
+    let p = cdf_step(0u, i) * cdf_step(ny + i * nx, j) * cell_density(c, x, y);
     return EnvSample(dir, p * f32(nx * ny) / (2.0 * PI * PI * sin_theta));
 }

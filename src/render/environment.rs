@@ -1,7 +1,8 @@
 //! The environment map: radiance arriving from an equirectangular image around the scene,
-//! and its importance sampling by a piecewise-constant distribution over cells of the
-//! image, weighed by luminance × sin θ and built once on the host. Every function but the
-//! builder has a WGSL twin of the same name in `shaders/environment.wgsl`.
+//! and its importance sampling: a cell of the image drawn from a piecewise-constant
+//! distribution over the cells, weighed by luminance × sin θ and built once on the host,
+//! then a point in the cell drawn in proportion to its bilinear luminance. Every function
+//! but the builder has a WGSL twin of the same name in `shaders/environment.wgsl`.
 //!
 //! The image is read as Mitsuba 3's `envmap` reads it, so that the two agree pixel for
 //! pixel: bilinearly between texel centres along u (wrapping around), and along v between
@@ -12,7 +13,7 @@
 use super::RenderScene;
 use super::texture::{texel, texel_span};
 use crate::scene::{Texture, Wrap};
-use glam::{DVec3, Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use std::f32::consts::PI;
 
 /// The environment's cells along u and v: one per column (between its texel centre and
@@ -25,32 +26,24 @@ pub fn env_cells(t: &Texture) -> [u32; 2] {
 /// [`env_cells`] [nx, ny], the inclusive
 /// CDF over the ny rows of cells, then each row's inclusive CDF over its nx cells, each
 /// normalised to end at 1; empty when the environment sends no light. A cell weighs the
-/// mean luminance of its four corners times sin θ at its centre, which is positive wherever
-/// the radiance in the cell is.
+/// mean luminance of its four corners (the integral of their bilinear interpolation) times
+/// sin θ at its centre, which is positive wherever the radiance in the cell is.
 pub fn env_distribution(scene: &RenderScene, index: u32) -> Vec<f32> {
     let t = &scene.textures[index as usize];
     let [nx, ny] = env_cells(t);
-    let luminance = |x: u32, y: u32| {
-        let c = texel(scene, t, x, y.min(t.height - 1))
-            .truncate()
-            .as_dvec3();
-        let l = c.dot(DVec3::new(0.2126, 0.7152, 0.0722));
-        if l.is_finite() { l.max(0.0) } else { 0.0 }
-    };
     let mut rows = Vec::with_capacity(ny as usize);
     let mut cdf = vec![0.0f32; (ny + nx * ny) as usize];
     for i in 0..ny {
         let sin_theta = (std::f64::consts::PI * (i as f64 + 0.5) / ny as f64).sin();
-        let row = &mut cdf[(ny + i * nx) as usize..(ny + (i + 1) * nx) as usize];
         let mut total = 0.0f64;
-        let mut sums = Vec::with_capacity(nx as usize);
-        for j in 0..nx {
-            let k = (j + 1) % nx;
-            let corners =
-                luminance(j, i) + luminance(k, i) + luminance(j, i + 1) + luminance(k, i + 1);
-            total += 0.25 * corners * sin_theta;
-            sums.push(total);
-        }
+        let sums: Vec<f64> = (0..nx)
+            .map(|j| {
+                let c = cell_corners(scene, t, i, j).as_dvec4();
+                total += 0.25 * (c.x + c.y + c.z + c.w) * sin_theta;
+                total
+            })
+            .collect();
+        let row = &mut cdf[(ny + i * nx) as usize..(ny + (i + 1) * nx) as usize];
         for (c, s) in row.iter_mut().zip(&sums) {
             // A row that sends nothing is never picked; a uniform CDF keeps it well formed.
             *c = if total > 0.0 {
@@ -75,6 +68,53 @@ pub fn env_distribution(scene: &RenderScene, index: u32) -> Vec<f32> {
     }
     cdf[ny as usize - 1] = 1.0;
     cdf
+}
+
+/// The luminance of texel (`x`, `y`) of image `t`, or 0 where that is not positive: the
+/// environment's sampling weight.
+/// mirror: shaders/environment.wgsl `texel_luminance`
+pub fn texel_luminance(scene: &RenderScene, t: &Texture, x: u32, y: u32) -> f32 {
+    let c = texel(scene, t, x, y);
+    let l = 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+    if l > 0.0 { l } else { 0.0 }
+}
+
+/// The luminances at the corners of cell (`i`, `j`) of image `t`: its row `i` at columns
+/// `j` and `j + 1` (around), then its row `i + 1` (the last row for an image of one row).
+/// mirror: shaders/environment.wgsl `cell_corners`
+pub fn cell_corners(scene: &RenderScene, t: &Texture, i: u32, j: u32) -> Vec4 {
+    let k = (j + 1) % t.width;
+    let below = (i + 1).min(t.height - 1);
+    Vec4::new(
+        texel_luminance(scene, t, j, i),
+        texel_luminance(scene, t, k, i),
+        texel_luminance(scene, t, j, below),
+        texel_luminance(scene, t, k, below),
+    )
+}
+
+/// A point of [0, 1) drawn with density proportional to the line from `a` at 0 to `b` at
+/// 1 (both at least 0), from the uniform number `u`; `u` itself where both are 0.
+/// mirror: shaders/environment.wgsl `sample_linear`
+pub fn sample_linear(u: f32, a: f32, b: f32) -> f32 {
+    if a + b <= 0.0 {
+        return u;
+    }
+    let x = u * (a + b) / (a + (a * a + u * (b * b - a * a)).max(0.0).sqrt());
+    x.clamp(0.0, 0.99999994)
+}
+
+/// The density, relative to the cell's mean, of the bilinear luminance `c` (as
+/// [`cell_corners`] orders them) at (`x`, `y`) in the cell; 0 for a black cell.
+/// mirror: shaders/environment.wgsl `cell_density`
+pub fn cell_density(c: Vec4, x: f32, y: f32) -> f32 {
+    let mean = 0.25 * (c.x + c.y + c.z + c.w);
+    if mean <= 0.0 {
+        return 0.0;
+    }
+    let top = c.x + x * (c.y - c.x);
+    let bottom = c.z + x * (c.w - c.z);
+    (top + y * (bottom - top)) / mean
 }
 
 /// Where unit direction `dir` reads the environment's image: (u, v), u from the left edge
@@ -116,6 +156,7 @@ pub fn env_radiance(scene: &RenderScene, dir: Vec3) -> Vec3 {
 /// the poles, where no cell has area).
 /// mirror: shaders/environment.wgsl `env_pdf`
 pub fn env_pdf(scene: &RenderScene, dir: Vec3) -> f32 {
+    let t = &scene.textures[scene.env.texture as usize];
     let [nx, ny] = scene.env.cells;
     let uv = env_uv(scene, dir);
     let sin_theta = (1.0 - dir.y * dir.y).max(0.0).sqrt();
@@ -126,9 +167,15 @@ pub fn env_pdf(scene: &RenderScene, dir: Vec3) -> f32 {
     if x < 0.0 {
         x += nx as f32;
     }
+    let y = uv.y * ny as f32;
     let j = (x.max(0.0) as u32).min(nx - 1);
-    let i = ((uv.y * ny as f32).max(0.0) as u32).min(ny - 1);
-    let p = cdf_step(scene, 0, i) * cdf_step(scene, ny + i * nx, j);
+    let i = (y.max(0.0) as u32).min(ny - 1);
+    let within = cell_density(
+        cell_corners(scene, t, i, j),
+        (x - j as f32).clamp(0.0, 1.0),
+        (y - i as f32).clamp(0.0, 1.0),
+    );
+    let p = cdf_step(scene, 0, i) * cdf_step(scene, ny + i * nx, j) * within;
     p * (nx * ny) as f32 / (2.0 * PI * PI * sin_theta)
 }
 
@@ -160,26 +207,32 @@ pub fn search_cdf(scene: &RenderScene, start: u32, n: u32, u: f32) -> (u32, f32)
 }
 
 /// A direction drawn from the environment's distribution with the uniform numbers `u`,
-/// and its solid-angle density ([`env_pdf`]; 0 where the draw lands on a pole).
+/// and its solid-angle density ([`env_pdf`]; 0 where the draw lands on a pole): a cell by
+/// the CDFs, then a point in it with density proportional to its bilinear luminance (the
+/// radiance's own interpolation), so that radiance over density barely varies in a cell.
 /// mirror: shaders/environment.wgsl `sample_env`
 pub fn sample_env(scene: &RenderScene, u: Vec2) -> (Vec3, f32) {
+    let t = &scene.textures[scene.env.texture as usize];
     let [nx, ny] = scene.env.cells;
     let (i, fy) = search_cdf(scene, 0, ny, u.y);
     let (j, fx) = search_cdf(scene, ny + i * nx, nx, u.x);
-    let mut eu = (j as f32 + fx + 0.5) / nx as f32;
+    let c = cell_corners(scene, t, i, j);
+    let y = sample_linear(fy, c.x + c.y, c.z + c.w);
+    let x = sample_linear(fx, c.x + y * (c.z - c.x), c.y + y * (c.w - c.y));
+    let mut eu = (j as f32 + x + 0.5) / nx as f32;
     if eu >= 1.0 {
         eu -= 1.0;
     }
-    let ev = (i as f32 + fy) / ny as f32;
+    let ev = (i as f32 + y) / ny as f32;
     let (sin_theta, cos_theta) = (PI * ev).sin_cos();
     let (sin_phi, cos_phi) = (2.0 * PI * eu).sin_cos();
-    let x = sin_theta * sin_phi;
-    let z = -sin_theta * cos_phi;
-    let [c, s] = scene.env.rotation;
-    let dir = Vec3::new(c * x + s * z, cos_theta, -s * x + c * z);
+    let dx = sin_theta * sin_phi;
+    let dz = -sin_theta * cos_phi;
+    let [rc, rs] = scene.env.rotation;
+    let dir = Vec3::new(rc * dx + rs * dz, cos_theta, -rs * dx + rc * dz);
     if sin_theta <= 0.0 {
         return (dir, 0.0);
     }
-    let p = cdf_step(scene, 0, i) * cdf_step(scene, ny + i * nx, j);
+    let p = cdf_step(scene, 0, i) * cdf_step(scene, ny + i * nx, j) * cell_density(c, x, y);
     (dir, p * (nx * ny) as f32 / (2.0 * PI * PI * sin_theta))
 }
