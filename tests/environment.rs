@@ -184,13 +184,22 @@ fn environment_sampling_draws_by_its_density() {
 }
 
 /// A sky table is an environment or a colour, not both; `rotate` and `strength` belong to
-/// an environment; the image must exist and decode. Each is a one-line error naming the
-/// field.
+/// an environment; the image must exist and decode, and an EXR compressed in a way the exr
+/// crate cannot read (DWAA, DWAB) says so. Each is a one-line error naming the field.
 #[test]
 fn bad_environments_are_errors_naming_the_field() {
     let dir = TempDir::new("env-errors");
     dir.write_exr("e.exr", 2, 2, &[[1.0; 4]; 4]);
     dir.write("junk.hdr", "not an image");
+    // The test map with its header's compression turned to DWAA (8) and DWAB (9).
+    let exr = std::fs::read(root().join("assets/env/test_16x8.exr")).unwrap();
+    let key = b"compression\0compression\0";
+    let at = exr.windows(key.len()).position(|w| w == key).unwrap() + key.len() + 4;
+    for (name, code) in [("dwaa.exr", 8), ("dwab.exr", 9)] {
+        let mut patched = exr.clone();
+        patched[at] = code;
+        dir.write(name, patched);
+    }
     for (sky, needles) in [
         (
             "environment = \"e.exr\"\ncolor = [1.0, 1.0, 1.0]",
@@ -219,6 +228,14 @@ fn bad_environments_are_errors_naming_the_field() {
         (
             "environment = \"junk.hdr\"",
             &["sky.environment", "junk.hdr"],
+        ),
+        (
+            "environment = \"dwaa.exr\"",
+            &["sky.environment", "dwaa.exr", "DWAA", "ZIP"],
+        ),
+        (
+            "environment = \"dwab.exr\"",
+            &["sky.environment", "dwab.exr", "DWAB"],
         ),
     ] {
         let toml = format!(

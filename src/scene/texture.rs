@@ -366,6 +366,51 @@ impl Decoded {
     }
 }
 
+/// OpenEXR's compression codes, in order (the header's `compression` attribute).
+const EXR_COMPRESSIONS: [&str; 11] = [
+    "NONE", "RLE", "ZIPS", "ZIP", "PIZ", "PXR24", "B44", "B44A", "DWAA", "DWAB", "HTJ2K",
+];
+
+/// Refuses an OpenEXR file whose compression the `exr` crate cannot read (DWAA, DWAB,
+/// HTJ2K), naming it, where the decoder would give a less helpful message. The header is a
+/// list of attributes (name, type, size, value) after 8 bytes of magic number and version;
+/// a header this cannot follow is left to the decoder.
+fn check_exr_compression(bytes: &[u8]) -> Result<(), String> {
+    let mut at = 8;
+    let text = |at: &mut usize| -> Option<&[u8]> {
+        let rest = bytes.get(*at..)?;
+        let end = rest.iter().position(|&b| b == 0)?;
+        *at += end + 1;
+        Some(&rest[..end])
+    };
+    while let Some(name) = text(&mut at) {
+        if name.is_empty() {
+            break;
+        }
+        text(&mut at);
+        let size = bytes
+            .get(at..at + 4)
+            .map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+        let Some(size) = size.and_then(|s| usize::try_from(s).ok()) else {
+            return Ok(());
+        };
+        at += 4;
+        if name == b"compression" {
+            let code = bytes.get(at).copied().unwrap_or(0) as usize;
+            return match EXR_COMPRESSIONS.get(code) {
+                Some(&c @ ("DWAA" | "DWAB" | "HTJ2K")) => Err(format!(
+                    "the EXR is compressed with {c}, which meshtrace's EXR reader (the exr \
+                     crate) cannot read; save it with ZIP or PIZ compression instead \
+                     (for example `oiiotool in.exr --compression zip -o out.exr`)"
+                )),
+                _ => Ok(()),
+            };
+        }
+        at += size;
+    }
+    Ok(())
+}
+
 /// Decodes an image's bytes, in `format` where its extension or MIME type names one (TGA
 /// has no magic number), or else in the format guessed from its first bytes. Before it
 /// allocates, the image's size is checked against the memory the machine has free: an
@@ -378,6 +423,9 @@ fn decode(format: Option<ImageFormat>, bytes: &[u8]) -> Result<(Kind, Decoded), 
             "not an image format meshtrace reads (PNG, JPEG, BMP, TGA, HDR, EXR)".to_string()
         })?;
     let cannot = |e: image::ImageError| format!("cannot decode the image: {e}");
+    if format == ImageFormat::OpenExr {
+        check_exr_compression(bytes)?;
+    }
     let mut reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
     // The image crate's default cap (512 MiB) would refuse an 16384² texture that fits;
     // the check below against the free memory replaces it.
