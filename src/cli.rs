@@ -11,6 +11,7 @@ use meshtrace::math::Aabb;
 use meshtrace::render::backend::{Backend, DeviceChoice};
 use meshtrace::render::gpu::{self, GpuError};
 use meshtrace::render::{LIGHT_EMITTER, RenderJob, RenderScene, SKY_EMITTER};
+use meshtrace::scene::studio::{BareOptions, Up};
 use meshtrace::scene::{self, Scene, TextureFormat, builtin, load::validate_settings};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -143,14 +144,34 @@ pub struct RenderArgs {
     /// checkpoints already written stay).
     #[arg(long)]
     pub no_partial: bool,
+    /// The up axis of a bare mesh (.obj, .gltf, .glb). By default an OBJ whose extent is
+    /// largest along Z is taken as Z-up, anything else as Y-up.
+    #[arg(long, value_enum)]
+    pub up: Option<UpAxis>,
+    /// Light the scene or the bare mesh with this equirectangular image (.hdr or .exr)
+    /// instead of its own sky.
+    #[arg(long, value_name = "FILE")]
+    pub env: Option<PathBuf>,
 }
 
-/// Loads a scene given on the command line: a path, or `builtin:NAME`.
-fn load(path: &Path) -> Result<Scene> {
+/// An axis for `--up`.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum UpAxis {
+    X,
+    Y,
+    Z,
+}
+
+/// Loads a scene given on the command line: a path, or `builtin:NAME`; a bare mesh with
+/// `options`.
+fn load(path: &Path, options: &BareOptions) -> Result<Scene> {
     let text = path.to_string_lossy();
     let scene = match text.strip_prefix("builtin:") {
+        Some(_) if options.up.is_some() => {
+            bail!("--up: applies to a bare mesh (.obj, .gltf, .glb), not to a built-in scene")
+        }
         Some(name) => builtin::load_builtin(name)?,
-        None => scene::load_scene(path)?,
+        None => scene::load::load_scene_with(path, &scene::obj::Fs, options)?,
     };
     for w in &scene.warnings {
         eprintln!("warning: {w}");
@@ -179,10 +200,19 @@ pub struct Interrupted(String);
 pub fn render(args: &RenderArgs) -> Result<()> {
     meshtrace::film::Film::check_writable(&args.output)?;
     set_threads(args.threads)?;
-    let mut scene = match &args.scene {
-        Some(path) => load(path)?,
-        None => load(Path::new(&format!("builtin:{}", builtin::DEFAULT)))?,
+    let options = BareOptions {
+        up: args.up.map(|u| match u {
+            UpAxis::X => Up::X,
+            UpAxis::Y => Up::Y,
+            UpAxis::Z => Up::Z,
+        }),
     };
+    let default = PathBuf::from(format!("builtin:{}", builtin::DEFAULT));
+    let mut scene = load(args.scene.as_ref().unwrap_or(&default), &options)?;
+    if let Some(env) = &args.env {
+        scene::load::replace_environment(&mut scene, env)
+            .map_err(|message| anyhow::anyhow!("--env: {message}"))?;
+    }
     let s = &mut scene.settings;
     s.width = args.width.unwrap_or(s.width);
     s.height = args.height.unwrap_or(s.height);
@@ -284,7 +314,7 @@ fn progress_bar(total: u64, quiet: bool) -> ProgressBar {
 }
 
 pub fn info(path: &Path) -> Result<()> {
-    let scene = load(path)?;
+    let scene = load(path, &BareOptions::default())?;
     let rs = RenderScene::new(&scene, &BuildParams::default())?;
     let st = &rs.bvh.stats;
     let name = scene.path.as_deref().unwrap_or(path).display();
@@ -463,7 +493,7 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
             Some("terrain") => ("terrain-2M".to_string(), meshtrace::bench::terrain(1000)),
             Some(other) => bail!("unknown generated scene `{other}`; there is: terrain"),
             None => {
-                let scene = load(path)?;
+                let scene = load(path, &BareOptions::default())?;
                 let name = path
                     .file_stem()
                     .map_or(text.to_string(), |s| s.to_string_lossy().into_owned());

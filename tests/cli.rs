@@ -445,3 +445,49 @@ fn info_into_a_closed_pipe_ends_quietly() {
     assert!(stderr.is_empty(), "stderr: {stderr}");
     assert_eq!(out.status.code(), Some(0), "stderr: {stderr}");
 }
+
+/// `--up` and `--env`: a bad value or a file that is not there fails cleanly, naming the
+/// option; a bare mesh renders with `--up z` and lit by another map with `--env`.
+#[test]
+fn up_and_env_options() {
+    let dir = TempDir::new("up-env");
+    dir.write("t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    dir.write("junk.hdr", "not an image");
+    let map = common::fs::root().join("assets/env/test_16x8.exr");
+    let map = map.to_str().unwrap();
+    assert_fails(
+        &dir,
+        &["render", "t.obj", "--env", "gone.hdr"],
+        &["--env", "gone.hdr"],
+    );
+    assert_fails(
+        &dir,
+        &["render", "t.obj", "--env", "junk.hdr"],
+        &["--env", "junk.hdr"],
+    );
+    assert_fails(
+        &dir,
+        &["render", "builtin:cornell", "--up", "z"],
+        &["--up", "bare mesh"],
+    );
+    for args in [
+        &["render", "t.obj", "--up", "z", "-o", "up.png"][..],
+        &["render", "t.obj", "--env", map, "-o", "env.png"],
+        &[
+            "render",
+            "builtin:cornell",
+            "--env",
+            map,
+            "-o",
+            "cornell.png",
+        ],
+    ] {
+        let mut args = args.to_vec();
+        args.extend([
+            "--spp", "1", "--width", "8", "--height", "6", "--device", "cpu",
+        ]);
+        let (code, stderr) = run(&dir, &args);
+        assert_eq!(code, 0, "{args:?}: {stderr}");
+    }
+    assert!(dir.path().join("up.png").is_file() && dir.path().join("cornell.png").is_file());
+}

@@ -10,6 +10,7 @@ use common::fs::TempDir;
 use common::gltf::*;
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use meshtrace::scene::material::{MAT_ALPHA_MASK, MAT_THIN_WALLED};
+use meshtrace::scene::studio;
 use meshtrace::scene::{
     Camera, MaterialKind, NO_TANGENT, NO_TEXTURE, PunctualLight, Scene, Sky, TextureFormat, Wrap,
     load_scene,
@@ -20,7 +21,7 @@ use serde_json::json;
 fn load(asset: &Asset) -> Scene {
     let dir = TempDir::new("gltf");
     let path = dir.write("a.gltf", asset.embedded());
-    load_scene(&path).unwrap_or_else(|e| panic!("{e}"))
+    common::studio::without_ground(load_scene(&path).unwrap_or_else(|e| panic!("{e}")))
 }
 
 fn close(a: Vec3, b: Vec3) -> bool {
@@ -582,12 +583,14 @@ fn gltf_with_embedded_or_external_buffers_and_glb_load_the_same() {
     let n = a.floats(&[0.0, 0.0, 1.0].repeat(3), "VEC3");
     a.triangle(json!({ "attributes": { "NORMAL": n } }));
     let dir = TempDir::new("gltf-forms");
-    let embedded = load_scene(&dir.write("e.gltf", a.embedded())).unwrap();
+    let bare =
+        |path: std::path::PathBuf| common::studio::without_ground(load_scene(&path).unwrap());
+    let embedded = bare(dir.write("e.gltf", a.embedded()));
     let (json, bin) = a.external("sub/buffer data.bin");
     std::fs::create_dir_all(dir.join("sub")).unwrap();
     dir.write("sub/buffer data.bin", bin);
-    let external = load_scene(&dir.write("x.gltf", json)).unwrap();
-    let glb = load_scene(&dir.write("g.glb", a.glb())).unwrap();
+    let external = bare(dir.write("x.gltf", json));
+    let glb = bare(dir.write("g.glb", a.glb()));
     for s in [&external, &glb] {
         assert_eq!(s.mesh.positions, embedded.mesh.positions);
         assert_eq!(s.mesh.normals, embedded.mesh.normals);
@@ -709,19 +712,28 @@ fn punctual_lights_in_radiometric_units() {
     assert_eq!(scene.sky, Sky::Constant(Vec3::ZERO));
 }
 
+/// A bare file without camera or light is shown in the studio: its camera, its
+/// environment, and a ground under it.
 #[test]
-fn a_bare_file_without_camera_or_light_is_framed_under_a_white_sky() {
+fn a_bare_file_without_camera_or_light_is_shown_in_the_studio() {
     let mut a = Asset::new();
     a.triangle(json!({}));
     a.json["nodes"][0]["translation"] = json!([5, 0, 0]);
-    let scene = load(&a);
-    assert_eq!(scene.sky, Sky::Constant(Vec3::ONE));
+    let dir = TempDir::new("gltf-studio");
+    let scene = load_scene(&dir.write("a.gltf", a.embedded())).unwrap();
+    assert!(
+        matches!(scene.sky, Sky::Environment { .. }),
+        "{:?}",
+        scene.sky
+    );
+    assert_eq!(scene.mesh.triangles.len(), 3, "the triangle and the ground");
+    let scene = common::studio::without_ground(scene);
     let bounds = meshtrace::math::Aabb::from_points(&[
         Vec3::new(5.0, 0.0, 0.0),
         Vec3::new(6.0, 0.0, 0.0),
         Vec3::new(5.0, 1.0, 0.0),
     ]);
-    assert_eq!(scene.camera, Camera::framing(&bounds).unwrap());
+    assert_eq!(scene.camera, studio::camera(&bounds).unwrap());
 }
 
 #[test]

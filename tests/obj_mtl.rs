@@ -4,8 +4,12 @@
 mod common;
 
 use common::fs::{TempDir, data};
+use common::studio::without_ground;
 use glam::Vec3;
+use meshtrace::math::Aabb;
+use meshtrace::scene::load::load_scene_with;
 use meshtrace::scene::obj::{Fs, MeshPart, load_obj};
+use meshtrace::scene::studio::{BareOptions, Up};
 use meshtrace::scene::{Material, MaterialKind, NO_NORMAL, SceneError, Sky, load_scene};
 use std::path::PathBuf;
 
@@ -294,7 +298,7 @@ fn malformed_mtl_does_not_panic() {
 
 #[test]
 fn degenerate_triangles_are_dropped_with_a_count() {
-    let s = load_scene(&data("degenerate.obj")).unwrap();
+    let s = without_ground(load_scene(&data("degenerate.obj")).unwrap());
     assert_eq!(s.mesh.triangles.len(), 1);
     assert_eq!(
         s.mesh.vertices(&s.mesh.triangles[0]),
@@ -511,19 +515,47 @@ fn obj_without_faces_is_an_error_for_a_bare_load() {
 
 // ---------------------------------------------------------------- bare OBJ
 
+/// A bare OBJ in the studio, its up axis given as Y: the studio environment, a ground
+/// just under the mesh, and a camera from the front-right and above whose view holds every
+/// corner and whose vertical field of view the bounding sphere fills to 80%.
 #[test]
-fn bare_obj_frames_the_bounding_box() {
-    let s = load_scene(&data("box.obj")).unwrap();
-    assert_eq!(s.sky, Sky::Constant(Vec3::ONE));
-    assert_eq!(s.mesh.triangles.len(), 12);
+fn bare_obj_is_shown_in_the_studio() {
+    let options = BareOptions { up: Some(Up::Y) };
+    let s = load_scene_with(&data("box.obj"), &Fs, &options).unwrap();
+    assert!(matches!(s.sky, Sky::Environment { .. }), "{:?}", s.sky);
+    assert_eq!(s.mesh.triangles.len(), 14, "the box and the ground");
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     let (min, max) = (Vec3::new(1.0, 2.0, 3.0), Vec3::new(3.0, 3.0, 7.0));
     let center = 0.5 * (min + max);
+    // The ground: level, facing up, just below the box and far wider than it.
+    let ground: Vec<Vec3> = s.mesh.positions[s.mesh.positions.len() - 4..].to_vec();
+    for p in &ground {
+        assert!(p.y < min.y && p.y > min.y - 1e-3, "ground corner {p}");
+        assert!((*p - center).length() > 10.0 * (max - min).length());
+    }
+    let t = s.mesh.triangles[13];
+    let [a, b, c] = s.mesh.vertices(&t);
+    assert!((b - a).cross(c - a).y > 0.0, "the ground faces up");
     let c = &s.camera;
     assert!(c.position.z > max.z, "camera in front (+Z): {}", c.position);
+    assert!(
+        c.position.x > max.x,
+        "camera to the right (+X): {}",
+        c.position
+    );
     assert!(c.position.y > center.y, "camera above: {}", c.position);
     assert!((c.forward - (center - c.position).normalize()).length() < 1e-5);
     assert!(c.up.y > 0.0);
+    let radius = 0.5 * (max - min).length();
+    let seen = (radius / (center - c.position).length())
+        .asin()
+        .to_degrees();
+    assert!(
+        (seen - 0.4 * c.vfov).abs() < 1e-3,
+        "the bounding sphere spans {} degrees of {}",
+        2.0 * seen,
+        c.vfov
+    );
     let tan_v = (0.5 * c.vfov.to_radians()).tan();
     let aspect = s.settings.width as f32 / s.settings.height as f32;
     for i in 0..8 {
@@ -546,6 +578,62 @@ fn bare_obj_frames_the_bounding_box() {
     }
 }
 
+/// A mesh whose extent is largest along Z is taken as Z-up and turned so that +Z is up
+/// (+Y), as `--up z` does; `--up x` turns +X up; `--up y` leaves it as it is.
+#[test]
+fn the_up_axis_is_detected_or_given() {
+    let turned = |up: Option<Up>| {
+        let s =
+            without_ground(load_scene_with(&data("box.obj"), &Fs, &BareOptions { up }).unwrap());
+        s.mesh.positions.iter().fold(Aabb::EMPTY, |b, &p| b.grow(p))
+    };
+    // box.obj spans (1, 2, 3) to (3, 3, 7): longest along Z.
+    let close = |b: Aabb, min: [f32; 3], max: [f32; 3]| {
+        (b.min - Vec3::from(min)).abs().max_element() < 1e-5
+            && (b.max - Vec3::from(max)).abs().max_element() < 1e-5
+    };
+    for up in [None, Some(Up::Z)] {
+        let b = turned(up);
+        assert!(
+            close(b, [1.0, 3.0, -3.0], [3.0, 7.0, -2.0]),
+            "{up:?}: {b:?}"
+        );
+    }
+    let b = turned(Some(Up::Y));
+    assert!(close(b, [1.0, 2.0, 3.0], [3.0, 3.0, 7.0]), "{b:?}");
+    let b = turned(Some(Up::X));
+    assert!(close(b, [-3.0, 1.0, 3.0], [-2.0, 3.0, 7.0]), "{b:?}");
+}
+
+/// A bare OBJ that brings its own light (an emissive MTL material) is lit by it alone:
+/// a black sky and no ground.
+#[test]
+fn a_bare_obj_with_its_own_light_gets_no_studio() {
+    let dir = TempDir::new("bare-lit");
+    dir.write("m.mtl", "newmtl lamp\nKe 4 4 4\n");
+    let obj = dir.write(
+        "m.obj",
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl lamp\nf 1 2 3\n",
+    );
+    let s = load_scene(&obj).unwrap();
+    assert_eq!(s.sky, Sky::Constant(Vec3::ZERO));
+    assert_eq!(s.mesh.triangles.len(), 1);
+}
+
+/// `--up` belongs to bare meshes: a scene file turns its objects itself.
+#[test]
+fn up_for_a_scene_file_is_an_error() {
+    let options = BareOptions { up: Some(Up::Z) };
+    let message = load_scene_with(&data("full.toml"), &Fs, &options)
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        message.contains("--up") && message.contains("bare mesh"),
+        "{message}"
+    );
+}
+
 // ---------------------------------------------------------------- a real mesh
 
 #[test]
@@ -566,7 +654,7 @@ fn suzanne() {
     let m = load_obj(&path, &Fs).unwrap();
     assert_eq!(m.triangles.len(), expected);
     assert!(m.triangles.iter().all(|t| t.n != [NO_NORMAL; 3]), "has vn");
-    let s = load_scene(&path).unwrap();
+    let s = without_ground(load_scene(&path).unwrap());
     assert_eq!(s.mesh.triangles.len(), expected, "no degenerate triangles");
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     // quads and triangles only: 500 faces of which the quads give two triangles each
@@ -837,7 +925,7 @@ fn bare_obj_is_framed_by_the_vertices_its_faces_use() {
     let padded = format!("v -100 -100 -100\n{shifted}v 100 100 100\n");
     let dir = TempDir::new("unused-vertices");
     let padded = load_scene(&dir.write("padded.obj", padded));
-    let padded = padded.unwrap();
+    let padded = without_ground(padded.unwrap());
     let plain = load_scene(&data("box.obj")).unwrap();
     assert_eq!(padded.mesh.triangles.len(), 12);
     assert_eq!(padded.camera, plain.camera);

@@ -10,6 +10,7 @@ use super::light::PunctualLight;
 use super::material::MAT_ALPHA_MASK;
 use super::obj::{FileSource, Fs, MeshPart, PartTriangle, load_obj};
 use super::sphere::{default_subdivisions, icosphere};
+use super::studio::{self, BareOptions, Up};
 use super::texture::{TextureError, TextureRef, TextureSource, Textures, Usage, UvTransform, Wrap};
 use super::{
     Camera, Material, MaterialKind, Mesh, NO_NORMAL, NO_TANGENT, NO_TEXTURE, NO_UV, RenderSettings,
@@ -46,6 +47,19 @@ pub fn load_environment(
     })
 }
 
+/// Lights `scene` with the equirectangular image at `path` (strength 1, not turned)
+/// instead of its own sky, as `--env` asks; why not, naming the file, when it cannot be
+/// read.
+pub fn replace_environment(scene: &mut Scene, path: &Path) -> Result<(), String> {
+    let texture = load_environment(path, &mut scene.textures, &Fs)?;
+    scene.sky = Sky::Environment {
+        texture,
+        strength: 1.0,
+        rotation: 0.0,
+    };
+    Ok(())
+}
+
 /// Whether a path names an OBJ mesh (by its extension, in any case).
 fn is_obj(path: &Path) -> bool {
     path.extension()
@@ -53,23 +67,40 @@ fn is_obj(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
 }
 
-/// Loads a scene file (`.toml`), a bare mesh (`.obj`, framed by an automatic camera) or a
-/// glTF file (`.gltf`, `.glb`: its own camera, else framed as a bare mesh).
+/// Loads a scene file (`.toml`), or a bare mesh (`.obj`, `.gltf`, `.glb`) shown in the
+/// studio ([`studio`](super::studio)).
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
-    load_scene_from(path, &Fs)
+    load_scene_with(path, &Fs, &BareOptions::default())
 }
 
 /// [`load_scene`] reading through `files`, so that built-in scenes load like any other.
-/// The extension (in any case) says what the file is; any other is an error that lists
-/// the inputs meshtrace reads.
 pub fn load_scene_from(path: &Path, files: &dyn FileSource) -> Result<Scene, SceneError> {
+    load_scene_with(path, files, &BareOptions::default())
+}
+
+/// [`load_scene_from`] with the options for a bare mesh. The extension (in any case) says
+/// what the file is; any other is an error that lists the inputs meshtrace reads. Options
+/// given for a scene file are an error: it places its meshes itself.
+pub fn load_scene_with(
+    path: &Path,
+    files: &dyn FileSource,
+    options: &BareOptions,
+) -> Result<Scene, SceneError> {
     let extension = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     match extension.as_deref() {
-        Some("obj") => return load_bare_obj(path, files),
-        Some("gltf" | "glb") => return load_bare_gltf(path, files),
+        Some("obj") => return load_bare_obj(path, files, options),
+        Some("gltf" | "glb") => return load_bare_gltf(path, files, options),
+        Some("toml") if options.up.is_some() => {
+            return Err(SceneError::Unsupported {
+                path: super::shown(path),
+                message: "--up applies to a bare mesh (.obj, .gltf, .glb); a scene file \
+                          turns its objects with `rotate`"
+                    .into(),
+            });
+        }
         Some("toml") => {}
         _ => {
             return Err(SceneError::Unsupported {
@@ -120,9 +151,13 @@ fn parse_scene_from(text: &str, path: &Path, files: &dyn FileSource) -> Result<S
     Ok(builder.finish(Some(path.to_path_buf()), camera, sky, settings))
 }
 
-/// A bare OBJ: its own materials, a white sky, and a camera framing its bounds from the
-/// front (+Z) and slightly above.
-fn load_bare_obj(path: &Path, files: &dyn FileSource) -> Result<Scene, SceneError> {
+/// A bare OBJ in the studio: its own materials, turned so that its up axis (given, or
+/// detected from its bounds) is +Y, framed by the studio camera.
+fn load_bare_obj(
+    path: &Path,
+    files: &dyn FileSource,
+    options: &BareOptions,
+) -> Result<Scene, SceneError> {
     let mut builder = Builder::default();
     let part = load_obj(path, files)?;
     // The frame is that of the vertices the faces use, degenerate faces included: a file
@@ -139,7 +174,17 @@ fn load_bare_obj(path: &Path, files: &dyn FileSource) -> Result<Scene, SceneErro
         line: None,
         message,
     };
-    builder.append_part(part, Mat4::IDENTITY, None, files, &obj_error)?;
+    let raw = part
+        .positions
+        .iter()
+        .zip(&used)
+        .filter(|&(_, &used)| used)
+        .fold(Aabb::EMPTY, |b, (&p, _)| b.grow(p));
+    if raw.is_empty() {
+        return Err(obj_error("the mesh has no faces".into()));
+    }
+    let turn = options.up.unwrap_or_else(|| Up::detect(&raw)).to_y();
+    builder.append_part(part, turn, None, files, &obj_error)?;
     let bounds = builder
         .mesh
         .positions
@@ -147,76 +192,71 @@ fn load_bare_obj(path: &Path, files: &dyn FileSource) -> Result<Scene, SceneErro
         .zip(&used)
         .filter(|&(_, &used)| used)
         .fold(Aabb::EMPTY, |b, (&p, _)| b.grow(p));
-    if bounds.is_empty() {
-        return Err(SceneError::Obj {
-            path: super::shown(path),
-            line: None,
-            message: "the mesh has no faces".into(),
-        });
-    }
-    let camera = Camera::framing(&bounds).ok_or_else(|| SceneError::Obj {
-        path: super::shown(path),
-        line: None,
-        message: format!(
+    let camera = studio::camera(&bounds).ok_or_else(|| {
+        obj_error(format!(
             "the mesh spans {} to {}, too far out to frame with a camera",
             bounds.min, bounds.max
-        ),
+        ))
     })?;
+    let sky = builder.light_the_studio(&bounds, files)?;
     Ok(builder.finish(
         Some(path.to_path_buf()),
         camera,
-        Sky::Constant(Vec3::ONE),
+        sky,
         RenderSettings::default(),
     ))
 }
 
-/// A bare glTF file: its materials and lights, seen through its first perspective camera
-/// or else framed as a bare OBJ; under a white sky, or a black one when the file brings its
-/// own light (punctual lights or emissive materials).
-fn load_bare_gltf(path: &Path, files: &dyn FileSource) -> Result<Scene, SceneError> {
+/// A bare glTF file in the studio: its materials and lights, turned so that its up axis
+/// (given, or glTF's +Y) is +Y, seen through its first perspective camera or else the
+/// studio camera.
+fn load_bare_gltf(
+    path: &Path,
+    files: &dyn FileSource,
+    options: &BareOptions,
+) -> Result<Scene, SceneError> {
     let shown = super::shown(path);
     let asset = load_gltf(path, files)?;
-    let camera = asset.camera.clone();
+    let turn = options.up.unwrap_or(Up::Y).to_y();
+    let own_camera = asset.camera.clone();
     let mut builder = Builder::default();
     let error = |at: &str, message: String| SceneError::Gltf {
         path: shown.clone(),
         at: at.to_string(),
         message,
     };
-    builder.append_gltf(asset, Mat4::IDENTITY, None, files, &error)?;
+    builder.append_gltf(asset, turn, None, files, &error)?;
     let mesh = &builder.mesh;
     if mesh.triangles.is_empty() {
-        return Err(SceneError::Gltf {
-            path: shown,
-            at: "scene".into(),
-            message: "the default scene has no triangles to render".into(),
-        });
+        return Err(error(
+            "scene",
+            "the default scene has no triangles to render".into(),
+        ));
     }
-    let camera = match camera {
-        Some(camera) => camera,
-        None => {
-            let bounds = mesh.triangles.iter().fold(Aabb::EMPTY, |b, t| {
-                b.union(Aabb::from_points(&mesh.vertices(t)))
-            });
-            Camera::framing(&bounds).ok_or_else(|| SceneError::Gltf {
-                path: shown.clone(),
-                at: "scene".into(),
-                message: format!(
-                    "the scene spans {} to {}, too far out to frame with a camera",
-                    bounds.min, bounds.max
-                ),
-            })?
-        }
-    };
-    let emissive = mesh
-        .triangles
-        .iter()
-        .any(|t| builder.materials[t.material as usize].is_emissive());
-    let sky = if emissive || !builder.lights.is_empty() {
-        Sky::Constant(Vec3::ZERO)
-    } else {
-        Sky::Constant(Vec3::ONE)
-    };
+    let bounds = mesh.triangles.iter().fold(Aabb::EMPTY, |b, t| {
+        b.union(Aabb::from_points(&mesh.vertices(t)))
+    });
+    let camera = match own_camera {
+        Some(c) => Camera::new(
+            turn.transform_point3(c.position),
+            turn.transform_point3(c.position + c.forward),
+            turn.transform_vector3(c.up),
+            c.vfov,
+            c.aperture,
+            Some(c.focus_distance),
+        ),
+        None => studio::camera(&bounds),
+    }
+    .ok_or_else(|| {
+        error(
+            "scene",
+            format!(
+                "the scene spans {} to {}, too far out to frame with a camera",
+                bounds.min, bounds.max
+            ),
+        )
+    })?;
+    let sky = builder.light_the_studio(&bounds, files)?;
     Ok(builder.finish(
         Some(path.to_path_buf()),
         camera,
@@ -242,6 +282,41 @@ struct Builder {
 }
 
 impl Builder {
+    /// The lighting of a bare mesh of `bounds`: a file that brings its own light
+    /// (emissive materials or punctual lights) is lit by that alone, under a black sky;
+    /// any other gets the studio environment and a ground under it.
+    fn light_the_studio(
+        &mut self,
+        bounds: &Aabb,
+        files: &dyn FileSource,
+    ) -> Result<Sky, SceneError> {
+        let emissive = self
+            .mesh
+            .triangles
+            .iter()
+            .any(|t| self.materials[t.material as usize].is_emissive());
+        if emissive || !self.lights.is_empty() {
+            return Ok(Sky::Constant(Vec3::ZERO));
+        }
+        let ground = self.add_material(
+            "studio ground",
+            Material::diffuse(Vec3::splat(studio::GROUND_ALBEDO)),
+        );
+        let no_error = |message: String| SceneError::Invalid {
+            path: "studio".into(),
+            field: "ground".into(),
+            message,
+        };
+        self.append_part(
+            studio::ground(bounds),
+            Mat4::IDENTITY,
+            Some(ground),
+            files,
+            &no_error,
+        )?;
+        studio::sky(&mut self.textures)
+    }
+
     /// Appends a material to the table; returns its index.
     fn add_material(&mut self, name: &str, material: Material) -> u32 {
         self.materials.push(material);

@@ -15,6 +15,7 @@ pub mod material;
 pub mod mtl;
 pub mod obj;
 pub mod sphere;
+pub mod studio;
 pub mod tangents;
 pub mod texture;
 

@@ -21,6 +21,7 @@ pub mod materials;
 pub mod rand;
 pub mod scenes;
 pub mod stats;
+pub mod studio;
 
 use meshtrace::film::Film;
 use meshtrace::render::gpu::{GpuContext, GpuError, GpuRenderer};

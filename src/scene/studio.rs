@@ -1,0 +1,140 @@
+//! The studio a bare mesh (an `.obj`, `.gltf` or `.glb` rendered on its own) is shown in:
+//! the mesh turned so that its up axis is +Y, a three-quarter camera above the front that
+//! frames its bounding sphere, a ground under it that takes its shadow, and an embedded
+//! studio environment (`assets/env/studio.hdr`, made by `tools/gen_studio_env.py`) whose
+//! soft key, fill and rim lights show its shape.
+
+use super::camera::Camera;
+use super::obj::{MeshPart, PartTriangle};
+use super::texture::{TextureError, TextureRef, TextureSource, Textures, Usage, UvTransform, Wrap};
+use super::{NO_NORMAL, NO_TANGENT, NO_UV, SceneError, Sky};
+use crate::math::Aabb;
+use glam::{Mat4, Vec3};
+use std::sync::Arc;
+
+/// The studio environment, built into the binary.
+const STUDIO_HDR: &[u8] = include_bytes!("../../assets/env/studio.hdr");
+
+/// The axis of a bare mesh that points up.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Up {
+    X,
+    Y,
+    Z,
+}
+
+impl Up {
+    /// The up axis a bare mesh without other cues is taken to have: Z where its extent is
+    /// largest along Z (scans and CAD exports), else Y (the OBJ and glTF convention).
+    pub fn detect(bounds: &Aabb) -> Up {
+        let e = bounds.extent();
+        if e.z > e.x && e.z > e.y { Up::Z } else { Up::Y }
+    }
+
+    /// The rotation that turns this axis to +Y: a quarter turn about X for Z-up (+Z to +Y,
+    /// +Y to −Z), about Z for X-up (+X to +Y).
+    pub fn to_y(self) -> Mat4 {
+        match self {
+            Up::X => Mat4::from_rotation_z(std::f32::consts::FRAC_PI_2),
+            Up::Y => Mat4::IDENTITY,
+            Up::Z => Mat4::from_rotation_x(-std::f32::consts::FRAC_PI_2),
+        }
+    }
+}
+
+/// Options for showing a bare mesh.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BareOptions {
+    /// The mesh's up axis; `None` detects it ([`Up::detect`]) for an OBJ and takes glTF's
+    /// +Y for a glTF file.
+    pub up: Option<Up>,
+}
+
+/// Vertical field of view of the studio camera, in degrees.
+const VFOV: f32 = 40.0;
+
+/// How much of the vertical field of view the bounding sphere fills.
+const FILL: f32 = 0.8;
+
+/// The studio camera for a Y-up mesh of `bounds`: from the front-right (35 degrees from +Z
+/// towards +X) and 22 degrees above, at the distance where the bounding sphere fills 80% of
+/// the vertical field of view. `None` when the bounds are too large for f32.
+pub fn camera(bounds: &Aabb) -> Option<Camera> {
+    let center = bounds.center();
+    // Far from the origin, a tiny mesh still needs a camera distance that f32 resolves.
+    let resolvable = 1e-5 * (1.0 + center.abs().max_element());
+    let radius = (0.5 * bounds.extent().length()).max(resolvable);
+    let distance = radius / (0.5 * FILL * VFOV.to_radians()).sin();
+    let (azimuth, elevation) = (35f32.to_radians(), 22f32.to_radians());
+    let towards = Vec3::new(
+        azimuth.sin() * elevation.cos(),
+        elevation.sin(),
+        azimuth.cos() * elevation.cos(),
+    );
+    let position = center + distance * towards;
+    if !(center.is_finite() && position.is_finite()) {
+        return None;
+    }
+    Camera::new(position, center, Vec3::Y, VFOV, 0.0, None)
+}
+
+/// The ground under a Y-up mesh of `bounds`: a square 40 bounding radii across, facing
+/// up, a hair below the mesh's lowest point (so that a flat base does not coincide with
+/// it), without texture coordinates.
+pub fn ground(bounds: &Aabb) -> MeshPart {
+    let center = bounds.center();
+    let radius = 0.5 * bounds.extent().length();
+    let half = 20.0 * radius;
+    let y = bounds.min.y - 1e-4 * radius;
+    let positions = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+        .map(|(x, z)| Vec3::new(center.x + x * half, y, center.z + z * half))
+        .to_vec();
+    let triangle = |p: [u32; 3]| PartTriangle {
+        p,
+        n: [NO_NORMAL; 3],
+        t: [NO_UV; 3],
+        g: [NO_TANGENT; 3],
+        material: None,
+    };
+    MeshPart {
+        positions,
+        // Counter-clockwise seen from above.
+        triangles: vec![triangle([0, 2, 1]), triangle([0, 3, 2])],
+        ..MeshPart::default()
+    }
+}
+
+/// The albedo of the studio ground: a light neutral grey.
+pub const GROUND_ALBEDO: f32 = 0.6;
+
+/// The studio environment's strength: its irradiance on an upward surface is 2.23 π, so a
+/// white surface facing up comes out at 0.9 and the ground at 0.54, within a PNG's range.
+const STUDIO_STRENGTH: f32 = 0.4;
+
+/// The studio environment, added to `textures`.
+pub fn sky(textures: &mut Textures) -> Result<Sky, SceneError> {
+    let r = TextureRef {
+        source: TextureSource::Memory {
+            name: "studio.hdr (built in)".into(),
+            bytes: Arc::from(STUDIO_HDR),
+            format: Some(image::ImageFormat::Hdr),
+        },
+        usage: Usage::Colour,
+        transform: UvTransform::scale(1.0, 1.0),
+        wrap: [Wrap::REPEAT, Wrap::CLAMP],
+        optional: false,
+    };
+    let texture = textures.add(&r, &super::obj::Fs).map_err(|e| match e {
+        TextureError::Fatal(e) => e,
+        TextureError::Missing(name) => SceneError::Invalid {
+            path: name,
+            field: "sky".into(),
+            message: "the built-in studio environment cannot be read".into(),
+        },
+    })?;
+    Ok(Sky::Environment {
+        texture,
+        strength: STUDIO_STRENGTH,
+        rotation: 0.0,
+    })
+}
