@@ -95,8 +95,10 @@ struct Params {
     sky_pmf: f32,
     // Texels per pixel of the accumulation buffer: radiance, then one per film channel.
     film_texels: u32,
-    _pad0: u32,
-    _pad1: u32,
+    // The AOVs the film holds (AOV_* bits), and 1 if camera rays that miss add no radiance
+    // (a transparent render); set with the film.
+    aovs: u32,
+    transparent: u32,
 }
 
 

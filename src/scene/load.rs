@@ -91,6 +91,7 @@ fn parse_scene_from(text: &str, path: &Path, files: &dyn FileSource) -> Result<S
         builder.named.insert(name.clone(), index);
     }
     for (i, object) in file.objects.iter().enumerate() {
+        builder.object = i as u32;
         ctx.object(&mut builder, i, object)?;
     }
     for (i, light) in file.lights.iter().enumerate() {
@@ -162,7 +163,7 @@ fn load_bare_gltf(path: &Path, files: &dyn FileSource) -> Result<Scene, SceneErr
         at: at.to_string(),
         message,
     };
-    builder.append_gltf(asset, Mat4::IDENTITY, None, files, &error)?;
+    builder.append_gltf(asset, Mat4::IDENTITY, None, true, files, &error)?;
     let mesh = &builder.mesh;
     if mesh.triangles.is_empty() {
         return Err(SceneError::Gltf {
@@ -218,6 +219,8 @@ struct Builder {
     warnings: Vec<String>,
     /// [`Builder::obj_material`]'s answers so far.
     obj_materials: HashMap<u32, u32>,
+    /// The object index of the triangles appended now ([`Mesh::objects`]).
+    object: u32,
 }
 
 impl Builder {
@@ -290,12 +293,15 @@ impl Builder {
 
     /// Appends what a glTF file brings, transformed by `m`: its primitives with their
     /// node matrices, and its materials unless `material` overrides them; its lights. An
-    /// error about a primitive is made by `error` from the primitive's JSON path.
+    /// error about a primitive is made by `error` from the primitive's JSON path. With
+    /// `node_objects` (a bare file), each node's triangles belong to the object of the
+    /// node's index; else to the current object.
     fn append_gltf(
         &mut self,
         asset: GltfAsset,
         m: Mat4,
         material: Option<u32>,
+        node_objects: bool,
         files: &dyn FileSource,
         error: &dyn Fn(&str, String) -> SceneError,
     ) -> Result<(), SceneError> {
@@ -310,6 +316,9 @@ impl Builder {
             )?,
         };
         for p in asset.parts {
+            if node_objects {
+                self.object = p.node;
+            }
             let at = p.at;
             self.append_geometry(p.part, m * p.matrix, material, &local, false, &|message| {
                 error(&at, message)
@@ -484,6 +493,7 @@ impl Builder {
                 corners.resize(self.mesh.triangles.len(), [NO_TANGENT; 3]);
                 corners.push(g);
             }
+            self.mesh.objects.push(self.object);
             self.mesh.triangles.push(Triangle {
                 p,
                 n,
@@ -992,7 +1002,7 @@ impl Ctx<'_> {
                     let error = |at: &str, message: String| {
                         object_error(format!("{shown}: {at}: {message}"))
                     };
-                    builder.append_gltf(asset, transform, material, self.files, &error)?;
+                    builder.append_gltf(asset, transform, material, false, self.files, &error)?;
                 } else if is_obj(&path) {
                     let part = load_obj(&path, self.files)?;
                     if part.triangles.is_empty() {

@@ -36,7 +36,10 @@ pub struct Params {
     /// Texels per pixel of the accumulation buffer
     /// ([`Film::texels_per_pixel`](crate::film::Film::texels_per_pixel)); set with the film.
     pub film_texels: u32,
-    pub _pad: [u32; 2],
+    /// The film's AOVs ([`Aov::mask`](crate::film::Aov::mask)) and whether it is
+    /// [`transparent`](crate::film::Film::transparent) (1); set with the film.
+    pub aovs: u32,
+    pub transparent: u32,
 }
 
 impl Params {
@@ -65,7 +68,8 @@ impl Params {
             row_end,
             sky_pmf,
             film_texels,
-            _pad,
+            aovs,
+            transparent,
         })
     }
 

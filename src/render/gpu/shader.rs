@@ -8,6 +8,7 @@ use super::layout::StructLayout;
 use super::params::Params;
 use super::tables::{Element, TABLE_WIDTH, TABLES, wgsl_tables};
 use crate::bvh::STACK_SIZE;
+use crate::film::{Aov, NO_ID};
 use crate::geometry::{GAMMA_2, GAMMA_3, SLAB_SLACK, T_INF};
 use crate::render::integrator::RR_DEPTH;
 use crate::render::rng;
@@ -55,6 +56,7 @@ pub fn shared_constants() -> Vec<(String, Value)> {
         ("LIGHT_EMITTER", U32(LIGHT_EMITTER)),
         ("SKY_EMITTER", U32(SKY_EMITTER)),
         ("NO_TEXTURE", U32(NO_TEXTURE)),
+        ("NO_ID", U32(NO_ID)),
         ("MAT_THIN_WALLED", U32(MAT_THIN_WALLED)),
         ("MAT_ALPHA_MASK", U32(MAT_ALPHA_MASK)),
         ("TABLE_WIDTH_LOG2", U32(TABLE_WIDTH.ilog2())),
@@ -78,6 +80,9 @@ pub fn shared_constants() -> Vec<(String, Value)> {
     }
     for (wrap, name) in Wrap::ALL {
         list.push((format!("WRAP_{}", name.to_uppercase()), U32(wrap.0)));
+    }
+    for aov in Aov::ALL {
+        list.push((format!("AOV_{}", aov.name().to_uppercase()), U32(aov.bit())));
     }
     list
 }
