@@ -455,4 +455,15 @@ material = "white"
         // Only the PNG: no AOV file was asked for.
         assert!(!dir.join(format!("{device}.aovs.exr")).exists());
     }
+    // Paths of one segment see only emitters: here only the sky, which a transparent render
+    // leaves out, so every pixel is black however much of it the plane covers.
+    let mut unlit = scene.clone();
+    unlit.settings.max_depth = 1;
+    for (device, film) in render_both("transparent", &unlit, &[], true) {
+        assert!(
+            film.sum.iter().all(|&s| s == Vec3::ZERO),
+            "{device}: {:?}",
+            film.sum
+        );
+    }
 }
