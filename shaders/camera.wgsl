@@ -16,3 +16,11 @@ fn generate_camera_ray(px: u32, py: u32, rng: Rng) -> Ray {
     let origin = params.cam_position + lens.x * params.cam_right + lens.y * params.cam_up;
     return Ray(origin, normalize(focus - origin));
 }
+
+// The ray through the centre of pixel (px, py) and of the lens, for the pixel-centre AOVs.
+// mirror: src/render/camera.rs `pixel_centre_ray`
+fn pixel_centre_ray(px: u32, py: u32) -> Ray {
+    let sx = (2.0 * (f32(px) + 0.5) / f32(params.width) - 1.0) * params.tan_half_vfov * params.aspect;
+    let sy = (1.0 - 2.0 * (f32(py) + 0.5) / f32(params.height)) * params.tan_half_vfov;
+    return Ray(params.cam_position, normalize(params.cam_forward + sx * params.cam_right + sy * params.cam_up));
+}

@@ -1,6 +1,7 @@
 // Triangles, and the ray–triangle and ray–box tests. mirror: src/geometry.rs
 
-// mirror: src/geometry.rs `TriVerts` (48 bytes)
+// mirror: src/geometry.rs `TriVerts` (48 bytes). v0.w: 1 on a masked triangle; v1.w: the
+// bits of its object index.
 struct TriVerts {
     v0: vec4<f32>,
     v1: vec4<f32>,

@@ -163,3 +163,30 @@ fn trace_path(ray: Ray, rng: Rng) -> vec4<f32> {
     }
     return vec4<f32>(st.radiance, f32(st.rays));
 }
+
+// What the AOVs read of a camera ray's first hit. mirror: src/render/integrator.rs `FirstHit`
+struct FirstHit {
+    hit: bool,
+    p: vec3<f32>,
+    normal: vec3<f32>,
+    albedo: vec3<f32>,
+    material: u32,
+    object: u32,
+    cost: u32,
+}
+
+// The first hit of a camera ray, for the AOVs. mirror: src/render/integrator.rs `first_hit`
+fn first_hit(ray: Ray) -> FirstHit {
+    let counted = traverse_closest_counted(ray, T_INF);
+    let hit = counted.hit;
+    if hit.tri == NO_HIT {
+        return FirstHit(false, vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), NO_ID, NO_ID, counted.cost);
+    }
+    let si = surface_at(ray, hit);
+    let mat = material_at(load_material(si.material), si.uv);
+    let normal = select(si.ns, -si.ns, dot(si.ns, ray.dir) > 0.0);
+    let albedo = select(mat.albedo, vec3<f32>(1.0), mat.kind == MAT_DIELECTRIC);
+    // TriVerts.v1.w holds the bits of the triangle's object index.
+    let object = bitcast<u32>(load_tri(hit.tri).v1.w);
+    return FirstHit(true, si.p, normal, albedo, si.material, object, counted.cost);
+}

@@ -2,7 +2,8 @@
 
 // The film, params.film_texels texels per pixel: the radiance sum (xyz) and the index of
 // the pixel's next sample (w, as a float: exact to 2^24), then one texel per film channel,
-// the first being the `rays` channel (its x counts the rays traced).
+// the first being the `rays` channel (its x counts the rays traced), then one per AOV in
+// params.aovs, in the order of their bits.
 // mirror: src/film.rs `Film::texels_per_pixel`
 @group(1) @binding(0) var<storage, read_write> film: array<vec4<f32>>;
 
@@ -13,6 +14,53 @@
 fn is_finite3(v: vec3<f32>) -> bool {
     let e = bitcast<vec3<u32>>(v) & vec3<u32>(0x7f800000u);
     return all(e != vec3<u32>(0x7f800000u));
+}
+
+// A pixel's AOV accumulators: a texel per AOV, indexed by its bit's position, as the AOV's
+// film channel holds it. mirror: src/render/cpu.rs `AovSums`
+struct AovSums {
+    t: array<vec4<f32>, 7>,
+}
+
+// The film texel of the AOV of bit `bit` for the pixel whose first texel is `base`.
+fn aov_texel(base: u32, bit: u32) -> u32 {
+    return base + 2u + countOneBits(params.aovs & (bit - 1u));
+}
+
+// mirror: src/render/cpu.rs `add_aov_sample`
+fn add_aov_sample(sums: ptr<function, AovSums>, fh: FirstHit) {
+    (*sums).t[6].x += f32(fh.cost);
+    if !fh.hit {
+        return;
+    }
+    let depth = dot(fh.p - params.cam_position, params.cam_forward);
+    (*sums).t[0] += vec4<f32>(depth, 0.0, 0.0, 1.0);
+    (*sums).t[1] += vec4<f32>(fh.normal, 1.0);
+    (*sums).t[2] += vec4<f32>(fh.albedo, 1.0);
+    (*sums).t[3] += vec4<f32>(1.0, 0.0, 0.0, 1.0);
+}
+
+// mirror: src/render/cpu.rs `set_aov_ids`
+fn set_aov_ids(sums: ptr<function, AovSums>, fh: FirstHit) {
+    (*sums).t[4] = vec4<f32>(f32(fh.object & 0xffffu), f32(fh.object >> 16u), 0.0, 1.0);
+    (*sums).t[5] = vec4<f32>(f32(fh.material & 0xffffu), f32(fh.material >> 16u), 0.0, 1.0);
+}
+
+// A sample's camera ray. With AOVs, also adds its first hit to `sums` (and with sample 0
+// the pixel-centre ray's ids), and returns in `seen` whether its radiance counts: not in a
+// transparent render where it misses.
+fn start_sample(x: u32, y: u32, s: u32, rng: Rng, sums: ptr<function, AovSums>, seen: ptr<function, bool>) -> PathState {
+    let ray = generate_camera_ray(x, y, rng);
+    *seen = true;
+    if params.aovs != 0u {
+        let fh = first_hit(ray);
+        add_aov_sample(sums, fh);
+        *seen = fh.hit || params.transparent == 0u;
+        if s == 0u {
+            set_aov_ids(sums, first_hit(pixel_centre_ray(x, y)));
+        }
+    }
+    return path_start(ray);
 }
 
 // mirror: src/render/cpu.rs `render_pixel`
@@ -42,11 +90,18 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     // Persistent paths: a lane whose path ends starts its next sample at once, so the lanes
     // of a SIMD group do not all wait for the longest path of every sample.
+    var sums = AovSums();
+    for (var k = 0u; k < 7u; k++) {
+        if (params.aovs & (1u << k)) != 0u {
+            sums.t[k] = film[aov_texel(base, 1u << k)];
+        }
+    }
+    var seen = true;
     var rng = Rng(pixel, s, params.seed);
-    var st = path_start(generate_camera_ray(x, y, rng));
+    var st = start_sample(x, y, s, rng, &sums, &seen);
     loop {
         if path_step(&st, rng) {
-            if is_finite3(st.radiance) {
+            if is_finite3(st.radiance) && seen {
                 radiance += st.radiance;
             }
             rays += f32(st.rays);
@@ -55,7 +110,7 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
                 break;
             }
             rng = Rng(pixel, s, params.seed);
-            st = path_start(generate_camera_ray(x, y, rng));
+            st = start_sample(x, y, s, rng, &sums, &seen);
         }
     }
     var rounds = 0u;
@@ -72,4 +127,9 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     film[base] = vec4<f32>(radiance, f32(s));
     film[base + 1u].x = rays;
+    for (var k = 0u; k < 7u; k++) {
+        if (params.aovs & (1u << k)) != 0u {
+            film[aov_texel(base, 1u << k)] = sums.t[k];
+        }
+    }
 }

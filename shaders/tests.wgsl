@@ -141,6 +141,18 @@ fn test_camera_ray(@builtin(global_invocation_id) gid: vec3<u32>) {
     case_out(i, u4(vec4<f32>(ray.origin, 0.0)), u4(vec4<f32>(ray.dir, 0.0)));
 }
 
+// in: (x, y, _, _) | out: first_hit of pixel_centre_ray(x, y): (hit, cost, material,
+// object), (normal xyz, depth along the view axis)
+@compute @workgroup_size(64)
+fn test_first_hit(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = case_index(gid);
+    if i >= case_count() { return; }
+    let k = case_in(i, 0u);
+    let fh = first_hit(pixel_centre_ray(k.x, k.y));
+    let depth = dot(fh.p - params.cam_position, params.cam_forward);
+    case_out(i, vec4<u32>(select(0u, 1u, fh.hit), fh.cost, fh.material, fh.object), u4(vec4<f32>(fh.normal, depth)));
+}
+
 // in: (x, y, sample, _) | out: (radiance xyz, rays)
 @compute @workgroup_size(64)
 fn test_trace_path(@builtin(global_invocation_id) gid: vec3<u32>) {

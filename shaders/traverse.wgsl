@@ -5,6 +5,9 @@
 // lavapipe more than the traversal of a small scene.
 var<private> stack: array<u32, STACK_SIZE>;
 
+// What a counting walk has done: BVH nodes visited plus triangles tested.
+var<private> walk_cost: u32;
+
 struct Hit {
     t: f32,
     u: f32,
@@ -15,12 +18,25 @@ struct Hit {
 
 // mirror: src/bvh/traverse.rs `traverse_closest`
 fn traverse_closest(ray: Ray, t_max: f32) -> Hit {
-    return walk(ray, t_max, false);
+    return walk(ray, t_max, false, false);
+}
+
+// The closest hit and the traversal's cost (the CPU's tuple).
+struct CountedHit {
+    hit: Hit,
+    cost: u32,
+}
+
+// mirror: src/bvh/traverse.rs `traverse_closest_counted`
+fn traverse_closest_counted(ray: Ray, t_max: f32) -> CountedHit {
+    walk_cost = 0u;
+    let hit = walk(ray, t_max, false, true);
+    return CountedHit(hit, walk_cost);
 }
 
 // mirror: src/bvh/traverse.rs `traverse_any`
 fn traverse_any(ray: Ray, t_max: f32) -> bool {
-    return walk(ray, t_max, true).tri != NO_HIT;
+    return walk(ray, t_max, true, false).tri != NO_HIT;
 }
 
 // The leaves the ray may reach, nearer child first: the closest hit, or with `any_hit`
@@ -28,8 +44,10 @@ fn traverse_any(ray: Ray, t_max: f32) -> bool {
 // `alpha_test` passes, as the CPU's `accept`. The same visits as the CPU's single loop, arranged "while-while"
 // (Aila and Laine 2009): interior nodes in an inner loop, then the leaf, so that the lanes
 // of a SIMD group intersect their leaves together rather than one branch at a time (15-20%
-// less time on lavapipe, BENCHMARKS.md). mirror: src/bvh/traverse.rs `walk`
-fn walk(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
+// less time on lavapipe, BENCHMARKS.md). With `counted`, adds the nodes visited and the
+// triangles tested to `walk_cost`; every call passes constants, so the compiler drops the
+// counting from the others. mirror: src/bvh/traverse.rs `walk`
+fn walk(ray: Ray, t_max: f32, any_hit: bool, counted: bool) -> Hit {
     var best = Hit(t_max, 0.0, 0.0, NO_HIT);
     let sheared = sheared_ray(ray);
     let root = load_node(0);
@@ -48,6 +66,9 @@ fn walk(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
         // their leaves together).
         var done = false;
         while n.count == 0u {
+            if counted {
+                walk_cost += 1u;
+            }
             var a = node + 1u;
             var b = n.left_or_first;
             let ca = load_node(a);
@@ -80,6 +101,9 @@ fn walk(ray: Ray, t_max: f32, any_hit: bool) -> Hit {
         }
         if done {
             break;
+        }
+        if counted {
+            walk_cost += 1u + n.count;
         }
         for (var i = n.left_or_first; i < n.left_or_first + n.count; i++) {
             let tri = load_tri(i);

@@ -67,7 +67,7 @@ struct Light {
     _pad1: u32,
 }
 
-// mirror: src/render/gpu/params.rs `Params` (160 bytes): one dispatch's camera, sky and range.
+// mirror: src/render/gpu/params.rs `Params` (176 bytes): one dispatch's camera, sky and range.
 struct Params {
     cam_position: vec3<f32>,
     width: u32,
@@ -102,6 +102,12 @@ struct Params {
     env_strength: f32,
     env_rotation: vec2<f32>,
     env_cells: vec2<u32>,
+    // The AOVs the film holds (AOV_* bits), and 1 if camera rays that miss add no radiance
+    // (a transparent render); set with the film.
+    aovs: u32,
+    transparent: u32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 

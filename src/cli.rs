@@ -6,7 +6,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use meshtrace::bvh::BuildParams;
-use meshtrace::film::Film;
+use meshtrace::film::{Aov, Film, Format};
 use meshtrace::math::Aabb;
 use meshtrace::render::backend::{Backend, DeviceChoice};
 use meshtrace::render::gpu::{self, GpuError};
@@ -140,6 +140,15 @@ pub struct RenderArgs {
     /// Also write the image every this many seconds while rendering.
     #[arg(long, value_name = "SECONDS")]
     pub checkpoint: Option<f64>,
+    /// Render outputs to add, comma-separated: depth, normal, albedo, alpha, object_id,
+    /// material_id, bvh_cost. Extra channels of an .exr output; beside any other output,
+    /// one <stem>.aovs.exr.
+    #[arg(long, value_name = "LIST")]
+    pub aov: Option<String>,
+    /// Write an RGBA PNG whose alpha is the coverage; the sky still lights the scene but
+    /// is not seen directly.
+    #[arg(long)]
+    pub transparent: bool,
     /// On Ctrl-C, write no image (by default the samples finished so far are written;
     /// checkpoints already written stay).
     #[arg(long)]
@@ -198,7 +207,14 @@ fn set_threads(threads: Option<usize>) -> Result<()> {
 pub struct Interrupted(String);
 
 pub fn render(args: &RenderArgs) -> Result<()> {
-    meshtrace::film::Film::check_writable(&args.output)?;
+    let aovs = match &args.aov {
+        Some(list) => Aov::parse_list(list).context("--aov")?,
+        None => Vec::new(),
+    };
+    Film::check_writable(&args.output, args.transparent)?;
+    if !aovs.is_empty() && Format::from_path(&args.output)? != Format::Exr {
+        Film::check_writable(&Film::aov_path(&args.output), false)?;
+    }
     set_threads(args.threads)?;
     let options = BareOptions {
         up: args.up.map(|u| match u {
@@ -224,7 +240,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     }
     let settings = *s;
     let rs = RenderScene::new(&scene, &BuildParams::default())?;
-    let mut job = RenderJob::new(settings);
+    let mut job = RenderJob::new(settings).with_aovs(Aov::mask(&aovs), args.transparent);
     let cancel = Arc::new(AtomicBool::new(false));
     job.cancel = Some(cancel.clone());
     ctrlc::set_handler(move || {

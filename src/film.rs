@@ -5,6 +5,10 @@
 //! (Radiance RGBE) keep the radiance; `.png`, `.jpg`/`.jpeg` and `.bmp` are sRGB-encoded
 //! and clamped. Files are written to a temporary sibling and renamed, so a failed or
 //! interrupted write never leaves a half-written image under the requested name.
+//!
+//! Render outputs beyond radiance ([`Aov`]s) are film channels too. They go into an `.exr`
+//! output as extra channels of the one part, and beside any other output into one
+//! `<stem>.aovs.exr`; object and material ids are 32-bit unsigned channels there.
 
 use glam::Vec3;
 use std::path::{Path, PathBuf};
@@ -19,6 +23,115 @@ pub enum Accumulation {
     /// The value of the one ray through the pixel centre, traced by the render that holds
     /// sample 0; the texel's `w` is 1 where it was traced.
     PixelCentre,
+}
+
+/// A render output beyond radiance (an AOV), filled from each camera ray's first hit. Each
+/// is a film channel of the same name; the order of [`Aov::ALL`] is the channels' order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Aov {
+    /// Distance of the hit point along the camera's viewing axis, over the samples that hit.
+    Depth,
+    /// World-space shading normal facing the camera ray, over the samples that hit.
+    Normal,
+    /// Reflectance at the hit (textures applied), a miss counting 0.
+    Albedo,
+    /// The fraction of the camera samples that hit a surface.
+    Alpha,
+    /// The `[[objects]]` entry (glTF: mesh node) the pixel-centre ray hits.
+    ObjectId,
+    /// The material the pixel-centre ray hits.
+    MaterialId,
+    /// BVH nodes visited plus triangles tested per camera ray.
+    BvhCost,
+}
+
+/// The id an [`Aov::ObjectId`] or [`Aov::MaterialId`] pixel holds where nothing is hit.
+pub const NO_ID: u32 = u32::MAX;
+
+impl Aov {
+    /// Every AOV, in channel order.
+    pub const ALL: [Aov; 7] = [
+        Aov::Depth,
+        Aov::Normal,
+        Aov::Albedo,
+        Aov::Alpha,
+        Aov::ObjectId,
+        Aov::MaterialId,
+        Aov::BvhCost,
+    ];
+
+    /// The name on the command line and of the film channel.
+    pub fn name(self) -> &'static str {
+        match self {
+            Aov::Depth => "depth",
+            Aov::Normal => "normal",
+            Aov::Albedo => "albedo",
+            Aov::Alpha => "alpha",
+            Aov::ObjectId => "object_id",
+            Aov::MaterialId => "material_id",
+            Aov::BvhCost => "bvh_cost",
+        }
+    }
+
+    /// The AOV's bit in a mask of AOVs ([`Aov::mask`]; the GPU kernel's `params.aovs`).
+    pub fn bit(self) -> u32 {
+        1 << self as u32
+    }
+
+    /// The mask of a list of AOVs.
+    pub fn mask(aovs: &[Aov]) -> u32 {
+        aovs.iter().fold(0, |m, a| m | a.bit())
+    }
+
+    /// Parses a comma-separated list of names (`depth,normal`) into a sorted set.
+    pub fn parse_list(list: &str) -> Result<Vec<Aov>, FilmError> {
+        let mut out = Vec::new();
+        for name in list.split(',').map(str::trim) {
+            let aov = Aov::ALL
+                .into_iter()
+                .find(|a| a.name() == name)
+                .ok_or_else(|| FilmError::UnknownAov {
+                    name: name.to_string(),
+                    valid: Aov::ALL.map(Aov::name).join(", "),
+                })?;
+            out.push(aov);
+        }
+        out.sort();
+        out.dedup();
+        Ok(out)
+    }
+
+    /// Components of the AOV's channel, and how they accumulate. Ids are held as their
+    /// low and high 16 bits, each exact in an f32.
+    fn channel(self) -> (usize, Accumulation) {
+        match self {
+            Aov::Depth => (1, Accumulation::HitSamples),
+            Aov::Normal => (3, Accumulation::HitSamples),
+            Aov::Albedo => (3, Accumulation::AllSamples),
+            Aov::Alpha | Aov::BvhCost => (1, Accumulation::AllSamples),
+            Aov::ObjectId | Aov::MaterialId => (2, Accumulation::PixelCentre),
+        }
+    }
+
+    /// The EXR channel names of the AOV's components.
+    pub fn exr_channels(self) -> &'static [&'static str] {
+        match self {
+            Aov::Depth => &["Z"],
+            Aov::Normal => &["normal.X", "normal.Y", "normal.Z"],
+            Aov::Albedo => &["albedo.R", "albedo.G", "albedo.B"],
+            Aov::Alpha => &["A"],
+            Aov::ObjectId => &["object_id"],
+            Aov::MaterialId => &["material_id"],
+            Aov::BvhCost => &["bvh_cost"],
+        }
+    }
+}
+
+/// One AOV's per-pixel values, as an EXR channel holds them.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AovValues {
+    F32(Vec<f32>),
+    U32(Vec<u32>),
 }
 
 /// One named per-pixel channel beyond radiance. A pixel's entry is one texel, as in the
@@ -44,6 +157,13 @@ pub struct Film {
     /// Samples per pixel in `sum` and in the channels.
     pub samples: u32,
     pub channels: Vec<Channel>,
+    /// Whether camera rays that miss added no radiance (the sky seen directly is left out),
+    /// so that the mean radiance is premultiplied by the [`Aov::Alpha`] coverage: the film
+    /// of a `--transparent` render, saved as an RGBA PNG.
+    pub transparent: bool,
+    /// The AOVs [`Film::save`] writes (an [`Aov::mask`]): those asked for. A transparent
+    /// film holds the alpha AOV for its PNG's alpha channel even when not asked for it.
+    pub saved_aovs: u32,
 }
 
 /// The image formats meshtrace writes.
@@ -86,6 +206,12 @@ pub enum FilmError {
     UnknownFormat { path: String },
     #[error("{path}: {message}")]
     Io { path: String, message: String },
+    #[error("unknown AOV `{name}`; the AOVs are {valid}")]
+    UnknownAov { name: String, valid: String },
+    #[error(
+        "{path}: a transparent render is written as a PNG (its alpha channel is the coverage); give a .png output"
+    )]
+    TransparentNotPng { path: String },
 }
 
 impl Film {
@@ -101,9 +227,67 @@ impl Film {
             sum: vec![Vec3::ZERO; width as usize * height as usize],
             samples: 0,
             channels: Vec::new(),
+            transparent: false,
+            saved_aovs: 0,
         };
         film.add_channel(Self::RAYS, 1, Accumulation::AllSamples);
         film
+    }
+
+    /// An empty film with the [`Film::RAYS`] channel and one channel per AOV of `aovs`
+    /// (a mask of [`Aov::bit`]s), in the order of [`Aov::ALL`]; a `transparent` one
+    /// ([`Film::transparent`]) also holds [`Aov::Alpha`].
+    pub fn with_aovs(width: u32, height: u32, aovs: u32, transparent: bool) -> Self {
+        let mut film = Self::new(width, height);
+        let held = aovs | if transparent { Aov::Alpha.bit() } else { 0 };
+        for aov in Aov::ALL.into_iter().filter(|a| held & a.bit() != 0) {
+            let (components, accumulation) = aov.channel();
+            film.add_channel(aov.name(), components, accumulation);
+        }
+        film.transparent = transparent;
+        film.saved_aovs = aovs;
+        film
+    }
+
+    /// The AOVs the film holds, in channel order.
+    pub fn aovs(&self) -> Vec<Aov> {
+        Aov::ALL
+            .into_iter()
+            .filter(|a| self.channel(a.name()).is_some())
+            .collect()
+    }
+
+    /// An AOV's per-pixel values, as the table of [`Aov`] defines them: `None` if the film
+    /// does not hold it. Depth is +inf and the normal 0 where no sample hit; the normal is
+    /// the normalised mean; ids are [`NO_ID`] where the centre ray hit nothing.
+    pub fn aov_values(&self, aov: Aov) -> Option<Vec<AovValues>> {
+        let channel = self.channel(aov.name())?;
+        let values = self.channel_values(channel);
+        let scalar = |f: &dyn Fn(Option<[f32; 3]>) -> f32| {
+            AovValues::F32(values.iter().map(|&v| f(v)).collect())
+        };
+        Some(match aov {
+            Aov::Depth => vec![scalar(&|v| v.map_or(f32::INFINITY, |v| v[0]))],
+            Aov::Alpha | Aov::BvhCost => vec![scalar(&|v| v.map_or(0.0, |v| v[0]))],
+            Aov::Albedo => (0..3)
+                .map(|k| scalar(&|v: Option<[f32; 3]>| v.map_or(0.0, |v| v[k])))
+                .collect(),
+            Aov::Normal => {
+                let unit: Vec<Vec3> = values
+                    .iter()
+                    .map(|v| v.map_or(Vec3::ZERO, |v| Vec3::from(v).normalize_or_zero()))
+                    .collect();
+                (0..3)
+                    .map(|k| AovValues::F32(unit.iter().map(|n| n[k]).collect()))
+                    .collect()
+            }
+            Aov::ObjectId | Aov::MaterialId => vec![AovValues::U32(
+                values
+                    .iter()
+                    .map(|v| v.map_or(NO_ID, |v| v[0] as u32 | (v[1] as u32) << 16))
+                    .collect(),
+            )],
+        })
     }
 
     /// Adds an empty channel of `components` (1 to 3) values per pixel.
@@ -193,12 +377,20 @@ impl Film {
             }
         }
         self.samples += other.samples;
+        self.transparent |= other.transparent;
+        self.saved_aovs |= other.saved_aovs;
     }
 
     /// Checks, before any rendering, that `path` names a known format in a folder where a
     /// file can be created, by creating and removing the temporary file `save` would use.
-    pub fn check_writable(path: &Path) -> Result<(), FilmError> {
-        Format::from_path(path)?;
+    /// A `transparent` render must name a PNG.
+    pub fn check_writable(path: &Path, transparent: bool) -> Result<(), FilmError> {
+        let format = Format::from_path(path)?;
+        if transparent && format != Format::Png {
+            return Err(FilmError::TransparentNotPng {
+                path: path.display().to_string(),
+            });
+        }
         let tmp = temp_sibling(path);
         std::fs::File::create(&tmp).map_err(|e| FilmError::Io {
             path: path.display().to_string(),
@@ -208,22 +400,78 @@ impl Film {
         Ok(())
     }
 
-    /// Writes the mean radiance in the format the extension names.
+    /// The file that holds the AOVs of an output `path` that is not an EXR:
+    /// `<stem>.aovs.exr` beside it.
+    pub fn aov_path(path: &Path) -> PathBuf {
+        let stem = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        path.with_file_name(format!("{stem}.aovs.exr"))
+    }
+
+    /// Writes the mean radiance in the format the extension names, with the AOVs the film
+    /// holds: extra channels of an EXR, or else [`Film::aov_path`] beside the image. A
+    /// transparent film is written as an RGBA PNG.
     pub fn save(&self, path: &Path) -> Result<(), FilmError> {
         let format = Format::from_path(path)?;
-        let io = |message: String| FilmError::Io {
-            path: path.display().to_string(),
-            message,
-        };
-        let tmp = temp_sibling(path);
-        let result = self
-            .encode(&tmp, format)
-            .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
-        if let Err(message) = result {
-            let _ = std::fs::remove_file(&tmp);
-            return Err(io(message));
+        if self.transparent && format != Format::Png {
+            return Err(FilmError::TransparentNotPng {
+                path: path.display().to_string(),
+            });
         }
-        Ok(())
+        if self.saved_aovs == 0 {
+            return write_atomically(path, |tmp| self.encode(tmp, format));
+        }
+        if format == Format::Exr {
+            return write_atomically(path, |tmp| self.encode_exr(tmp, true));
+        }
+        write_atomically(&Self::aov_path(path), |tmp| self.encode_exr(tmp, false))?;
+        write_atomically(path, |tmp| self.encode(tmp, format))
+    }
+
+    /// One single-part EXR: the mean radiance as `R`, `G`, `B` if `radiance`, then every
+    /// AOV's channels (ids as 32-bit unsigned), losslessly compressed.
+    fn encode_exr(&self, tmp: &Path, radiance: bool) -> Result<(), String> {
+        use exr::prelude::{
+            AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes,
+            WritableImage,
+        };
+        let mut channels = Vec::new();
+        if radiance {
+            let mean = self.mean();
+            for (k, name) in ["R", "G", "B"].into_iter().enumerate() {
+                let samples = FlatSamples::F32(mean.iter().map(|c| c[k]).collect());
+                channels.push(AnyChannel::new(name, samples));
+            }
+        }
+        for aov in self.aovs() {
+            if self.saved_aovs & aov.bit() == 0 {
+                continue;
+            }
+            let values = self.aov_values(aov).ok_or("missing AOV channel")?;
+            for (name, v) in aov.exr_channels().iter().zip(values) {
+                let samples = match v {
+                    AovValues::F32(v) => FlatSamples::F32(v),
+                    AovValues::U32(v) => FlatSamples::U32(v),
+                };
+                channels.push(AnyChannel::new(*name, samples));
+            }
+        }
+        let size = (self.width as usize, self.height as usize);
+        let layer = Layer::new(
+            size,
+            LayerAttributes::default(),
+            Encoding::FAST_LOSSLESS,
+            AnyChannels::sort(channels.into()),
+        );
+        let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+        let mut out = std::io::BufWriter::new(file);
+        Image::from_layer(layer)
+            .write()
+            .to_buffered(&mut out)
+            .map_err(|e| e.to_string())?;
+        finish_file(out)
     }
 
     fn encode(&self, tmp: &Path, format: Format) -> Result<(), String> {
@@ -244,6 +492,11 @@ impl Film {
                 let img = image::Rgb32FImage::from_raw(w, h, data).ok_or("film size mismatch")?;
                 image::DynamicImage::ImageRgb32F(img).write_to(&mut out, image_format)
             }
+            Format::Png if self.transparent => {
+                let img = image::RgbaImage::from_raw(w, h, self.straight_rgba8(&mean)?)
+                    .ok_or("film size mismatch")?;
+                image::DynamicImage::ImageRgba8(img).write_to(&mut out, image_format)
+            }
             Format::Png | Format::Jpeg | Format::Bmp => {
                 let data: Vec<u8> = mean
                     .iter()
@@ -254,13 +507,55 @@ impl Film {
             }
         };
         result.map_err(|e| e.to_string())?;
-        use std::io::Write;
-        out.flush().map_err(|e| e.to_string())?;
-        out.into_inner()
-            .map_err(|e| e.to_string())?
-            .sync_all()
-            .map_err(|e| e.to_string())
+        finish_file(out)
     }
+
+    /// A transparent film's 8-bit RGBA: alpha the coverage, colour the premultiplied mean
+    /// divided by it (PNG stores straight alpha), sRGB-encoded; 0 where nothing was hit.
+    fn straight_rgba8(&self, mean: &[Vec3]) -> Result<Vec<u8>, String> {
+        let alpha = self
+            .channel(Aov::Alpha.name())
+            .map(|c| self.channel_values(c))
+            .ok_or("a transparent film needs its alpha channel")?;
+        Ok(mean
+            .iter()
+            .zip(alpha)
+            .flat_map(|(&c, a)| {
+                let a = a.map_or(0.0, |a| a[0]);
+                let c = if a > 0.0 { c / a } else { Vec3::ZERO };
+                let [r, g, b] = c.to_array().map(linear_to_srgb8);
+                [r, g, b, (a.clamp(0.0, 1.0) * 255.0 + 0.5) as u8]
+            })
+            .collect())
+    }
+}
+
+/// Writes `path` through `encode` into a temporary sibling, renamed into place once
+/// complete; the temporary file is removed on failure.
+fn write_atomically(
+    path: &Path,
+    encode: impl FnOnce(&Path) -> Result<(), String>,
+) -> Result<(), FilmError> {
+    let tmp = temp_sibling(path);
+    let result = encode(&tmp).and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
+    if let Err(message) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(FilmError::Io {
+            path: path.display().to_string(),
+            message,
+        });
+    }
+    Ok(())
+}
+
+/// Flushes a written file to the disk.
+fn finish_file(mut out: std::io::BufWriter<std::fs::File>) -> Result<(), String> {
+    use std::io::Write;
+    out.flush().map_err(|e| e.to_string())?;
+    out.into_inner()
+        .map_err(|e| e.to_string())?
+        .sync_all()
+        .map_err(|e| e.to_string())
 }
 
 /// Reads an image's linear RGB radiance (EXR and HDR as stored; 8-bit formats decoded from sRGB).

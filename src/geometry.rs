@@ -10,7 +10,9 @@ pub const T_INF: f32 = f32::MAX;
 
 /// A triangle's three corners in BVH leaf order, padded to 16-byte rows as WGSL lays out
 /// `array<vec4<f32>>` (48 bytes). The first padding word marks a triangle whose material
-/// cuts out parts of it (1; else 0): traversals ask before counting a hit on it.
+/// cuts out parts of it (1; else 0): traversals ask before counting a hit on it. The
+/// second holds the bits of the index of the object the triangle belongs to (read only by
+/// the `object_id` AOV).
 /// mirror: shaders/geometry.wgsl `TriVerts`
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -38,6 +40,16 @@ impl TriVerts {
     /// Marks the triangle as [`is_masked`](Self::is_masked).
     pub fn set_masked(&mut self) {
         self.v0[3] = 1.0;
+    }
+
+    /// The index of the object the triangle belongs to.
+    pub fn object(&self) -> u32 {
+        self.v1[3].to_bits()
+    }
+
+    /// Sets [`object`](Self::object).
+    pub fn set_object(&mut self, object: u32) {
+        self.v1[3] = f32::from_bits(object);
     }
 
     /// The three corners. (Always inlined: on the hot paths the compiler otherwise may

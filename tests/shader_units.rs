@@ -20,10 +20,10 @@ use meshtrace::geometry::{
 };
 use meshtrace::math::Ray;
 use meshtrace::render::bsdf::{bsdf_eval, bsdf_pdf, bsdf_sample, fresnel_dielectric};
-use meshtrace::render::camera::{CameraRays, generate_camera_ray};
+use meshtrace::render::camera::{CameraRays, generate_camera_ray, pixel_centre_ray};
 use meshtrace::render::environment::{env_pdf, env_radiance, sample_env};
 use meshtrace::render::gpu::GpuContext;
-use meshtrace::render::integrator::trace_path;
+use meshtrace::render::integrator::{first_hit, trace_path};
 use meshtrace::render::rng::{DIMS_PER_BOUNCE, Rng, pcg4d};
 use meshtrace::render::sampling::{
     cosine_hemisphere_pdf, power_heuristic, sample_cdf, sample_concentric_disk,
@@ -1324,4 +1324,53 @@ fn environment_matches() {
     pdf.check("test_environment", cases.len());
     sample.check("test_environment");
     sample_pdf.check("test_environment");
+}
+
+/// `first_hit` (the AOVs' camera hit) against its Rust twin on every pixel-centre ray of
+/// the Cornell box.
+#[test]
+fn first_hit_matches() {
+    let Some(ctx) = common::gpu("first_hit_matches") else {
+        return;
+    };
+    // The glTF-free scene with several objects and materials: the Cornell box.
+    let (rs, _) = cornell();
+    let settings = RenderSettings {
+        width: 160,
+        height: 100,
+        spp: 1,
+        max_depth: 8,
+        seed: 0,
+    };
+    let cases: Vec<Case> = (0..settings.height)
+        .flat_map(|y| (0..settings.width).map(move |x| [[x, y, 0, 0], [0; 4]]))
+        .collect();
+    let out = run(&ctx, &rs, &settings, "test_first_hit", &cases);
+    let cam = CameraRays::new(&rs.camera, settings.width, settings.height);
+    let mut differ = Tally::new("hit, ids or cost differ (rays through edges)", 5e-3);
+    let mut normal_err = Worst::new("normal (abs)", 1e-5);
+    let mut depth_err = Worst::new("depth (relative)", 1e-5);
+    let mut hits = 0;
+    for (c, o) in cases.iter().zip(&out) {
+        let [x, y, _, _] = c[0];
+        let fh = first_hit(&rs, &pixel_centre_ray(&cam, x, y));
+        let show = || format!("({x}, {y}): CPU {fh:?}, GPU {o:?}");
+        let cpu = [fh.hit as u32, fh.cost, fh.material, fh.object];
+        if cpu != o[0] {
+            differ.add(show);
+            continue;
+        }
+        if !fh.hit {
+            continue;
+        }
+        hits += 1;
+        normal_err.add((v3(o[1]) - fh.normal).abs().max_element() as f64, show);
+        let depth = (fh.p - cam.position).dot(cam.forward);
+        depth_err.add(rel(depth, f(o[1][3]), 0.0), show);
+    }
+    eprintln!("test_first_hit: {} cases, {hits} hits", cases.len());
+    differ.check("test_first_hit", cases.len());
+    normal_err.check("test_first_hit");
+    depth_err.check("test_first_hit");
+    assert!(hits > cases.len() / 2, "{hits}");
 }

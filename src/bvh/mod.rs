@@ -10,7 +10,7 @@ mod traverse;
 mod validate;
 
 pub use build::{BuildParams, MAX_BINS};
-pub use traverse::{Hit, solid, traverse_any, traverse_closest};
+pub use traverse::{Hit, solid, traverse_any, traverse_closest, traverse_closest_counted};
 pub use validate::validate;
 
 use crate::math::Aabb;

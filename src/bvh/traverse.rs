@@ -31,12 +31,40 @@ pub fn traverse_closest(
     tris: &[TriVerts],
     ray: &Ray,
     t_max: f32,
-    mut accept: impl FnMut(u32, f32, f32) -> bool,
+    accept: impl FnMut(u32, f32, f32) -> bool,
 ) -> Option<Hit> {
+    closest(nodes, tris, ray, t_max, accept).0
+}
+
+/// [`traverse_closest`], and its cost: the BVH nodes it visited plus the triangles it
+/// tested (the `bvh_cost` AOV).
+/// mirror: shaders/traverse.wgsl `traverse_closest_counted`
+pub fn traverse_closest_counted(
+    nodes: &[BvhNode],
+    tris: &[TriVerts],
+    ray: &Ray,
+    t_max: f32,
+    accept: impl FnMut(u32, f32, f32) -> bool,
+) -> (Option<Hit>, u32) {
+    closest(nodes, tris, ray, t_max, accept)
+}
+
+/// The closest hit and the traversal's cost; inlined, so that [`traverse_closest`] does
+/// not count.
+#[inline(always)]
+fn closest(
+    nodes: &[BvhNode],
+    tris: &[TriVerts],
+    ray: &Ray,
+    t_max: f32,
+    mut accept: impl FnMut(u32, f32, f32) -> bool,
+) -> (Option<Hit>, u32) {
     let sheared = ShearedRay::new(ray);
     let mut best: Option<Hit> = None;
     let mut t_best = t_max;
-    walk(nodes, ray, t_max, |first, count, _| {
+    let mut tested = 0u32;
+    let visited = walk(nodes, ray, t_max, |first, count, _| {
+        tested += count;
         for i in first..first + count {
             let tri = &tris[i as usize];
             if let Some(h) = intersect_triangle(&sheared, tri, t_best)
@@ -53,7 +81,7 @@ pub fn traverse_closest(
         }
         (false, t_best)
     });
-    best
+    (best, visited + tested)
 }
 
 /// Whether anything lies on the ray with `0 < t < t_max` (shadow rays), with hits on
@@ -80,7 +108,8 @@ pub fn traverse_any(
 }
 
 /// Visits the leaves the ray may reach, nearer child first. `leaf(first, count, t_max)`
-/// returns whether to stop and the (possibly shortened) ray extent.
+/// returns whether to stop and the (possibly shortened) ray extent. Returns the number of
+/// nodes visited (a count that callers who ignore it do not pay for: `walk` is inlined).
 /// mirror: shaders/traverse.wgsl `walk`
 #[inline]
 fn walk(
@@ -88,27 +117,29 @@ fn walk(
     ray: &Ray,
     mut t_max: f32,
     mut leaf: impl FnMut(u32, u32, f32) -> (bool, f32),
-) {
-    let Some(root) = nodes.first() else { return };
+) -> u32 {
+    let Some(root) = nodes.first() else { return 0 };
     // An empty scene's root is a leaf of no triangles (any other root with count 0 is an
     // interior node, whose second child is never at index 0).
     if root.count == 0 && root.left_or_first == 0 {
-        return;
+        return 0;
     }
     let inv_dir = safe_inverse(ray.dir);
     if intersect_aabb(ray.origin, inv_dir, root.min.into(), root.max.into(), t_max) == T_INF {
-        return;
+        return 0;
     }
     let mut stack = [0u32; STACK_SIZE];
     let mut sp = 0usize;
     let mut node = 0u32;
+    let mut visited = 0u32;
     loop {
+        visited += 1;
         let n = &nodes[node as usize];
         if n.count > 0 {
             let (stop, t) = leaf(n.left_or_first, n.count, t_max);
             t_max = t;
             if stop || sp == 0 {
-                return;
+                return visited;
             }
             sp -= 1;
             node = stack[sp];
@@ -132,7 +163,7 @@ fn walk(
         }
         if ta == T_INF {
             if sp == 0 {
-                return;
+                return visited;
             }
             sp -= 1;
             node = stack[sp];

@@ -66,3 +66,15 @@ pub fn generate_camera_ray(cam: &CameraRays, px: u32, py: u32, rng: &Rng) -> Ray
     let origin = cam.position + lens.x * cam.right + lens.y * cam.up;
     Ray::new(origin, (focus - origin).normalize())
 }
+
+/// The ray through the centre of pixel (`px`, `py`) and of the lens: what the pixel-centre
+/// AOVs (object and material ids) see. Draws no random numbers.
+/// mirror: shaders/camera.wgsl `pixel_centre_ray`
+pub fn pixel_centre_ray(cam: &CameraRays, px: u32, py: u32) -> Ray {
+    let sx = (2.0 * (px as f32 + 0.5) / cam.width as f32 - 1.0) * cam.tan_half_vfov * cam.aspect;
+    let sy = (1.0 - 2.0 * (py as f32 + 0.5) / cam.height as f32) * cam.tan_half_vfov;
+    Ray::new(
+        cam.position,
+        (cam.forward + sx * cam.right + sy * cam.up).normalize(),
+    )
+}

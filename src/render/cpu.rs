@@ -2,11 +2,11 @@
 //! each pass parallel over 16×16 tiles with rayon. Each sample is [`trace_path`] on a
 //! camera ray, the same stages the GPU kernel (`shaders/render.wgsl`) runs. No I/O.
 
-use super::camera::{CameraRays, generate_camera_ray};
-use super::integrator::trace_path;
+use super::camera::{CameraRays, generate_camera_ray, pixel_centre_ray};
+use super::integrator::{FirstHit, first_hit, trace_path};
 use super::rng::Rng;
 use super::{Checkpoints, RenderJob, RenderScene};
-use crate::film::Film;
+use crate::film::{Aov, Film};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -24,6 +24,12 @@ pub struct PixelSums {
     pub rays: f32,
 }
 
+/// One pixel's AOV accumulators: a texel per [`Aov`] (indexed by it), as the AOV's film
+/// channel holds it. Kept only by a render with AOVs.
+/// mirror: shaders/render.wgsl `AovSums`
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AovSums(pub [[f32; 4]; Aov::ALL.len()]);
+
 /// Renders the job's sample range with rayon over tiles, in passes of a few samples per
 /// pixel over the whole image. `progress` is told of every finished tile's sample count; it
 /// runs on worker threads. Stops early, after a whole pass, when the job is cancelled; the
@@ -36,48 +42,72 @@ pub fn render(scene: &RenderScene, job: &RenderJob, progress: &(dyn Fn(u64) + Sy
         .collect();
     let step = (PATHS_PER_PASS / (w as u64 * h as u64)).max(1) as u32;
     let cam = CameraRays::new(&scene.camera, w, h);
-    let mut film = Film::new(w, h);
+    let mut film = job.film();
     let mut pixels = vec![PixelSums::default(); film.sum.len()];
+    let aov_pixels = if film.aovs().is_empty() {
+        0
+    } else {
+        film.sum.len()
+    };
+    let mut aovs = vec![AovSums::default(); aov_pixels];
     let mut checkpoints = Checkpoints::new(job);
     let mut start = job.samples.start;
     while start < job.samples.end && !job.cancelled() {
         let end = (start + step).min(job.samples.end);
-        let before = &pixels;
-        let done: Vec<((u32, u32), Vec<PixelSums>)> = tiles
+        let (before, aovs_before) = (&pixels, &aovs);
+        type TileSums = ((u32, u32), Vec<PixelSums>, Vec<AovSums>);
+        let done: Vec<TileSums> = tiles
             .par_iter()
             .map(|&(x0, y0)| {
                 let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
                 let mut sums = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+                let mut aov_sums = Vec::new();
                 for y in y0..y1 {
                     for x in x0..x1 {
-                        let acc = before[(y * w + x) as usize];
-                        sums.push(render_pixel(scene, &cam, job, x, y, start..end, acc));
+                        let i = (y * w + x) as usize;
+                        let mut aov = aovs_before.get(i).copied();
+                        let acc = render_pixel(
+                            scene,
+                            &cam,
+                            job,
+                            x,
+                            y,
+                            start..end,
+                            before[i],
+                            aov.as_mut(),
+                        );
+                        sums.push(acc);
+                        aov_sums.extend(aov);
                     }
                 }
                 progress(sums.len() as u64 * (end - start) as u64);
-                ((x0, y0), sums)
+                ((x0, y0), sums, aov_sums)
             })
             .collect();
-        for ((x0, y0), sums) in done {
+        for ((x0, y0), sums, aov_sums) in done {
             let tw = (x0 + TILE).min(w) - x0;
             for (i, acc) in sums.into_iter().enumerate() {
                 let (x, y) = (x0 + i as u32 % tw, y0 + i as u32 / tw);
                 pixels[(y * w + x) as usize] = acc;
             }
+            for (i, acc) in aov_sums.into_iter().enumerate() {
+                let (x, y) = (x0 + i as u32 % tw, y0 + i as u32 / tw);
+                aovs[(y * w + x) as usize] = acc;
+            }
         }
         film.samples += end - start;
         start = end;
         if start < job.samples.end && checkpoints.due() {
-            fill(&mut film, &pixels);
+            fill(&mut film, &pixels, &aovs);
             checkpoints.write(&film);
         }
     }
-    fill(&mut film, &pixels);
+    fill(&mut film, &pixels, &aovs);
     film
 }
 
-/// Copies the accumulators into the film's radiance and `rays` channel.
-fn fill(film: &mut Film, pixels: &[PixelSums]) {
+/// Copies the accumulators into the film's radiance, `rays` channel and AOV channels.
+fn fill(film: &mut Film, pixels: &[PixelSums], aovs: &[AovSums]) {
     for (dst, p) in film.sum.iter_mut().zip(pixels) {
         *dst = p.radiance;
     }
@@ -86,11 +116,52 @@ fn fill(film: &mut Film, pixels: &[PixelSums]) {
     for (dst, p) in rays.data.iter_mut().zip(pixels) {
         dst[0] = p.rays;
     }
+    for aov in Aov::ALL {
+        if let Some(channel) = film.channels.iter_mut().find(|c| c.name == aov.name()) {
+            for (dst, p) in channel.data.iter_mut().zip(aovs) {
+                *dst = p.0[aov as usize];
+            }
+        }
+    }
+}
+
+/// Adds one camera sample's first hit to a pixel's AOV sums: its cost, and where it hit,
+/// its depth along the viewing axis, normal, albedo and coverage.
+/// mirror: shaders/render.wgsl `add_aov_sample`
+pub fn add_aov_sample(sums: &mut AovSums, cam: &CameraRays, fh: &FirstHit) {
+    let t = &mut sums.0;
+    t[Aov::BvhCost as usize][0] += fh.cost as f32;
+    if !fh.hit {
+        return;
+    }
+    let depth = (fh.p - cam.position).dot(cam.forward);
+    let add = |texel: &mut [f32; 4], v: Vec3| {
+        texel[0] += v.x;
+        texel[1] += v.y;
+        texel[2] += v.z;
+        texel[3] += 1.0;
+    };
+    add(&mut t[Aov::Depth as usize], Vec3::new(depth, 0.0, 0.0));
+    add(&mut t[Aov::Normal as usize], fh.normal);
+    add(&mut t[Aov::Albedo as usize], fh.albedo);
+    add(&mut t[Aov::Alpha as usize], Vec3::X);
+}
+
+/// Sets a pixel's ids from its centre ray's first hit: each id as its low and high 16
+/// bits (exact in f32), `w` = 1 to say the centre ray was traced.
+/// mirror: shaders/render.wgsl `set_aov_ids`
+pub fn set_aov_ids(sums: &mut AovSums, fh: &FirstHit) {
+    let split = |id: u32| [(id & 0xffff) as f32, (id >> 16) as f32, 0.0, 1.0];
+    sums.0[Aov::ObjectId as usize] = split(fh.object);
+    sums.0[Aov::MaterialId as usize] = split(fh.material);
 }
 
 /// `acc` plus one pixel's samples over `samples`, added in sample order in f32 as the GPU
-/// adds them; non-finite radiance samples are dropped (their rays still count).
+/// adds them; non-finite radiance samples are dropped (their rays still count). With AOVs,
+/// `aov` gets each sample's first hit, and with sample 0 the pixel-centre ray's ids; in a
+/// transparent render, a sample whose camera ray misses adds no radiance.
 /// mirror: shaders/render.wgsl `render`
+#[allow(clippy::too_many_arguments)]
 pub fn render_pixel(
     scene: &RenderScene,
     cam: &CameraRays,
@@ -99,15 +170,25 @@ pub fn render_pixel(
     y: u32,
     samples: std::ops::Range<u32>,
     mut acc: PixelSums,
+    mut aov: Option<&mut AovSums>,
 ) -> PixelSums {
     let s = &job.settings;
     let pixel = y * s.width + x;
     for sample in samples {
         let rng = Rng::new(pixel, sample, s.seed);
         let ray = generate_camera_ray(cam, x, y, &rng);
+        let mut seen = true;
+        if let Some(aov) = aov.as_deref_mut() {
+            let fh = first_hit(scene, &ray);
+            add_aov_sample(aov, cam, &fh);
+            seen = fh.hit || !job.transparent;
+            if sample == 0 {
+                set_aov_ids(aov, &first_hit(scene, &pixel_centre_ray(cam, x, y)));
+            }
+        }
         let (l, rays) = trace_path(scene, ray, &rng, s.max_depth);
         acc.rays += rays as f32;
-        if l.is_finite() {
+        if l.is_finite() && seen {
             acc.radiance += l;
         }
     }

@@ -15,9 +15,11 @@ use super::rng::{self, Rng};
 use super::sampling::power_heuristic;
 use super::texture::{alpha_test, material_at, normal_mapped, triangle_uv};
 use super::{RenderScene, TRI_SMOOTH, TRI_TANGENT, TRI_UV};
-use crate::bvh::{Hit, traverse_any, traverse_closest};
+use crate::bvh::{Hit, traverse_any, traverse_closest, traverse_closest_counted};
+use crate::film::NO_ID;
 use crate::geometry::{self, T_INF};
 use crate::math::{Ray, onb_from_normal};
+use crate::scene::MaterialKind;
 use glam::{Vec2, Vec3};
 
 /// Path depth (in bounces) from which Russian roulette may end a path.
@@ -259,4 +261,62 @@ pub fn trace_path(scene: &RenderScene, ray: Ray, rng: &Rng, max_depth: u32) -> (
     let mut st = path_start(ray);
     while !path_step(scene, &mut st, rng, max_depth) {}
     (st.radiance, st.rays)
+}
+
+/// What the AOVs read of a camera ray's first hit.
+/// mirror: shaders/integrator.wgsl `FirstHit`
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FirstHit {
+    /// Whether the ray hit a surface; the other fields but `cost` are zero (ids [`NO_ID`])
+    /// where it did not.
+    pub hit: bool,
+    pub p: Vec3,
+    /// The shading normal (normal maps applied), turned to face the ray.
+    pub normal: Vec3,
+    /// The reflectance: albedo or base colour with its texture, 1 for `dielectric`.
+    pub albedo: Vec3,
+    pub material: u32,
+    pub object: u32,
+    /// BVH nodes visited plus triangles tested.
+    pub cost: u32,
+}
+
+/// The first hit of camera ray `ray`, for the AOVs: a counting traversal, then the surface
+/// and its material as [`path_step`] finds them. Draws no random numbers.
+/// mirror: shaders/integrator.wgsl `first_hit`
+pub fn first_hit(scene: &RenderScene, ray: &Ray) -> FirstHit {
+    let (hit, cost) =
+        traverse_closest_counted(&scene.bvh.nodes, &scene.tris, ray, T_INF, |t, u, v| {
+            alpha_test(scene, t, u, v)
+        });
+    let Some(hit) = hit else {
+        return FirstHit {
+            hit: false,
+            p: Vec3::ZERO,
+            normal: Vec3::ZERO,
+            albedo: Vec3::ZERO,
+            material: NO_ID,
+            object: NO_ID,
+            cost,
+        };
+    };
+    let si = surface_at(scene, ray, &hit);
+    let mat = material_at(scene, &scene.materials[si.material as usize], si.uv);
+    FirstHit {
+        hit: true,
+        p: si.p,
+        normal: if si.ns.dot(ray.dir) > 0.0 {
+            -si.ns
+        } else {
+            si.ns
+        },
+        albedo: if mat.kind == MaterialKind::DIELECTRIC {
+            Vec3::ONE
+        } else {
+            mat.albedo
+        },
+        material: si.material,
+        object: scene.tris[hit.tri as usize].object(),
+        cost,
+    }
 }

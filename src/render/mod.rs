@@ -219,6 +219,7 @@ impl RenderScene {
             .iter()
             .map(|&i| {
                 let mut t = TriVerts::new(corners[i as usize]);
+                t.set_object(mesh.object(i as usize));
                 let m = &scene.materials[mesh.triangles[i as usize].material as usize];
                 if m.flags & MAT_ALPHA_MASK != 0 {
                     t.set_masked();
@@ -449,6 +450,11 @@ pub struct RenderJob {
     pub cancel: Option<Arc<AtomicBool>>,
     /// Called with the film so far after a finished pass, at most once per interval.
     pub checkpoint: Option<(Duration, CheckpointFn)>,
+    /// The AOVs to fill ([`Aov::mask`](crate::film::Aov::mask)); 0 for radiance alone.
+    pub aovs: u32,
+    /// Whether camera rays that miss add no radiance ([`Film::transparent`]); the film
+    /// then holds the alpha AOV, for the coverage.
+    pub transparent: bool,
 }
 
 /// What a checkpoint does with the film so far (the CLI writes the output image).
@@ -461,7 +467,26 @@ impl RenderJob {
             samples: 0..settings.spp,
             cancel: None,
             checkpoint: None,
+            aovs: 0,
+            transparent: false,
         }
+    }
+
+    /// The job with the AOVs of mask `aovs`, and [`RenderJob::transparent`] or not.
+    pub fn with_aovs(mut self, aovs: u32, transparent: bool) -> Self {
+        self.aovs = aovs;
+        self.transparent = transparent;
+        self
+    }
+
+    /// An empty film for this job's settings and AOVs.
+    pub fn film(&self) -> Film {
+        Film::with_aovs(
+            self.settings.width,
+            self.settings.height,
+            self.aovs,
+            self.transparent,
+        )
     }
 
     /// The job over samples `range` only.

@@ -143,6 +143,7 @@ fn parse_scene_from(text: &str, path: &Path, files: &dyn FileSource) -> Result<S
         builder.named.insert(name.clone(), index);
     }
     for (i, object) in file.objects.iter().enumerate() {
+        builder.object = i as u32;
         ctx.object(&mut builder, i, object)?;
     }
     for (i, light) in file.lights.iter().enumerate() {
@@ -225,7 +226,7 @@ fn load_bare_gltf(
         at: at.to_string(),
         message,
     };
-    builder.append_gltf(asset, turn, None, files, &error)?;
+    builder.append_gltf(asset, turn, None, true, files, &error)?;
     let mesh = &builder.mesh;
     if mesh.triangles.is_empty() {
         return Err(error(
@@ -279,6 +280,8 @@ struct Builder {
     warnings: Vec<String>,
     /// [`Builder::obj_material`]'s answers so far.
     obj_materials: HashMap<u32, u32>,
+    /// The object index of the triangles appended now ([`Mesh::objects`]).
+    object: u32,
 }
 
 impl Builder {
@@ -302,6 +305,8 @@ impl Builder {
             "studio ground",
             Material::diffuse(Vec3::splat(studio::GROUND_ALBEDO)),
         );
+        // The ground is an object of its own, after the mesh's.
+        self.object = self.mesh.objects.iter().max().map_or(0, |&o| o + 1);
         let no_error = |message: String| SceneError::Invalid {
             path: "studio".into(),
             field: "ground".into(),
@@ -386,12 +391,15 @@ impl Builder {
 
     /// Appends what a glTF file brings, transformed by `m`: its primitives with their
     /// node matrices, and its materials unless `material` overrides them; its lights. An
-    /// error about a primitive is made by `error` from the primitive's JSON path.
+    /// error about a primitive is made by `error` from the primitive's JSON path. With
+    /// `node_objects` (a bare file), each node's triangles belong to the object of the
+    /// node's index; else to the current object.
     fn append_gltf(
         &mut self,
         asset: GltfAsset,
         m: Mat4,
         material: Option<u32>,
+        node_objects: bool,
         files: &dyn FileSource,
         error: &dyn Fn(&str, String) -> SceneError,
     ) -> Result<(), SceneError> {
@@ -406,6 +414,9 @@ impl Builder {
             )?,
         };
         for p in asset.parts {
+            if node_objects {
+                self.object = p.node;
+            }
             let at = p.at;
             self.append_geometry(p.part, m * p.matrix, material, &local, false, &|message| {
                 error(&at, message)
@@ -580,6 +591,7 @@ impl Builder {
                 corners.resize(self.mesh.triangles.len(), [NO_TANGENT; 3]);
                 corners.push(g);
             }
+            self.mesh.objects.push(self.object);
             self.mesh.triangles.push(Triangle {
                 p,
                 n,
@@ -1117,7 +1129,7 @@ impl Ctx<'_> {
                     let error = |at: &str, message: String| {
                         object_error(format!("{shown}: {at}: {message}"))
                     };
-                    builder.append_gltf(asset, transform, material, self.files, &error)?;
+                    builder.append_gltf(asset, transform, material, false, self.files, &error)?;
                 } else if is_obj(&path) {
                     let part = load_obj(&path, self.files)?;
                     if part.triangles.is_empty() {

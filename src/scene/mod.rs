@@ -64,11 +64,20 @@ pub struct Mesh {
     /// table beside the triangles rather than a field of [`Triangle`], so that meshes built
     /// in code need not say that they have none.)
     pub tangent_corners: Vec<[u32; 3]>,
+    /// Per triangle, parallel to [`Mesh::triangles`], the object it belongs to (the index
+    /// of its scene file's `[[objects]]` entry, or of a bare glTF file's node); empty in
+    /// a mesh built in code, whose triangles all belong to object 0.
+    pub objects: Vec<u32>,
 }
 
 impl Mesh {
     pub fn vertices(&self, t: &Triangle) -> [Vec3; 3] {
         t.p.map(|i| self.positions[i as usize])
+    }
+
+    /// The object triangle `i` belongs to ([`Mesh::objects`]).
+    pub fn object(&self, i: usize) -> u32 {
+        self.objects.get(i).copied().unwrap_or(0)
     }
 
     /// The tangent indices of triangle `i`: `[NO_TANGENT; 3]` where it has none.

@@ -30,6 +30,9 @@ pub fn without_ground(mut scene: Scene) -> Scene {
     if mesh.tangent_corners.len() == keep.len() {
         mesh.tangent_corners.truncate(keep.len() - 2);
     }
+    if mesh.objects.len() == keep.len() {
+        mesh.objects.truncate(keep.len() - 2);
+    }
     mesh.positions.truncate(mesh.positions.len() - 4);
     scene.materials.pop();
     scene.material_names.pop();

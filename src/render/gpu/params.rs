@@ -15,7 +15,7 @@ pub const SKY_CONSTANT: u32 = 0;
 pub const SKY_GRADIENT: u32 = 1;
 pub const SKY_ENVIRONMENT: u32 = 2;
 
-/// One dispatch's parameters (160 bytes). mirror: shaders/types.wgsl `Params`
+/// One dispatch's parameters (176 bytes). mirror: shaders/types.wgsl `Params`
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Params {
@@ -49,6 +49,11 @@ pub struct Params {
     pub env_strength: f32,
     pub env_rotation: [f32; 2],
     pub env_cells: [u32; 2],
+    /// The film's AOVs ([`Aov::mask`](crate::film::Aov::mask)) and whether it is
+    /// [`transparent`](crate::film::Film::transparent) (1); set with the film.
+    pub aovs: u32,
+    pub transparent: u32,
+    pub _pad: [u32; 2],
 }
 
 impl Params {
@@ -81,6 +86,9 @@ impl Params {
             env_strength,
             env_rotation,
             env_cells,
+            aovs,
+            transparent,
+            _pad,
         })
     }
 

@@ -5,7 +5,7 @@ use super::params::Params;
 use super::pipelines::Pipeline;
 use super::tables::{SceneTables, params_buffer};
 use super::{GpuContext, GpuError, shader};
-use crate::film::Film;
+use crate::film::{Aov, Film};
 use crate::render::{Checkpoints, RenderJob, RenderScene};
 use crate::scene::{Camera, RenderSettings};
 use glam::Vec3;
@@ -122,6 +122,17 @@ impl GpuRenderer {
     /// Starts an empty film for `settings`, whose first sample will be `first_sample`.
     pub fn begin(&mut self, settings: &RenderSettings, first_sample: u32) -> Result<(), GpuError> {
         let template = Film::new(settings.width, settings.height);
+        self.begin_film(settings, template, first_sample)
+    }
+
+    /// Starts a film like `template` (empty, of `settings`' size: its channels say which
+    /// AOVs to fill), whose first sample will be `first_sample`.
+    pub fn begin_film(
+        &mut self,
+        settings: &RenderSettings,
+        template: Film,
+        first_sample: u32,
+    ) -> Result<(), GpuError> {
         let texels = template.texels_per_pixel() as u32;
         let bytes = template.sum.len() as u64 * texels as u64 * 16;
         let limit = self.ctx.limits.max_storage_buffer_binding_size;
@@ -135,6 +146,8 @@ impl GpuRenderer {
         }
         self.base = Params {
             film_texels: texels,
+            aovs: Aov::mask(&template.aovs()),
+            transparent: template.transparent as u32,
             ..self.params_for(settings)
         };
         let buffer = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -279,7 +292,7 @@ impl GpuRenderer {
     /// the film's `samples` says how many it holds.
     pub fn render(&mut self, job: &RenderJob, progress: &dyn Fn(u64)) -> Result<Film, GpuError> {
         let (w, h) = (job.settings.width, job.settings.height);
-        self.begin(&job.settings, job.samples.start)?;
+        self.begin_film(&job.settings, job.film(), job.samples.start)?;
         let mut checkpoints = Checkpoints::new(job);
         for (samples, rows) in plan_dispatches(job) {
             self.dispatch(samples.clone(), rows.clone())?;

@@ -8,6 +8,7 @@ use super::layout::StructLayout;
 use super::params::{Params, SKY_CONSTANT, SKY_ENVIRONMENT, SKY_GRADIENT};
 use super::tables::{Element, TABLE_WIDTH, TABLES, wgsl_tables};
 use crate::bvh::STACK_SIZE;
+use crate::film::{Aov, NO_ID};
 use crate::geometry::{GAMMA_2, GAMMA_3, SLAB_SLACK, T_INF};
 use crate::render::integrator::RR_DEPTH;
 use crate::render::rng;
@@ -58,6 +59,7 @@ pub fn shared_constants() -> Vec<(String, Value)> {
         ("SKY_GRADIENT", U32(SKY_GRADIENT)),
         ("SKY_ENVIRONMENT", U32(SKY_ENVIRONMENT)),
         ("NO_TEXTURE", U32(NO_TEXTURE)),
+        ("NO_ID", U32(NO_ID)),
         ("MAT_THIN_WALLED", U32(MAT_THIN_WALLED)),
         ("MAT_ALPHA_MASK", U32(MAT_ALPHA_MASK)),
         ("TABLE_WIDTH_LOG2", U32(TABLE_WIDTH.ilog2())),
@@ -81,6 +83,9 @@ pub fn shared_constants() -> Vec<(String, Value)> {
     }
     for (wrap, name) in Wrap::ALL {
         list.push((format!("WRAP_{}", name.to_uppercase()), U32(wrap.0)));
+    }
+    for aov in Aov::ALL {
+        list.push((format!("AOV_{}", aov.name().to_uppercase()), U32(aov.bit())));
     }
     list
 }

@@ -55,6 +55,8 @@ pub struct GltfPart {
     pub part: MeshPart,
     /// The node's world matrix.
     pub matrix: Mat4,
+    /// The index of the node in the file's `nodes`: a bare file's object id.
+    pub node: u32,
     /// The primitive's JSON path, `meshes[i].primitives[j]`, for messages.
     pub at: String,
 }

@@ -89,6 +89,7 @@ pub(super) fn load_scene(doc: &Doc, buffers: &Buffers) -> Result<GltfAsset, Scen
                 asset.parts.push(GltfPart {
                     part,
                     matrix: world,
+                    node: n as u32,
                     at: format!("meshes[{m}].primitives[{p}]"),
                 });
             }
