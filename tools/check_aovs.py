@@ -3,13 +3,13 @@
 
 Mitsuba renders the scene (translated by mitsuba_render.build_scene_dict, so through
 meshtrace's exact camera) with its `aov` integrator (`depth`, `position`, `sh_normal`,
-`albedo`) on an `rgba` film, one sample per pixel per pass, `--spp` passes with their own
+`albedo`) on an `rgba` film (A unused, see below), one sample per pixel per pass, `--spp` passes with their own
 seeds. With a box filter and one sample per pixel a pass holds each pixel's one camera
 sample exactly, so the script forms meshtrace's semantics (docs/scene-format.md, section 11)
 sample by sample, not from Mitsuba's filtered averages:
 
-  hit      the film's A (1 where the camera ray hits, 0 where it misses; Mitsuba's AOVs are
-           all 0 there, t included)
+  hit      t > 0 (the `aov` integrator alone leaves the film's A at 0 everywhere; a miss has
+           t = 0 and all other AOVs 0, which the script checks on every pass)
   alpha    hits / spp
   depth    dot(mean over hits of position - camera position, unit forward); +inf without hits
   normal   sh_normal turned to face the ray (negated where dot(n, p - camera) > 0, as
@@ -132,10 +132,11 @@ def mitsuba_aovs(mi, scene, w, h, spp, seed, cam, fwd):
             ial = [ix["a.R"], ix["a.G"], ix["a.B"]]
             it = ix["t.T"] if "t.T" in ix else ix["t.Y"]
         a = np.array(bmp, dtype=np.float64)
-        hit = a[:, :, ia] > 0.5
-        # a miss leaves every AOV at 0, t included (checked here once per pass)
-        if np.any(a[~hit][:, it] != 0.0):
-            raise SystemExit("check_aovs: Mitsuba gave a non-zero t where A = 0")
+        # A is 0 everywhere (the aov integrator alone returns no `valid`); a miss has t = 0
+        # and every other AOV 0 too (checked on each pass), a hit t > near_clip > 0
+        hit = a[:, :, it] > 0.0
+        if np.any(a[~hit][:, ip + inn + ial] != 0.0) or np.any(a[:, :, ia] != 0.0):
+            raise SystemExit("check_aovs: Mitsuba's misses are not what this script assumes")
         p = a[:, :, ip]
         n = a[:, :, inn]
         flip = np.einsum("ijk,ijk->ij", n, p - cam) > 0.0
