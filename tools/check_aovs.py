@@ -104,7 +104,7 @@ def aov_scene_dict(mi, scene_path, args, tmp):
         print("check_aovs: note: %s camera: the normal is faced towards p - camera position, "
               "not the sampled lens point" % sensor["type"], file=sys.stderr)
     for k, v in d.items():
-        if isinstance(v, dict) and "bsdf" in v:
+        if isinstance(v, dict) and "bsdf" in v and not args.raw_albedo:
             v["bsdf"] = albedo_twin(v["bsdf"], k)
     m = np.array(sensor["to_world"].matrix, dtype=np.float64)
     cam = m[:3, 3]
@@ -236,6 +236,9 @@ def main():
                     help="spheres as meshtrace's icosphere (default: the geometry is then "
                          "the same) or Mitsuba's analytic sphere")
     ap.add_argument("--meshtrace", default="target/release/meshtrace")
+    ap.add_argument("--raw-albedo", action="store_true",
+                    help="keep the scene's BSDFs (Mitsuba's own albedo AOV; to show why the "
+                         "albedo twins are needed)")
     ap.add_argument("--self-test", action="store_true",
                     help="also check that wrong variants of meshtrace's AOVs fail")
     ap.add_argument("--keep", help="write meshtrace's EXRs and Mitsuba's arrays (.npz) here")
