@@ -3,8 +3,8 @@
 
 Mitsuba renders the scene (translated by mitsuba_render.build_scene_dict, so through
 meshtrace's exact camera) with its `aov` integrator (`depth`, `position`, `sh_normal`,
-`albedo`) on an `rgba` film (A unused, see below), one sample per pixel per pass, `--spp` passes with their own
-seeds. With a box filter and one sample per pixel a pass holds each pixel's one camera
+`albedo`) on an `rgba` film (A unused, see below), one sample per pixel per pass, `--spp`
+passes with their own seeds. With a box filter and one sample per pixel a pass holds each pixel's one camera
 sample exactly, so the script forms meshtrace's semantics (docs/scene-format.md, section 11)
 sample by sample, not from Mitsuba's filtered averages:
 
@@ -43,7 +43,8 @@ verdicts, which must be FAIL.
 
 Usage:
   python3 tools/check_aovs.py SCENE [--spp 128] [--device cpu gpu] [--width W --height H]
-      [--meshtrace /work/main/target/release/meshtrace] [--self-test] [--keep DIR] [--json OUT]
+      [--meshtrace target/release/meshtrace]
+      [--spheres mesh|analytic] [--raw-albedo] [--self-test] [--keep DIR] [--json OUT]
 
 Exit status 1 when an AOV fails on a device (or a --self-test variant passes).
 """
@@ -126,7 +127,6 @@ def mitsuba_aovs(mi, scene, w, h, spp, seed, cam, fwd):
         if names is None:
             names = [f.name for f in bmp.struct_()]
             ix = {n: i for i, n in enumerate(names)}
-            ia = ix["A"]
             ip = [ix["p.X"], ix["p.Y"], ix["p.Z"]]
             inn = [ix["n.X"], ix["n.Y"], ix["n.Z"]]
             ial = [ix["a.R"], ix["a.G"], ix["a.B"]]
@@ -135,7 +135,7 @@ def mitsuba_aovs(mi, scene, w, h, spp, seed, cam, fwd):
         # A is 0 everywhere (the aov integrator alone returns no `valid`); a miss has t = 0
         # and every other AOV 0 too (checked on each pass), a hit t > near_clip > 0
         hit = a[:, :, it] > 0.0
-        if np.any(a[~hit][:, ip + inn + ial] != 0.0) or np.any(a[:, :, ia] != 0.0):
+        if np.any(a[~hit][:, ip + inn + ial] != 0.0):
             raise SystemExit("check_aovs: Mitsuba's misses are not what this script assumes")
         p = a[:, :, ip]
         n = a[:, :, inn]
