@@ -143,6 +143,42 @@ pub struct RenderArgs {
     /// checkpoints already written stay).
     #[arg(long)]
     pub no_partial: bool,
+    /// Denoise the image with Intel Open Image Denoise before writing it (checkpoints are
+    /// written as rendered). Needs a build with `--features denoise`.
+    #[arg(long)]
+    pub denoise: bool,
+}
+
+/// What `--denoise` says in a build without the `denoise` feature.
+#[cfg(not(feature = "denoise"))]
+const NO_DENOISE: &str = "--denoise needs a build with Open Image Denoise: `pip install pyoidn==2.5.1.0`, \
+     set OIDN_DIR to its pyoidn/oidn folder, then `cargo build --release --features denoise` \
+     (README.md, \"Denoising (optional)\")";
+
+#[cfg(feature = "denoise")]
+use meshtrace::denoise::Denoiser;
+
+/// Without the `denoise` feature there is no denoiser: [`denoiser`] refuses `--denoise`.
+#[cfg(not(feature = "denoise"))]
+enum Denoiser {}
+
+#[cfg(not(feature = "denoise"))]
+impl Denoiser {
+    fn denoise_film(&self, _film: &mut Film) -> Result<()> {
+        match *self {}
+    }
+}
+
+/// The denoiser `--denoise` asks for, made before the render so that a missing or unusable
+/// Open Image Denoise fails at once; `None` without `--denoise`.
+fn denoiser(wanted: bool) -> Result<Option<Denoiser>> {
+    if !wanted {
+        return Ok(None);
+    }
+    #[cfg(feature = "denoise")]
+    return Ok(Some(Denoiser::new()?));
+    #[cfg(not(feature = "denoise"))]
+    bail!("{NO_DENOISE}");
 }
 
 /// Loads a scene given on the command line: a path, or `builtin:NAME`.
@@ -177,6 +213,7 @@ fn set_threads(threads: Option<usize>) -> Result<()> {
 pub struct Interrupted(String);
 
 pub fn render(args: &RenderArgs) -> Result<()> {
+    let denoiser = denoiser(args.denoise)?;
     meshtrace::film::Film::check_writable(&args.output)?;
     set_threads(args.threads)?;
     let mut scene = match &args.scene {
@@ -232,10 +269,16 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             eprintln!("notice: {notice}");
         }
     }
-    let film = backend.render(&rs, &job, &|n| bar.inc(n))?;
+    let mut film = backend.render(&rs, &job, &|n| bar.inc(n))?;
     let rays = film.rays();
     let seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
+    // The denoised image replaces the radiance, in the complete and the interrupted film.
+    if let Some(d) = &denoiser {
+        if film.samples > 0 && !(film.samples < settings.spp && args.no_partial) {
+            d.denoise_film(&mut film)?;
+        }
+    }
     if film.samples < settings.spp {
         let what = if args.no_partial {
             format!(

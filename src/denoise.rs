@@ -72,8 +72,8 @@ impl Denoiser {
         if let Some(n) = normal {
             check("normal", n.len())?;
         }
-        let mut filter =
-            oidn::RayTracing::try_new(&self.device).map_err(|e| DenoiseError::Oidn(e.to_string()))?;
+        let mut filter = oidn::RayTracing::try_new(&self.device)
+            .map_err(|e| DenoiseError::Oidn(e.to_string()))?;
         filter
             .hdr(true)
             .image_dimensions(width as usize, height as usize);
