@@ -445,3 +445,32 @@ fn info_into_a_closed_pipe_ends_quietly() {
     assert!(stderr.is_empty(), "stderr: {stderr}");
     assert_eq!(out.status.code(), Some(0), "stderr: {stderr}");
 }
+
+/// Without the `denoise` feature, `--denoise` fails at once, says how to build with it, and
+/// writes nothing.
+#[cfg(not(feature = "denoise"))]
+#[test]
+fn denoise_without_the_feature_says_how_to_get_it() {
+    let dir = TempDir::new("no-denoise");
+    for out in ["out.png", "out.exr"] {
+        assert_fails(
+            &dir,
+            &[
+                "render",
+                "--denoise",
+                "--spp",
+                "1",
+                "--device",
+                "cpu",
+                "-o",
+                out,
+            ],
+            &[
+                "--denoise",
+                "pip install pyoidn==2.5.1.0",
+                "OIDN_DIR",
+                "cargo build --release --features denoise",
+            ],
+        );
+    }
+}

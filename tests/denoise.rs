@@ -77,11 +77,11 @@ fn denoised_cornell_is_closer_to_the_reference() {
     let raw = relmse(&film.mean(), &reference);
     let denoised = relmse(&vec3s(&out), &reference);
     eprintln!("cornell 16 spp: relMSE raw {raw:.6}, denoised {denoised:.6}");
-    // Measured: 0.0173 raw, 0.0013 denoised (BENCHMARKS.md). A denoiser that did nothing,
-    // or blurred the image into the wrong brightness, fails this.
+    // Measured: 0.0174 raw, 0.00066 denoised (BENCHMARKS.md): 0.038 of it. A denoiser that
+    // did nothing, or blurred the image into the wrong brightness, fails this.
     assert!(
-        denoised < 0.25 * raw,
-        "denoised relMSE {denoised} not below a quarter of the raw {raw}"
+        denoised < 0.1 * raw,
+        "denoised relMSE {denoised} not below a tenth of the raw {raw}"
     );
 }
 
