@@ -6,6 +6,8 @@ use clap::{Parser, Subcommand, ValueEnum};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use meshtrace::bvh::BuildParams;
+#[cfg(feature = "denoise")]
+use meshtrace::denoise::Denoiser;
 use meshtrace::film::Film;
 use meshtrace::math::Aabb;
 use meshtrace::render::backend::{Backend, DeviceChoice};
@@ -154,9 +156,6 @@ pub struct RenderArgs {
 const NO_DENOISE: &str = "--denoise needs a build with Open Image Denoise: `pip install pyoidn==2.5.1.0`, \
      set OIDN_DIR to its pyoidn/oidn folder, then `cargo build --release --features denoise` \
      (README.md, \"Denoising (optional)\")";
-
-#[cfg(feature = "denoise")]
-use meshtrace::denoise::Denoiser;
 
 /// Without the `denoise` feature there is no denoiser: [`denoiser`] refuses `--denoise`.
 #[cfg(not(feature = "denoise"))]
