@@ -6,6 +6,8 @@ use clap::{Parser, Subcommand, ValueEnum};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use meshtrace::bvh::BuildParams;
+#[cfg(feature = "denoise")]
+use meshtrace::denoise::Denoiser;
 use meshtrace::film::{Aov, Film, Format};
 use meshtrace::math::Aabb;
 use meshtrace::render::backend::{Backend, DeviceChoice};
@@ -161,6 +163,39 @@ pub struct RenderArgs {
     /// instead of its own sky.
     #[arg(long, value_name = "FILE")]
     pub env: Option<PathBuf>,
+    /// Denoise the image with Intel Open Image Denoise before writing it (checkpoints are
+    /// written as rendered). Needs a build with `--features denoise`.
+    #[arg(long)]
+    pub denoise: bool,
+}
+
+/// What `--denoise` says in a build without the `denoise` feature.
+#[cfg(not(feature = "denoise"))]
+const NO_DENOISE: &str = "--denoise needs a build with Open Image Denoise: `pip install pyoidn==2.5.1.0`, \
+     set OIDN_DIR to its pyoidn/oidn folder, then `cargo build --release --features denoise` \
+     (README.md, \"Denoising (optional)\")";
+
+/// Without the `denoise` feature there is no denoiser: [`denoiser`] refuses `--denoise`.
+#[cfg(not(feature = "denoise"))]
+enum Denoiser {}
+
+#[cfg(not(feature = "denoise"))]
+impl Denoiser {
+    fn denoise_film(&self, _film: &mut Film) -> Result<()> {
+        match *self {}
+    }
+}
+
+/// The denoiser `--denoise` asks for, made before the render so that a missing or unusable
+/// Open Image Denoise fails at once; `None` without `--denoise`.
+fn denoiser(wanted: bool) -> Result<Option<Denoiser>> {
+    if !wanted {
+        return Ok(None);
+    }
+    #[cfg(feature = "denoise")]
+    return Ok(Some(Denoiser::new()?));
+    #[cfg(not(feature = "denoise"))]
+    bail!("{NO_DENOISE}");
 }
 
 /// An axis for `--up`.
@@ -207,6 +242,7 @@ fn set_threads(threads: Option<usize>) -> Result<()> {
 pub struct Interrupted(String);
 
 pub fn render(args: &RenderArgs) -> Result<()> {
+    let denoiser = denoiser(args.denoise)?;
     let aovs = match &args.aov {
         Some(list) => Aov::parse_list(list).context("--aov")?,
         None => Vec::new(),
@@ -240,7 +276,15 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     }
     let settings = *s;
     let rs = RenderScene::new(&scene, &BuildParams::default())?;
-    let mut job = RenderJob::new(settings).with_aovs(Aov::mask(&aovs), args.transparent);
+    // The denoiser is guided by the first surface's albedo and normal, which the film then
+    // holds whether or not they are written.
+    let saved = Aov::mask(&aovs);
+    let guides = if denoiser.is_some() {
+        Aov::Albedo.bit() | Aov::Normal.bit()
+    } else {
+        0
+    };
+    let mut job = RenderJob::new(settings).with_aovs(saved | guides, args.transparent);
     let cancel = Arc::new(AtomicBool::new(false));
     job.cancel = Some(cancel.clone());
     ctrlc::set_handler(move || {
@@ -258,6 +302,8 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         job.checkpoint = Some((
             Duration::from_secs_f64(every),
             Arc::new(move |film: &Film| {
+                let mut film = film.clone();
+                film.saved_aovs = saved;
                 if let Err(e) = film.save(&out) {
                     eprintln!("warning: checkpoint not written: {e}");
                 }
@@ -278,10 +324,17 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             eprintln!("notice: {notice}");
         }
     }
-    let film = backend.render(&rs, &job, &|n| bar.inc(n))?;
+    let mut film = backend.render(&rs, &job, &|n| bar.inc(n))?;
+    film.saved_aovs = saved;
     let rays = film.rays();
     let seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
+    // The denoised image replaces the radiance, in the complete and the interrupted film.
+    if let Some(d) = &denoiser {
+        if film.samples > 0 && !(film.samples < settings.spp && args.no_partial) {
+            d.denoise_film(&mut film)?;
+        }
+    }
     if film.samples < settings.spp {
         let what = if args.no_partial {
             format!(

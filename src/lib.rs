@@ -4,10 +4,13 @@
 //! a SAH [`bvh::Bvh`] orders and indexes; [`render::RenderScene`] packs both into the flat
 //! tables that the CPU renderer ([`render::cpu`]) and the GPU compute renderer
 //! ([`render::gpu`]) read alike; the samples land in a [`film::Film`], which writes the
-//! image file.
+//! image file. With the `denoise` feature, the `denoise` module runs Intel Open Image Denoise over
+//! the film before it is written.
 
 pub mod bench;
 pub mod bvh;
+#[cfg(feature = "denoise")]
+pub mod denoise;
 pub mod film;
 pub mod geometry;
 pub mod math;

@@ -491,3 +491,32 @@ fn up_and_env_options() {
     }
     assert!(dir.path().join("up.png").is_file() && dir.path().join("cornell.png").is_file());
 }
+
+/// Without the `denoise` feature, `--denoise` fails at once, says how to build with it, and
+/// writes nothing.
+#[cfg(not(feature = "denoise"))]
+#[test]
+fn denoise_without_the_feature_says_how_to_get_it() {
+    let dir = TempDir::new("no-denoise");
+    for out in ["out.png", "out.exr"] {
+        assert_fails(
+            &dir,
+            &[
+                "render",
+                "--denoise",
+                "--spp",
+                "1",
+                "--device",
+                "cpu",
+                "-o",
+                out,
+            ],
+            &[
+                "--denoise",
+                "pip install pyoidn==2.5.1.0",
+                "OIDN_DIR",
+                "cargo build --release --features denoise",
+            ],
+        );
+    }
+}

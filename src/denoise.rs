@@ -1,0 +1,133 @@
+//! Denoising with Intel Open Image Denoise (OIDN), on the CPU: its `RT` filter, made for
+//! Monte Carlo path-traced images, over the film's linear HDR radiance, optionally guided
+//! by per-pixel albedo and normal images. Only with the `denoise` feature, which links
+//! libOpenImageDenoise (README.md, "Denoising (optional)", says how to get it).
+
+use crate::film::{Aov, AovValues, Film};
+use glam::Vec3;
+
+/// Why an image could not be denoised.
+#[derive(Debug, thiserror::Error)]
+pub enum DenoiseError {
+    /// An image's pixel count is not the width times the height.
+    #[error("denoise: the {image} image has {len} pixels, not {width}x{height}")]
+    Size {
+        image: &'static str,
+        len: usize,
+        width: u32,
+        height: u32,
+    },
+    /// OIDN's `RT` filter takes a normal image only together with an albedo image.
+    #[error("denoise: a normal guide needs an albedo guide too")]
+    NormalWithoutAlbedo,
+    /// Open Image Denoise itself failed (no usable CPU device, out of memory, ...).
+    #[error("Open Image Denoise: {0}")]
+    Oidn(String),
+}
+
+/// An Open Image Denoise CPU device. Making one first checks, before a long render, that
+/// the library loads and runs on this CPU; one device serves any number of images.
+pub struct Denoiser {
+    device: oidn::Device,
+}
+
+impl Denoiser {
+    /// A denoiser on the CPU.
+    pub fn new() -> Result<Self, DenoiseError> {
+        let device = oidn::Device::cpu().map_err(|e| DenoiseError::Oidn(e.to_string()))?;
+        Ok(Self { device })
+    }
+
+    /// Denoises `color`, linear HDR radiance of `width` × `height` pixels in rows from the
+    /// top, and returns the denoised image of the same size. `albedo` and `normal` are the
+    /// optional guides of the same size: the first surface's albedo in [0, 1] and its
+    /// shading normal (any length, world or camera space), 0 where no surface was hit.
+    /// They may be noisy (OIDN's `cleanAux` off): a film's channels are averages over the
+    /// same few samples as the image, noisy where depth of field or glass blurs them.
+    pub fn denoise(
+        &self,
+        width: u32,
+        height: u32,
+        color: &[[f32; 3]],
+        albedo: Option<&[[f32; 3]]>,
+        normal: Option<&[[f32; 3]]>,
+    ) -> Result<Vec<[f32; 3]>, DenoiseError> {
+        let pixels = width as usize * height as usize;
+        let check = |image: &'static str, len: usize| {
+            if len == pixels {
+                Ok(())
+            } else {
+                Err(DenoiseError::Size {
+                    image,
+                    len,
+                    width,
+                    height,
+                })
+            }
+        };
+        check("colour", color.len())?;
+        if let Some(a) = albedo {
+            check("albedo", a.len())?;
+        }
+        if let Some(n) = normal {
+            check("normal", n.len())?;
+        }
+        let mut filter = oidn::RayTracing::try_new(&self.device)
+            .map_err(|e| DenoiseError::Oidn(e.to_string()))?;
+        filter
+            .hdr(true)
+            .image_dimensions(width as usize, height as usize);
+        match (albedo, normal) {
+            (Some(a), Some(n)) => {
+                filter
+                    .albedo_normal(bytemuck::cast_slice(a), bytemuck::cast_slice(n))
+                    .clean_aux(false);
+            }
+            (Some(a), None) => {
+                filter.albedo(bytemuck::cast_slice(a)).clean_aux(false);
+            }
+            (None, Some(_)) => return Err(DenoiseError::NormalWithoutAlbedo),
+            (None, None) => {}
+        }
+        let mut out = vec![[0.0f32; 3]; pixels];
+        filter
+            .filter(
+                bytemuck::cast_slice(color),
+                bytemuck::cast_slice_mut(&mut out),
+            )
+            .map_err(|e| DenoiseError::Oidn(e.to_string()))?;
+        Ok(out)
+    }
+
+    /// Replaces the film's radiance by its denoised mean, keeping its sample count and its
+    /// channels, so that [`Film::save`] writes the denoised image. Where the film holds the
+    /// `albedo` and `normal` AOVs, they guide the denoiser.
+    pub fn denoise_film(&self, film: &mut Film) -> Result<(), DenoiseError> {
+        let color: Vec<[f32; 3]> = film.mean().iter().map(|c| c.to_array()).collect();
+        // The guides, where the film holds them: the albedo AOV, and with it the normal AOV
+        // (0 where no sample hit).
+        let guide = |aov: Aov| -> Option<Vec<[f32; 3]>> {
+            let values = film.aov_values(aov)?;
+            let [x, y, z] = [0, 1, 2].map(|k| match values.get(k) {
+                Some(AovValues::F32(v)) => Some(v),
+                _ => None,
+            });
+            let (x, y, z) = (x?, y?, z?);
+            Some((0..x.len()).map(|i| [x[i], y[i], z[i]]).collect())
+        };
+        let albedo = guide(Aov::Albedo);
+        let normal = albedo.as_ref().and_then(|_| guide(Aov::Normal));
+        let denoised = self.denoise(
+            film.width,
+            film.height,
+            &color,
+            albedo.as_deref(),
+            normal.as_deref(),
+        )?;
+        let samples = film.samples as f32;
+        for (sum, d) in film.sum.iter_mut().zip(&denoised) {
+            *sum = Vec3::from(*d) * samples;
+        }
+        Ok(())
+    }
+}
