@@ -227,11 +227,24 @@ fn render_denoise_writes_the_denoised_image() {
     assert_eq!((w, h, dw, dh), (64, 64, 64, 64));
     assert_eq!(raw.len(), denoised.len());
     assert_ne!(raw, denoised, "--denoise wrote the raw render");
-    // What the library makes of the same render, up to the film's sum and mean rounding.
-    let color: Vec<[f32; 3]> = raw.iter().map(|c| c.to_array()).collect();
-    let expected = Denoiser::new()
-        .and_then(|d| d.denoise(64, 64, &color, None, None))
+    // What the library makes of the same render guided by its albedo and normal AOVs, as
+    // `--denoise` renders them (and does not write them: no .aovs.exr above).
+    let scene = meshtrace::scene::builtin::load_builtin("cornell").expect("cornell");
+    let rs = RenderScene::new(&scene, &meshtrace::bvh::BuildParams::default()).expect("bvh");
+    let settings = RenderSettings {
+        width: 64,
+        height: 64,
+        ..scene.settings
+    };
+    let mut film = render_guided(&rs, settings, 4, scene.settings.seed);
+    assert_eq!(
+        pixels(&film),
+        raw.iter().map(|c| c.to_array()).collect::<Vec<_>>()
+    );
+    Denoiser::new()
+        .and_then(|d| d.denoise_film(&mut film))
         .expect("denoise");
+    let expected = pixels(&film);
     let worst = denoised
         .iter()
         .zip(&expected)
