@@ -1,4 +1,5 @@
-// Counter-based random numbers (the DIM_* constants are generated from the Rust ones).
+// Counter-based random numbers: Owen-scrambled Sobol points padded by pairs of dimensions
+// (the DIM_* constants are generated from the Rust ones).
 // mirror: src/render/rng.rs
 
 // mirror: src/render/rng.rs `pcg4d`
@@ -16,6 +17,43 @@ fn pcg4d(v_in: vec4<u32>) -> vec4<u32> {
     return v;
 }
 
+// mirror: src/render/rng.rs `sobol`
+fn sobol(index: u32, dim: u32) -> u32 {
+    if dim == 0u {
+        return reverseBits(index);
+    }
+    var x = 0u;
+    var d = 0x80000000u;
+    // The second dimension's generator matrix: each column is the one before shifted by
+    // one bit and XORed with itself (Pascal's triangle modulo 2), from 0x80000000.
+    for (var bit = 0u; bit < 32u; bit++) {
+        if ((index >> bit) & 1u) != 0u {
+            x ^= d;
+        }
+        d ^= d >> 1u;
+    }
+    return x;
+}
+
+// mirror: src/render/rng.rs `owen_scramble`
+fn owen_scramble(x_in: u32, seed: u32) -> u32 {
+    var x = reverseBits(x_in);
+    x += seed;
+    x ^= x * 0x6c50b47cu;
+    x ^= x * 0xb82f1e52u;
+    x ^= x * 0xc7afe638u;
+    x ^= x * 0x8d22f6e6u;
+    return reverseBits(x);
+}
+
+// mirror: src/render/rng.rs `dim_pair`
+fn dim_pair(dim: u32) -> vec2<u32> {
+    if dim == DIM_PIXEL_Y || dim == DIM_LENS_V || dim == DIM_LIGHT_V || dim == DIM_BSDF_V {
+        return vec2<u32>(dim - 1u, 1u);
+    }
+    return vec2<u32>(dim, 0u);
+}
+
 // mirror: src/render/rng.rs `u32_to_unit`
 fn u32_to_unit(x: u32) -> f32 {
     return f32(x >> 8u) * (1.0 / 16777216.0);
@@ -30,7 +68,10 @@ struct Rng {
 
 // mirror: src/render/rng.rs `Rng::rng_u32`
 fn rng_u32(rng: Rng, bounce: u32, dim: u32) -> u32 {
-    return pcg4d(vec4<u32>(rng.pixel, rng.sample, bounce * DIMS_PER_BOUNCE + dim, rng.seed)).x;
+    let pc = dim_pair(dim);
+    let seeds = pcg4d(vec4<u32>(rng.pixel, bounce * DIMS_PER_BOUNCE + pc.x, rng.seed, 0x5eedu));
+    let index = owen_scramble(rng.sample, seeds.x);
+    return owen_scramble(sobol(index, pc.y), seeds[1u + pc.y]);
 }
 
 // mirror: src/render/rng.rs `Rng::rng_1d`

@@ -2,9 +2,15 @@
 //!
 //! Every number is a pure function of (pixel, sample, bounce, dimension, seed), so any
 //! single sample of any pixel can be replayed alone, on either device, and renders of
-//! disjoint sample ranges can be merged. The hash is `pcg4d` (Jarzynski and Olano,
-//! "Hash Functions for GPU Rendering", JCGT 2020), which is integer-only and thus exact
-//! on every device.
+//! disjoint sample ranges can be merged. The numbers are Owen-scrambled Sobol points,
+//! padded two dimensions at a time (Burley, "Practical Hash-based Owen Scrambling", JCGT
+//! 2020): each pair of dimensions that a stage draws together (pixel x and y, lens u and v,
+//! light u and v, BSDF u and v) takes the first two Sobol dimensions at the sample index
+//! shuffled per (pixel, bounce, pair, seed), each component Owen-scrambled by its own seed;
+//! the single dimensions (light pick, lobe, roulette) take the first. A pixel's samples are
+//! thus stratified in every pair, and pixels, bounces and pairs stay independent. The
+//! seeds come from `pcg4d` (Jarzynski and Olano, "Hash Functions for GPU Rendering", JCGT
+//! 2020); everything is integer arithmetic and thus exact on every device.
 
 /// Dimensions used by the camera at bounce 0.
 pub const DIM_PIXEL_X: u32 = 0;
@@ -37,6 +43,54 @@ pub fn pcg4d(v: [u32; 4]) -> [u32; 4] {
     v
 }
 
+/// The generator matrix of the second Sobol dimension, by bit of the index (the first is
+/// the bit reversal of the index).
+const SOBOL_1: [u32; 32] = [
+    0x80000000, 0xc0000000, 0xa0000000, 0xf0000000, 0x88000000, 0xcc000000, 0xaa000000, 0xff000000,
+    0x80800000, 0xc0c00000, 0xa0a00000, 0xf0f00000, 0x88880000, 0xcccc0000, 0xaaaa0000, 0xffff0000,
+    0x80008000, 0xc000c000, 0xa000a000, 0xf000f000, 0x88008800, 0xcc00cc00, 0xaa00aa00, 0xff00ff00,
+    0x80808080, 0xc0c0c0c0, 0xa0a0a0a0, 0xf0f0f0f0, 0x88888888, 0xcccccccc, 0xaaaaaaaa, 0xffffffff,
+];
+
+/// Point `index` of Sobol dimension `dim` (0 or 1), as 32 bits of a fraction.
+/// mirror: shaders/rng.wgsl `sobol`
+pub fn sobol(index: u32, dim: u32) -> u32 {
+    if dim == 0 {
+        return index.reverse_bits();
+    }
+    let mut x = 0u32;
+    for (bit, d) in SOBOL_1.iter().enumerate() {
+        if (index >> bit) & 1 != 0 {
+            x ^= d;
+        }
+    }
+    x
+}
+
+/// Owen scrambling of the bits of `x` from the top (a nested uniform scramble), keyed by
+/// `seed`: Laine and Karras's permutation on the reversed bits, in Burley's 2020 form.
+/// mirror: shaders/rng.wgsl `owen_scramble`
+pub fn owen_scramble(x: u32, seed: u32) -> u32 {
+    let mut x = x.reverse_bits();
+    x = x.wrapping_add(seed);
+    x ^= x.wrapping_mul(0x6c50b47c);
+    x ^= x.wrapping_mul(0xb82f1e52);
+    x ^= x.wrapping_mul(0xc7afe638);
+    x ^= x.wrapping_mul(0x8d22f6e6);
+    x.reverse_bits()
+}
+
+/// The pair of dimensions `dim` draws from (numbered within a bounce), and which of its
+/// two components it is: the stages' pairs are (pixel x, y), (lens u, v), (light u, v)
+/// and (BSDF u, v); every other dimension is a pair of its own, component 0.
+/// mirror: shaders/rng.wgsl `dim_pair`
+pub fn dim_pair(dim: u32) -> (u32, u32) {
+    match dim {
+        DIM_PIXEL_Y | DIM_LENS_V | DIM_LIGHT_V | DIM_BSDF_V => (dim - 1, 1),
+        _ => (dim, 0),
+    }
+}
+
 /// Maps 32 random bits to a float in [0, 1) with 24 bits of precision (exact in f32).
 /// mirror: shaders/rng.wgsl `u32_to_unit`
 pub fn u32_to_unit(x: u32) -> f32 {
@@ -66,10 +120,15 @@ impl Rng {
         u32_to_unit(self.rng_u32(bounce, dim))
     }
 
-    /// The raw 32 bits for (bounce, dimension). mirror: shaders/rng.wgsl `rng_u32`
+    /// The raw 32 bits for (bounce, dimension): component `c` of the pair of `dim`, at the
+    /// sample index shuffled for (pixel, bounce, pair, seed), Owen-scrambled for the
+    /// component. mirror: shaders/rng.wgsl `rng_u32`
     pub fn rng_u32(&self, bounce: u32, dim: u32) -> u32 {
-        let key = bounce.wrapping_mul(DIMS_PER_BOUNCE).wrapping_add(dim);
-        pcg4d([self.pixel, self.sample, key, self.seed])[0]
+        let (pair, c) = dim_pair(dim);
+        let key = bounce.wrapping_mul(DIMS_PER_BOUNCE).wrapping_add(pair);
+        let seeds = pcg4d([self.pixel, key, self.seed, 0x5eed]);
+        let index = owen_scramble(self.sample, seeds[0]);
+        owen_scramble(sobol(index, c), seeds[1 + c as usize])
     }
 }
 
@@ -94,6 +153,44 @@ mod tests {
             .map(|&b| (b as f64 - expect).powi(2) / expect)
             .sum();
         assert!(chi2 < 27.9, "chi2 = {chi2}, buckets {buckets:?}");
+    }
+
+    /// The first 256 samples of a pixel, in each pair of dimensions that a stage draws
+    /// together, form a (0, 8, 2)-net: one point in each of the 16 × 16 squares, and in
+    /// each of the 256 × 1 and 1 × 256 strips; a single dimension alone puts one point in
+    /// each 1/256 of [0, 1). Independent numbers would leave many cells empty.
+    #[test]
+    fn a_pixels_samples_are_stratified_in_every_pair() {
+        for (pixel, bounce, seed) in [(0, 0, 0), (12345, 3, 7), (u32::MAX, 9, 1)] {
+            for (du, dv) in [
+                (DIM_PIXEL_X, DIM_PIXEL_Y),
+                (DIM_LENS_U, DIM_LENS_V),
+                (DIM_LIGHT_U, DIM_LIGHT_V),
+                (DIM_BSDF_U, DIM_BSDF_V),
+            ] {
+                for (nx, ny) in [(16, 16), (256, 1), (1, 256)] {
+                    let mut cells = vec![0u32; 256];
+                    for sample in 0..256 {
+                        let rng = Rng::new(pixel, sample, seed);
+                        let x = (rng.rng_1d(bounce, du) * nx as f32) as usize;
+                        let y = (rng.rng_1d(bounce, dv) * ny as f32) as usize;
+                        cells[y * nx + x] += 1;
+                    }
+                    assert!(
+                        cells.iter().all(|&c| c == 1),
+                        "pixel {pixel}, dims ({du}, {dv}), {nx}x{ny}: {cells:?}"
+                    );
+                }
+            }
+            for dim in [DIM_LIGHT_PICK, DIM_BSDF_LOBE, DIM_ROULETTE] {
+                let mut cells = vec![0u32; 256];
+                for sample in 0..256 {
+                    let x = Rng::new(pixel, sample, seed).rng_1d(bounce, dim);
+                    cells[(x * 256.0) as usize] += 1;
+                }
+                assert!(cells.iter().all(|&c| c == 1), "dim {dim}: {cells:?}");
+            }
+        }
     }
 
     #[test]
