@@ -34,13 +34,7 @@ pub fn load_environment(
     textures: &mut Textures,
     files: &dyn FileSource,
 ) -> Result<u32, String> {
-    let r = TextureRef {
-        source: TextureSource::File(path.to_path_buf()),
-        usage: Usage::Colour,
-        transform: UvTransform::scale(1.0, 1.0),
-        wrap: [Wrap::REPEAT, Wrap::CLAMP],
-        optional: false,
-    };
+    let r = TextureRef::environment(TextureSource::File(path.to_path_buf()));
     textures.add(&r, files).map_err(|e| match e {
         TextureError::Fatal(e) => e.to_string(),
         TextureError::Missing(file) => format!("cannot read {file}"),

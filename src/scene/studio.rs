@@ -6,7 +6,7 @@
 
 use super::camera::Camera;
 use super::obj::{MeshPart, PartTriangle};
-use super::texture::{TextureError, TextureRef, TextureSource, Textures, Usage, UvTransform, Wrap};
+use super::texture::{TextureError, TextureRef, TextureSource, Textures};
 use super::{NO_NORMAL, NO_TANGENT, NO_UV, SceneError, Sky};
 use crate::math::Aabb;
 use glam::{Mat4, Vec3};
@@ -113,17 +113,11 @@ const STUDIO_STRENGTH: f32 = 0.4;
 
 /// The studio environment, added to `textures`.
 pub fn sky(textures: &mut Textures) -> Result<Sky, SceneError> {
-    let r = TextureRef {
-        source: TextureSource::Memory {
-            name: "studio.hdr (built in)".into(),
-            bytes: Arc::from(STUDIO_HDR),
-            format: Some(image::ImageFormat::Hdr),
-        },
-        usage: Usage::Colour,
-        transform: UvTransform::scale(1.0, 1.0),
-        wrap: [Wrap::REPEAT, Wrap::CLAMP],
-        optional: false,
-    };
+    let r = TextureRef::environment(TextureSource::Memory {
+        name: "studio.hdr (built in)".into(),
+        bytes: Arc::from(STUDIO_HDR),
+        format: Some(image::ImageFormat::Hdr),
+    });
     let texture = textures.add(&r, &super::obj::Fs).map_err(|e| match e {
         TextureError::Fatal(e) => e,
         TextureError::Missing(name) => SceneError::Invalid {

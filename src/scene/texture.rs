@@ -187,6 +187,21 @@ pub struct TextureRef {
     pub optional: bool,
 }
 
+impl TextureRef {
+    /// An equirectangular image as an environment map reads it: a colour (linear, or
+    /// sRGB-decoded for an 8-bit image), repeating around, clamped at the poles; a file that
+    /// cannot be read is an error.
+    pub fn environment(source: TextureSource) -> Self {
+        Self {
+            source,
+            usage: Usage::Colour,
+            transform: UvTransform::scale(1.0, 1.0),
+            wrap: [Wrap::REPEAT, Wrap::CLAMP],
+            optional: false,
+        }
+    }
+}
+
 /// The scene's textures: the records material slots index, and the texel table their
 /// images are packed into.
 #[derive(Clone, Debug, Default)]
