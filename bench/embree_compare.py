@@ -1,183 +1,121 @@
 #!/usr/bin/env python3
 """Compare meshtrace's CPU primary-ray closest-hit throughput with Embree 4, per thread.
 
-The mesh, the camera (`Camera::framing`) and the rays (`RaySets::primary` of
-src/bench.rs: one jittered camera ray per pixel, pcg4d keys (pixel, 0, dim, 0x0bec))
-are rebuilt here bit for bit in numpy float32/uint32 arithmetic, traced with Embree
-through the `embreex` bindings (single-threaded: one `rtcIntersect1` per ray), and
-compared with `meshtrace bench MESH --device cpu --threads 1 --json`.
+`meshtrace bench SCENE --device cpu --threads 1 --json --rays-out DIR` measures its own
+rates and writes the triangles it traces (DIR/NAME.triangles.f32) and its two primary ray
+sets (DIR/NAME.primary.rays.f32: the scene's camera; DIR/NAME.primary_fill.rays.f32: a
+narrower view that the mesh fills). This script runs that command, builds an Embree scene
+of the same triangles, traces the same rays through it with the `embreex` bindings
+(single-threaded: one `rtcIntersect1` per ray) and prints both rates and their ratio for
+each view, with the BVH build rates, and a brute-force check of a sample of the rays.
 
 Needs numpy and embreex (`pip install embreex`) and a release build of meshtrace
 (`cargo build --release`). See bench/README.md.
 """
 
 import argparse
+import importlib.metadata
 import json
-import math
 import os
+import platform
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
 REPO = Path(__file__).resolve().parent.parent
-DEFAULT_MESH = REPO.parent / "shared" / "meshes" / "stanford-bunny.obj"
-BENCH_SEED = 0x0BEC
-DIM_PIXEL_X = 0
-DIM_PIXEL_Y = 1
-DIMS_PER_BOUNCE = 16
+DEFAULT_SCENE = REPO.parent / "shared" / "meshes" / "stanford-bunny.obj"
+VIEWS = ("primary", "primary_fill")
 F = np.float32
+MAX_MISMATCH = 0.01  # hit/miss disagreements with the brute force that fail the run
 
 
-# --- mesh ------------------------------------------------------------------------------
+# --- meshtrace's files (little-endian float32) -------------------------------------------
 
 
-def load_obj(path):
-    """Positions (float32, n x 3) and fan-triangulated faces (int64, m x 3) of an OBJ.
-
-    Like meshtrace's loader (tobj, triangulate): points and lines are ignored, indices may
-    be negative (relative), and only vertices some face uses are kept (for the bounds).
-    """
-    positions = []
-    faces = []
-    with open(path, "r", encoding="utf-8", errors="replace") as f:
-        for line in f:
-            if line.startswith("v "):
-                p = line.split()
-                positions.append((float(p[1]), float(p[2]), float(p[3])))
-            elif line.startswith("f "):
-                n = len(positions)
-                idx = []
-                for tok in line.split()[1:]:
-                    i = int(tok.split("/", 1)[0])
-                    idx.append(i - 1 if i > 0 else n + i)
-                for k in range(1, len(idx) - 1):
-                    faces.append((idx[0], idx[k], idx[k + 1]))
-    if not faces:
-        raise SystemExit(f"{path}: the mesh has no faces")
-    verts = np.array(positions, dtype=F)
-    tris = np.array(faces, dtype=np.int64)
-    used = np.unique(tris)
-    # Drop zero-area triangles as meshtrace's scene builder does (|(b-a)x(c-a)| > 0).
-    a, b, c = verts[tris[:, 0]], verts[tris[:, 1]], verts[tris[:, 2]]
-    area2 = np.sqrt(dot(cross(b - a, c - a), cross(b - a, c - a)))
-    keep = (area2 > 0) & np.isfinite(area2)
-    return verts, tris[keep], verts[used], int((~keep).sum())
+def read_f32(path, per_row):
+    """The float32 rows of `path`, `per_row` values each."""
+    if not path.is_file():
+        raise SystemExit(f"{path} is missing (does this meshtrace's bench have --rays-out?)")
+    data = np.fromfile(path, dtype="<f4")
+    if data.size == 0 or data.size % per_row:
+        raise SystemExit(f"{path}: {data.size} floats, not a positive multiple of {per_row}")
+    return data.reshape(-1, per_row)
 
 
-# --- float32 vector helpers, in glam's operation order ----------------------------------
+def load_triangles(path):
+    """The triangle soup as Embree takes it: corners (3n x 3) and indices 0..3n (n x 3)."""
+    verts = np.ascontiguousarray(read_f32(path, 9).reshape(-1, 3), dtype=F)
+    if not np.isfinite(verts).all():
+        raise SystemExit(f"{path}: non-finite vertex coordinates")
+    return verts, np.arange(len(verts), dtype=np.int32).reshape(-1, 3)
 
 
-def dot(a, b):
-    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
+def load_rays(path):
+    """Origins, unit directions (n x 3) and t_max (n) of a ray file (8 floats a ray)."""
+    r = read_f32(path, 8)
+    origins = np.ascontiguousarray(r[:, 0:3], dtype=F)
+    t_max = np.ascontiguousarray(r[:, 3], dtype=F)
+    dirs = np.ascontiguousarray(r[:, 4:7], dtype=F)
+    length = np.sqrt((dirs.astype(np.float64) ** 2).sum(axis=1))
+    if not (np.isfinite(r).all() and np.abs(length - 1).max() < 1e-5 and (t_max > 0).all()
+            and (r[:, 7] == 0).all()):
+        raise SystemExit(f"{path}: not rays of the expected layout (origin, t_max, unit "
+                         "direction, 0)")
+    return origins, dirs, t_max
 
 
-def cross(a, b):
-    return np.stack(
-        [
-            a[..., 1] * b[..., 2] - b[..., 1] * a[..., 2],
-            a[..., 2] * b[..., 0] - b[..., 2] * a[..., 0],
-            a[..., 0] * b[..., 1] - b[..., 0] * a[..., 1],
-        ],
-        axis=-1,
-    )
+def run_meshtrace(binary, scene, rays_dir, width, height, repeats, spp):
+    """Runs `meshtrace bench`: returns the command, the scene's name (the rows' `scene`,
+    which names the files) and its rows by (device, measure)."""
+    cmd = [str(binary), "bench", str(scene), "--device", "cpu", "--threads", "1", "--json",
+           "--rays-out", str(rays_dir), "--width", str(width), "--height", str(height),
+           "--repeats", str(repeats), "--spp", str(spp)]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        raise SystemExit(f"{' '.join(cmd)} failed ({r.returncode}):\n{r.stderr}")
+    rows = json.loads(r.stdout)
+    names = {row["scene"] for row in rows}
+    if len(names) != 1:
+        raise SystemExit(f"expected the rows of one scene from meshtrace, got {sorted(names)}")
+    got = {(row["device"], row["measure"]): row for row in rows}
+    need = [("cpu", f"{v}_rays") for v in VIEWS] + [("host", f"{v}_hits") for v in VIEWS]
+    missing = [f"{d}/{m}" for d, m in need + [("host", "bvh_build")] if (d, m) not in got]
+    if missing:
+        raise SystemExit(f"meshtrace's bench reported no {', '.join(missing)}")
+    return cmd, names.pop(), got
 
 
-def normalize(v):
-    """glam `normalize`: v * (1 / |v|)."""
-    length = np.sqrt(dot(v, v))
-    return v * (F(1.0) / length)[..., None]
+def saved_scene_name(rays_dir, scene):
+    """The scene whose files an earlier run left in `rays_dir`: the only one there, or else
+    the one named like `scene` (its file stem, or the name after `builtin:`)."""
+    names = sorted(p.name[: -len(".triangles.f32")] for p in rays_dir.glob("*.triangles.f32"))
+    guess = str(scene).split(":", 1)[1] if str(scene).startswith("builtin:") else Path(scene).stem
+    if len(names) == 1:
+        return names[0]
+    if guess in names:
+        return guess
+    raise SystemExit(f"{rays_dir}: no files of scene `{guess}` (there: {names or 'none'})")
 
 
-def f32_sin(x):
-    # Correctly rounded, as glibc's sinf/tanf are in practice (computed in f64, rounded).
-    return F(math.sin(float(x)))
-
-
-def f32_tan(x):
-    return F(math.tan(float(x)))
-
-
-# --- camera and rays (src/scene/camera.rs, src/render/rng.rs, src/bench.rs) ------------
-
-RADS_PER_DEG = F(math.pi) / F(180.0)  # Rust's f32::to_radians constant, in f32
-
-
-class Camera:
-    def __init__(self, used_verts):
-        """`Camera::framing` of the bounds of `used_verts`."""
-        vfov = F(40.0)
-        lo = used_verts.min(axis=0)
-        hi = used_verts.max(axis=0)
-        center = F(0.5) * (lo + hi)
-        ext = hi - lo
-        radius = max(F(F(0.5) * np.sqrt(dot(ext, ext))), F(1e-6))
-        half = F(F(0.5) * F(vfov * RADS_PER_DEG))
-        distance = F(F(F(1.1) * radius) / f32_sin(half))
-        view = normalize(np.array([0.0, 0.25, 1.0], dtype=F))
-        position = center + distance * view
-        forward = normalize(center - position)
-        right = normalize(cross(forward, np.array([0.0, 1.0, 0.0], dtype=F)))
-        up = cross(right, forward)
-        self.position, self.forward, self.right, self.up = position, forward, right, up
-        self.tan_half = f32_tan(half)
-        self.center, self.radius, self.distance = center, radius, distance
-
-
-def pcg4d(v0, v1, v2, v3):
-    """The 4D PCG hash on uint32 arrays; returns the four words."""
-    with np.errstate(over="ignore"):
-        v = [np.asarray(x, dtype=np.uint32) * np.uint32(1664525) + np.uint32(1013904223)
-             for x in (v0, v1, v2, v3)]
-        v[0] = v[0] + v[1] * v[3]
-        v[1] = v[1] + v[2] * v[0]
-        v[2] = v[2] + v[0] * v[1]
-        v[3] = v[3] + v[1] * v[2]
-        v = [x ^ (x >> np.uint32(16)) for x in v]
-        v[0] = v[0] + v[1] * v[3]
-        v[1] = v[1] + v[2] * v[0]
-        v[2] = v[2] + v[0] * v[1]
-        v[3] = v[3] + v[1] * v[2]
-    return v
-
-
-def rng_1d(pixel, sample, bounce, dim, seed):
-    """`Rng::new(pixel, sample, seed).rng_1d(bounce, dim)` for a uint32 array of pixels."""
-    n = pixel.shape[0]
-    key = np.full(n, bounce * DIMS_PER_BOUNCE + dim, dtype=np.uint32)
-    x = pcg4d(pixel, np.full(n, sample, np.uint32), key, np.full(n, seed, np.uint32))[0]
-    return (x >> np.uint32(8)).astype(F) * F(1.0 / 16_777_216.0)
-
-
-def primary_rays(cam, width, height):
-    """meshtrace's bench primary rays: origins and unit directions, float32 (n x 3)."""
-    i = np.arange(width * height, dtype=np.uint32)
-    px = (i % np.uint32(width)).astype(F)
-    py = (i // np.uint32(width)).astype(F)
-    jx = rng_1d(i, 0, 0, DIM_PIXEL_X, BENCH_SEED)
-    jy = rng_1d(i, 0, 0, DIM_PIXEL_Y, BENCH_SEED)
-    w, h = F(width), F(height)
-    aspect = F(w / h)
-    sx = (F(2.0) * (px + jx) / w - F(1.0)) * cam.tan_half * aspect
-    sy = (F(1.0) - F(2.0) * (py + jy) / h) * cam.tan_half
-    d = cam.forward + sx[:, None] * cam.right
-    d = d + sy[:, None] * cam.up
-    dirs = np.ascontiguousarray(normalize(d), dtype=F)
-    origins = np.ascontiguousarray(np.broadcast_to(cam.position, dirs.shape), dtype=F)
-    return origins, dirs
+def meshtrace_version(binary):
+    r = subprocess.run([str(binary), "--version"], capture_output=True, text=True)
+    return r.stdout.strip() if r.returncode == 0 else None
 
 
 # --- a brute-force check of a sample of rays ----------------------------------------------
 
 
-def brute_force_t(verts, tris, origins, dirs, chunk=16):
-    """Closest hit distance (inf for a miss) by Moller-Trumbore against every triangle, f64."""
-    v = verts.astype(np.float64)
-    a, b, c = v[tris[:, 0]], v[tris[:, 1]], v[tris[:, 2]]
-    e1, e2 = b - a, c - a
+def brute_force_t(verts, origins, dirs, t_max):
+    """Closest hit distance in (0, t_max) (inf for a miss) by Moller-Trumbore against
+    every triangle of the soup, in float64."""
+    v = verts.astype(np.float64).reshape(-1, 3, 3)
+    a, e1, e2 = v[:, 0], v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]
+    chunk = max(1, 2_000_000 // len(v))  # rays per step: ~2M ray-triangle pairs
     out = np.full(len(dirs), np.inf)
     for s in range(0, len(dirs), chunk):
         o = origins[s:s + chunk, None, :].astype(np.float64)
@@ -192,8 +130,22 @@ def brute_force_t(verts, tris, origins, dirs, chunk=16):
             w = np.sum(d * q, axis=-1) * inv
             t = np.sum(e2 * q, axis=-1) * inv
         ok = (det != 0) & (u >= 0) & (w >= 0) & (u + w <= 1) & (t > 0)
+        ok &= t < t_max[s:s + chunk, None].astype(np.float64)
         out[s:s + chunk] = np.where(ok, t, np.inf).min(axis=1)
     return out
+
+
+def verify(verts, origins, dirs, t_max, t_embree, hit, count):
+    """Compares Embree's hits of `count` rays spread over the set with the brute force."""
+    n = len(dirs)
+    sel = np.unique(np.linspace(0, n - 1, min(count, n)).astype(np.int64))
+    bf = brute_force_t(verts, origins[sel], dirs[sel], t_max[sel])
+    bf_hit = np.isfinite(bf)
+    both = bf_hit & hit[sel]
+    rel = np.abs(t_embree[sel][both] - bf[both]) / bf[both]
+    return {"rays": int(len(sel)), "hit_disagree": int((bf_hit != hit[sel]).sum()),
+            "brute_hits": int(bf_hit.sum()),
+            "max_rel_t_diff": float(rel.max()) if both.any() else 0.0}
 
 
 # --- Embree ------------------------------------------------------------------------------
@@ -222,29 +174,36 @@ def init_embree(build_threads):
     return device, rtcore_scene, mesh_construction
 
 
-def embree_scene(emb, verts, tris):
+def embree_scene(emb, verts=None, indices=None):
+    """An uncommitted scene of one triangle mesh, or of none without `verts`."""
     device, rtcore_scene, mesh_construction = emb
     scene = rtcore_scene.EmbreeScene(device)
-    mesh_construction.TriangleMesh(scene, verts, tris.astype(np.int32))
+    if verts is not None:
+        mesh_construction.TriangleMesh(scene, verts, indices)
     return scene
 
 
-def embree_build_seconds(emb, verts, tris, repeats):
-    """Times the BVH build: the first `run` commits the scene (`rtcCommitScene`); one ray.
-    Creating the scene and copying the buffers into Embree are excluded."""
-    o = np.zeros((1, 3), F)
-    d = np.array([[0.0, 0.0, 1.0]], F)
+def commit(scene):
+    """Builds the scene's BVH (`rtcCommitScene`): embreex commits on the first `run`."""
+    scene.run(np.zeros((1, 3), F), np.array([[0.0, 0.0, 1.0]], F))
+    return scene
+
+
+def embree_build_seconds(emb, verts, indices, repeats):
+    """Times the BVH build (the commit, with one ray); creating the scene and copying the
+    buffers into Embree are excluded. One warm-up build, then `repeats` timed ones."""
     times = []
     for _ in range(repeats + 1):
-        scene = embree_scene(emb, verts, tris)
+        scene = embree_scene(emb, verts, indices)
         start = time.perf_counter()
-        scene.run(o, d)
+        commit(scene)
         times.append(time.perf_counter() - start)
         del scene
     return times[1:]
 
 
 def timed(repeats, f):
+    """Seconds of `repeats` calls of `f` after one warm-up call."""
     f()
     out = []
     for _ in range(repeats):
@@ -254,22 +213,33 @@ def timed(repeats, f):
     return out
 
 
-# --- meshtrace ---------------------------------------------------------------------------
-
-
-def run_meshtrace(binary, mesh, width, height, repeats, spp):
-    cmd = [str(binary), "bench", str(mesh), "--device", "cpu", "--threads", "1", "--json",
-           "--width", str(width), "--height", str(height), "--repeats", str(repeats),
-           "--spp", str(spp)]
-    r = subprocess.run(cmd, capture_output=True, text=True)
-    if r.returncode != 0:
-        raise SystemExit(f"{' '.join(cmd)} failed ({r.returncode}):\n{r.stderr}")
-    rows = json.loads(r.stdout)
-    got = {}
-    for row in rows:
-        if row["measure"] in ("primary_rays", "bvh_build") and row["device"] in ("cpu", "host"):
-            got[row["measure"]] = row
-    return cmd, got
+def trace_view(scene, empty, verts, rays, repeats, verify_count):
+    """Embree's rates and hits for one ray set."""
+    origins, dirs, t_max = rays
+    n = len(dirs)
+    t_hit = scene.run(origins, dirs, dists=t_max.copy(), query="DISTANCE")  # in place
+    hit = t_hit < t_max
+    hits = int(hit.sum())
+    # The measure: closest hit of every ray, primID only (the cheapest result embreex gives).
+    prim = timed(repeats, lambda: scene.run(origins, dirs, dists=t_max))
+    # For reference: with output=1 embreex also returns u, v, Ng, t, geomID, through
+    # untyped numpy stores that add Python-level cost per ray. It writes t into `dists`.
+    full = timed(repeats, lambda: scene.run(origins, dirs, dists=t_max.copy(), output=1))
+    # The loop's own cost, without geometry: an empty committed scene.
+    loop = timed(repeats, lambda: empty.run(origins, dirs, dists=t_max))
+    med = statistics.median
+    return {
+        "rays": n,
+        "mrays": n / med(prim) / 1e6,
+        "mrays_all": [n / t / 1e6 for t in prim],
+        "output1_mrays": n / med(full) / 1e6,
+        "empty_scene_loop_mrays": n / med(loop) / 1e6,
+        "hits": hits,
+        "hit_fraction": hits / n,
+        "mean_t": float(t_hit[hit].astype(np.float64).mean()) if hits else None,
+        "verify": (verify(verts, origins, dirs, t_max, t_hit, hit, verify_count)
+                   if verify_count > 0 else None),
+    }
 
 
 # --- main --------------------------------------------------------------------------------
@@ -288,9 +258,55 @@ def parse_size(text):
     return w, h
 
 
+def fmt(x, spec=".3f"):
+    return "-" if x is None else format(x, spec)
+
+
+def print_table(result):
+    m = result["meshtrace"]
+    row = "{:<22} {:>9} {:>10} {:>10} {:>10} {:>10} {:>10}"
+    print(row.format("", "", "meshtrace", "embree", "", "mesh hits", "any hit"))
+    print(row.format("view (1 thread)", "rays", "Mrays/s", "Mrays/s", "mt/embree",
+                     "meshtrace", "embree"))
+    for view, v in result["views"].items():
+        e = v["embree"]
+        mt = v["meshtrace"] or {}
+        print(row.format(view, e["rays"], fmt(mt.get("mrays")), fmt(e["mrays"]),
+                         fmt(v["ratio"]), fmt(mt.get("mesh_hit_fraction"), ".1%"),
+                         fmt(e["hit_fraction"], ".1%")))
+    e = result["embree"]
+    print(row.format("BVH build   Mtris/s", result["triangles"],
+                     fmt(m and m["bvh_build_mtris"]), fmt(e["bvh_build_mtris"]),
+                     fmt(result["ratio_build"]), "", ""))
+    print(row.format("BVH build   ms", "", fmt(m and 1e3 * m["bvh_build_s"]),
+                     fmt(1e3 * e["bvh_build_s"]), "", "", ""))
+    print()
+    for view, v in result["views"].items():
+        e = v["embree"]
+        line = (f"{view}: embree {e['hits']} of {e['rays']} rays hit "
+                f"({e['hit_fraction']:.2%}), mean t {fmt(e['mean_t'], '.6g')}; "
+                f"output=1 {e['output1_mrays']:.3f} Mrays/s, empty-scene loop "
+                f"{e['empty_scene_loop_mrays']:.3f} Mrays/s")
+        if v["meshtrace"]:
+            lo, hi = v["meshtrace"]["min_max"]
+            line += f"; meshtrace min..max {lo:.3f}..{hi:.3f}"
+        print(line)
+        c = e["verify"]
+        if c:
+            print(f"  brute force, {c['rays']} rays: {c['hit_disagree']} disagree on hit/miss "
+                  f"({c['brute_hits']} hits), max relative t difference "
+                  f"{c['max_rel_t_diff']:.2e}")
+    print(f"embree build threads: {result['embree']['bvh_build_threads']}; "
+          + "; ".join(f"{k} {v}" for k, v in result["versions"].items() if v))
+    if m:
+        print(f"meshtrace: {m['command']}")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--mesh", type=Path, default=DEFAULT_MESH, help="an .obj (default: %(default)s)")
+    ap.add_argument("--scene", "--mesh", default=str(DEFAULT_SCENE),
+                    help="any scene `meshtrace bench` takes: a mesh file, a scene file, "
+                         "builtin:NAME (default: %(default)s)")
     ap.add_argument("--size", type=parse_size, default=(512, 512), help="N or WxH (default 512)")
     ap.add_argument("--repeats", type=int, default=5, help="timed runs after one warm-up (median)")
     ap.add_argument("--binary", type=Path, default=REPO / "target" / "release" / "meshtrace")
@@ -299,114 +315,93 @@ def main():
     ap.add_argument("--embree-build-threads", type=int, default=1,
                     help="CPUs Embree's BVH builder may use (0: all; default 1, like --threads 1)")
     ap.add_argument("--verify", type=int, default=256,
-                    help="rays checked against a brute-force intersection (0: none)")
-    ap.add_argument("--skip-meshtrace", action="store_true", help="time Embree only")
+                    help="rays of each view checked against a brute-force intersection (0: none)")
+    ap.add_argument("--rays-dir", type=Path,
+                    help="where meshtrace writes the triangles and rays, kept afterwards "
+                         "(default: a temporary directory)")
+    ap.add_argument("--skip-meshtrace", action="store_true",
+                    help="don't run meshtrace: trace the files an earlier run left in "
+                         "--rays-dir (Embree numbers only)")
     ap.add_argument("--json", action="store_true", help="print one JSON object")
     args = ap.parse_args()
     width, height = args.size
     say = (lambda *a: print(*a, file=sys.stderr)) if args.json else print
 
-    verts, tris, used, dropped = load_obj(args.mesh)
-    cam = Camera(used)
-    origins, dirs = primary_rays(cam, width, height)
-    n = len(dirs)
-    say(f"mesh {args.mesh} : {len(tris)} triangles ({dropped} degenerate dropped); "
-        f"{width}x{height} = {n} primary rays")
+    with tempfile.TemporaryDirectory(prefix="embree_compare.") as tmp:
+        rays_dir = args.rays_dir or Path(tmp)
+        if args.skip_meshtrace:
+            if not args.rays_dir:
+                raise SystemExit("--skip-meshtrace needs --rays-dir")
+            cmd, mt = None, None
+            name = saved_scene_name(rays_dir, args.scene)
+        else:
+            rays_dir.mkdir(parents=True, exist_ok=True)
+            say(f"running meshtrace bench on {args.scene} ...")
+            cmd, name, mt = run_meshtrace(args.binary, args.scene, rays_dir, width, height,
+                                          args.repeats, args.spp)
+        tri_path = rays_dir / f"{name}.triangles.f32"
+        verts, indices = load_triangles(tri_path)
+        rays = {v: load_rays(rays_dir / f"{name}.{v}.rays.f32") for v in VIEWS}
+    ntris = len(indices)
+    say(f"{tri_path}: {ntris} triangles; "
+        + ", ".join(f"{v} {len(r[1])} rays" for v, r in rays.items()))
 
     emb = init_embree(args.embree_build_threads)
-    build = embree_build_seconds(emb, verts, tris, args.repeats)
-    scene = embree_scene(emb, verts, tris)
-    scene.run(origins[:1], dirs[:1])  # commit: the build is not timed below
-
-    t_hit = scene.run(origins, dirs, query="DISTANCE")
-    hit = t_hit < 1e30
-    hits = int(hit.sum())
-    mean_t = float(t_hit[hit].astype(np.float64).mean()) if hits else float("nan")
-
-    # The measure: closest hit of every ray, primID only (the cheapest result embreex gives).
-    prim = timed(args.repeats, lambda: scene.run(origins, dirs))
-    # For reference: with output=1 embreex also returns u, v, Ng, t, geomID, through
-    # untyped numpy stores that add Python-level cost per ray.
-    full = timed(args.repeats, lambda: scene.run(origins, dirs, output=1))
-    # The loop's own cost, without geometry: an empty committed scene.
-    empty = rtcore_scene_empty(emb)
-    loop = timed(args.repeats, lambda: empty.run(origins, dirs))
-
-    verify = None
-    if args.verify > 0:
-        sel = np.linspace(0, n - 1, min(args.verify, n)).astype(np.int64)
-        bf = brute_force_t(verts, tris, origins[sel], dirs[sel])
-        bf_hit = np.isfinite(bf)
-        agree = int((bf_hit == hit[sel]).sum())
-        both = bf_hit & hit[sel]
-        rel = np.abs(t_hit[sel][both] - bf[both]) / bf[both]
-        verify = {"rays": int(len(sel)), "hit_agree": agree, "brute_hits": int(bf_hit.sum()),
-                  "max_rel_t_diff": float(rel.max()) if both.any() else 0.0}
+    build = embree_build_seconds(emb, verts, indices, args.repeats)
+    scene = commit(embree_scene(emb, verts, indices))
+    empty = commit(embree_scene(emb))
 
     med = statistics.median
-    emb_mrays = n / med(prim) / 1e6
     result = {
-        "mesh": str(args.mesh), "triangles": int(len(tris)), "width": width, "height": height,
-        "rays": n,
-        "camera": {"position": cam.position.tolist(), "forward": cam.forward.tolist()},
+        "scene": args.scene, "name": name, "triangles": ntris, "width": width,
+        "height": height, "repeats": args.repeats,
+        "meshtrace": None,
         "embree": {
-            "version": repr(emb[0]),
-            "primary_rays_mrays": emb_mrays,
-            "primary_rays_mrays_all": [n / t / 1e6 for t in prim],
-            "primary_rays_output1_mrays": n / med(full) / 1e6,
-            "empty_scene_loop_mrays": n / med(loop) / 1e6,
             "bvh_build_s": med(build),
-            "bvh_build_mtris": len(tris) / med(build) / 1e6,
+            "bvh_build_mtris": ntris / med(build) / 1e6,
             "bvh_build_threads": args.embree_build_threads or os.cpu_count(),
-            "hits": hits, "mean_t": mean_t,
         },
-        "verify": verify,
+        "views": {},
+        "ratio_build": None,
+        "versions": {
+            "embree": repr(emb[0]).split(":")[-1].strip(),
+            "embreex": importlib.metadata.version("embreex"),
+            "numpy": np.__version__,
+            "python": platform.python_version(),
+            "meshtrace": None if args.skip_meshtrace else meshtrace_version(args.binary),
+        },
     }
-    if not args.skip_meshtrace:
-        cmd, mt = run_meshtrace(args.binary, args.mesh, width, height, args.repeats, args.spp)
-        result["meshtrace"] = {
-            "command": " ".join(cmd),
-            "primary_rays_mrays": mt["primary_rays"]["median"],
-            "primary_rays_min_max": [mt["primary_rays"]["min"], mt["primary_rays"]["max"]],
-            "bvh_build_mtris": mt["bvh_build"]["median"],
-            "bvh_build_s": len(tris) / mt["bvh_build"]["median"] / 1e6,
-        }
-        result["ratio_primary"] = result["meshtrace"]["primary_rays_mrays"] / emb_mrays
-        result["ratio_build"] = result["meshtrace"]["bvh_build_mtris"] / result["embree"]["bvh_build_mtris"]
+    if mt:
+        build_mtris = mt[("host", "bvh_build")]["median"]
+        result["meshtrace"] = {"command": " ".join(cmd), "bvh_build_mtris": build_mtris,
+                               "bvh_build_s": ntris / build_mtris / 1e6}
+        result["ratio_build"] = build_mtris / result["embree"]["bvh_build_mtris"]
+    failures = []
+    for view, r in rays.items():
+        say(f"tracing {view} with embree ...")
+        e = trace_view(scene, empty, verts, r, args.repeats, args.verify)
+        m = None
+        if mt:
+            row = mt[("cpu", f"{view}_rays")]
+            m = {"mrays": row["median"], "min_max": [row["min"], row["max"]],
+                 "mesh_hit_fraction": mt[("host", f"{view}_hits")]["median"]}
+        result["views"][view] = {"meshtrace": m, "embree": e,
+                                 "ratio": m["mrays"] / e["mrays"] if m else None}
+        if e["hits"] == 0:
+            failures.append(f"{view}: no ray hits any triangle in Embree")
+        c = e["verify"]
+        if c and c["hit_disagree"] > MAX_MISMATCH * c["rays"]:
+            failures.append(f"{view}: Embree and the brute force disagree on hit/miss for "
+                            f"{c['hit_disagree']} of {c['rays']} rays")
+    result["failures"] = failures
 
     if args.json:
         print(json.dumps(result, indent=2))
-        return
-    e = result["embree"]
-    m = result.get("meshtrace")
-    say(f"camera position {np.array2string(cam.position, precision=5)}, "
-        f"Embree: {hits} hits ({100 * hits / n:.2f}%), mean t {mean_t:.6f}")
-    if verify:
-        say(f"brute-force check of {verify['rays']} rays: {verify['hit_agree']} agree on hit/miss "
-            f"({verify['brute_hits']} hits), max relative t difference {verify['max_rel_t_diff']:.2e}")
-    say("")
-    row = "{:<34} {:>12} {:>12} {:>10}"
-    say(row.format("measure (1 thread)", "meshtrace", "embree", "mt/embree"))
-    fmt = lambda x: f"{x:.3f}" if x is not None else "-"
-    say(row.format("primary closest hit  Mrays/s", fmt(m and m["primary_rays_mrays"]),
-                   fmt(e["primary_rays_mrays"]), fmt(m and result["ratio_primary"])))
-    say(row.format("BVH build            Mtris/s", fmt(m and m["bvh_build_mtris"]),
-                   fmt(e["bvh_build_mtris"]), fmt(m and result["ratio_build"])))
-    say(row.format("BVH build            ms", fmt(m and 1e3 * m["bvh_build_s"]),
-                   fmt(1e3 * e["bvh_build_s"]), ""))
-    say("")
-    say(f"embree, output=1 (u, v, Ng, t, ids): {e['primary_rays_output1_mrays']:.3f} Mrays/s; "
-        f"embreex loop on an empty scene: {e['empty_scene_loop_mrays']:.3f} Mrays/s")
-    if m:
-        say(f"meshtrace primary min..max {m['primary_rays_min_max'][0]:.3f}.."
-            f"{m['primary_rays_min_max'][1]:.3f}; embree build threads: {e['bvh_build_threads']}")
-
-
-def rtcore_scene_empty(emb):
-    device, rtcore_scene, _ = emb
-    s = rtcore_scene.EmbreeScene(device)
-    s.run(np.zeros((1, 3), F), np.ones((1, 3), F))
-    return s
+    else:
+        print()
+        print_table(result)
+    if failures:
+        raise SystemExit("FAILED: " + "; ".join(failures))
 
 
 if __name__ == "__main__":

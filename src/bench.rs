@@ -2,7 +2,8 @@
 //! rates for coherent, incoherent and shadow rays, and full path tracing. Each measure runs
 //! once to warm up, then `repeats` times; the median and the spread are reported.
 
-use crate::bvh::{BuildParams, Bvh, traverse_any, traverse_closest};
+use crate::bvh::{BuildParams, Bvh, BvhError, Hit};
+use crate::film::FilmError;
 use crate::geometry::{T_INF, geometric_normal};
 use crate::math::{Aabb, Ray, onb_from_normal};
 use crate::render::camera::{CameraRays, generate_camera_ray};
@@ -13,10 +14,11 @@ use crate::render::sampling::{sample_cosine_hemisphere, sample_uniform_triangle}
 use crate::render::texture::alpha_test;
 use crate::render::{RenderJob, RenderScene, SKY_EMITTER, cpu};
 use crate::scene::{
-    Camera, Material, Mesh, NO_NORMAL, NO_UV, RenderSettings, Scene, Sky, Triangle,
+    Camera, Material, Mesh, NO_NORMAL, NO_UV, RenderSettings, Scene, Sky, Triangle, studio,
 };
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
+use std::path::Path;
 use std::time::Instant;
 
 /// One reported number: the median of `repeats` timed runs, with their extremes.
@@ -53,11 +55,18 @@ impl Default for BenchOptions {
     }
 }
 
-/// The benchmark rays of a scene: one camera ray per pixel, a cosine-distributed bounce
-/// from each primary hit, and a shadow ray from each hit towards a light (or a random
-/// point of the scene where it has no emitters).
+/// The benchmark rays of a scene: one camera ray per pixel of the scene's view and of a
+/// narrower view that its subject fills ([`fill_view`]), a cosine-distributed bounce from
+/// each primary hit, and a shadow ray from each hit towards a light (or a random point of
+/// the scene where it has no emitters).
 pub struct RaySets {
     pub primary: Vec<BenchRay>,
+    pub primary_fill: Vec<BenchRay>,
+    /// The share of `primary` and of `primary_fill` rays whose closest hit is on the
+    /// subject: what the rates measure is mostly traversal of the mesh, not of empty space
+    /// (or of the studio's ground).
+    pub primary_hits: f64,
+    pub primary_fill_hits: f64,
     pub incoherent: Vec<BenchRay>,
     pub shadow: Vec<BenchRay>,
 }
@@ -65,23 +74,63 @@ pub struct RaySets {
 /// A ray and its extent.
 pub type BenchRay = (Ray, f32);
 
+/// One jittered ray per pixel of `cam`, from the bench's own random stream.
+fn camera_rays(cam: &CameraRays) -> Vec<BenchRay> {
+    (0..cam.width * cam.height)
+        .map(|i| {
+            let rng = Rng::new(i, 0, 0x0bec);
+            (generate_camera_ray(cam, i % cam.width, i / cam.width, &rng), T_INF)
+        })
+        .collect()
+}
+
+/// The closest hit as the CPU renderer finds it.
+fn closest(scene: &RenderScene, ray: &Ray, t_max: f32) -> Option<Hit> {
+    scene
+        .wide
+        .traverse_closest(&scene.tris, ray, t_max, |k, u, v| alpha_test(scene, k, u, v))
+}
+
+/// The share of `rays` whose closest hit is on a triangle that `subject` marks.
+fn subject_share(scene: &RenderScene, subject: &[bool], rays: &[BenchRay]) -> f64 {
+    let hits = rays
+        .par_iter()
+        .filter(|(r, t)| closest(scene, r, *t).is_some_and(|h| subject[h.tri as usize]))
+        .count();
+    hits as f64 / rays.len().max(1) as f64
+}
+
+/// The view that the subject fills: the scene's camera with its field of view narrowed by
+/// steps of 0.8 until at least 85% of a 64 x 64 probe's rays hit the subject (at most 24
+/// steps, 0.5% of the width). A view already that full is kept as it is.
+pub fn fill_view(scene: &RenderScene, subject: &[bool], width: u32, height: u32) -> CameraRays {
+    let mut cam = CameraRays::new(&scene.camera, width, height);
+    for _ in 0..24 {
+        let probe = camera_rays(&CameraRays {
+            width: 64,
+            height: 64,
+            ..cam
+        });
+        if subject_share(scene, subject, &probe) >= 0.85 {
+            break;
+        }
+        cam.tan_half_vfov *= 0.8;
+    }
+    cam
+}
+
 impl RaySets {
-    pub fn new(scene: &RenderScene, width: u32, height: u32) -> Self {
-        let cam = CameraRays::new(&scene.camera, width, height);
-        let primary: Vec<BenchRay> = (0..width * height)
-            .map(|i| {
-                let rng = Rng::new(i, 0, 0x0bec);
-                (generate_camera_ray(&cam, i % width, i / width, &rng), T_INF)
-            })
-            .collect();
+    /// The rays of a `width` x `height` image of `scene`; `subject[k]` says whether
+    /// leaf-order triangle `k` belongs to what the scene shows (all but a studio's ground).
+    pub fn new(scene: &RenderScene, subject: &[bool], width: u32, height: u32) -> Self {
+        let primary = camera_rays(&CameraRays::new(&scene.camera, width, height));
+        let primary_fill = camera_rays(&fill_view(scene, subject, width, height));
         let bounds = scene.bvh.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds());
         let hits: Vec<(u32, Ray, Vec3, Vec3)> = primary
             .par_iter()
             .enumerate()
-            .filter_map(|(i, (ray, _))| {
-                let h = traverse_closest(&scene.bvh.nodes, &scene.tris, ray, T_INF, |k, u, v| {
-                    alpha_test(scene, k, u, v)
-                })?;
+            .filter_map(|(i, (ray, t))| {
+                let h = closest(scene, ray, *t)?;
                 let mut n = geometric_normal(&scene.tris[h.tri as usize]);
                 if n.dot(ray.dir) > 0.0 {
                     n = -n;
@@ -120,7 +169,10 @@ impl RaySets {
             }
         }
         Self {
+            primary_hits: subject_share(scene, subject, &primary),
+            primary_fill_hits: subject_share(scene, subject, &primary_fill),
             primary,
+            primary_fill,
             incoherent,
             shadow,
         }
@@ -131,8 +183,8 @@ impl RaySets {
 fn timed(
     repeats: usize,
     work: f64,
-    mut f: impl FnMut() -> Result<f64, GpuError>,
-) -> Result<Vec<f64>, GpuError> {
+    mut f: impl FnMut() -> Result<f64, BenchError>,
+) -> Result<Vec<f64>, BenchError> {
     f()?;
     (0..repeats.max(1))
         .map(|_| f().map(|s| work / s.max(1e-9)))
@@ -170,14 +222,56 @@ fn ray_words(rays: &[BenchRay]) -> Vec<[u32; 4]> {
         .collect()
 }
 
-/// Measures one scene on the CPU and, when `gpu` is given, on that device.
+/// Why a scene could not be measured.
+#[derive(Debug, thiserror::Error)]
+pub enum BenchError {
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error(transparent)]
+    Bvh(#[from] BvhError),
+    #[error(transparent)]
+    Write(#[from] FilmError),
+}
+
+/// Writes the scene's triangles (leaf order, nine floats each) and each primary view's
+/// rays (origin, `t_max`, direction, 0: eight floats each), little-endian, as
+/// `NAME.triangles.f32` and `NAME.VIEW.rays.f32` in `dir`, for comparisons with other
+/// ray tracers on exactly the same work.
+fn write_rays(
+    dir: &Path,
+    name: &str,
+    scene: &RenderScene,
+    views: &[(&str, &[BenchRay])],
+) -> Result<(), FilmError> {
+    let tris: Vec<f32> = scene
+        .tris
+        .iter()
+        .flat_map(|t| t.corners().into_iter().flat_map(|c| c.to_array()))
+        .collect();
+    crate::film::write_bytes(
+        &dir.join(format!("{name}.triangles.f32")),
+        bytemuck::cast_slice(&tris),
+    )?;
+    for (view, rays) in views {
+        let words = ray_words(rays);
+        crate::film::write_bytes(
+            &dir.join(format!("{name}.{view}.rays.f32")),
+            bytemuck::cast_slice(&words),
+        )?;
+    }
+    Ok(())
+}
+
+/// Measures one scene on the CPU and, when `gpu` is given, on that device. With
+/// `rays_out`, also writes the primary rays there ([`write_rays`]).
 pub fn bench_scene(
     name: &str,
     scene: &Scene,
     gpu: Option<&GpuContext>,
     cpu: bool,
     opts: &BenchOptions,
-) -> Result<Vec<Measure>, GpuError> {
+    rays_out: Option<&Path>,
+) -> Result<Vec<Measure>, BenchError> {
     let mut out = Vec::new();
     let bounds: Vec<Aabb> = scene
         .mesh
@@ -189,19 +283,45 @@ pub fn bench_scene(
     let mut sah = 0.0;
     let builds = timed(opts.repeats, tris / 1e6, || {
         let start = Instant::now();
-        let bvh = Bvh::build(&bounds, &BuildParams::default())
-            .map_err(|e| GpuError::Fault(e.to_string()))?;
+        let bvh = Bvh::build(&bounds, &BuildParams::default())?;
         sah = bvh.stats.sah_cost as f64;
         Ok(start.elapsed().as_secs_f64())
     })?;
     out.push(summarize(name, "host", "bvh_build", "Mtris/s", builds));
     out.push(summarize(name, "host", "sah_cost", "cost", vec![sah]));
 
-    let rs = RenderScene::new(scene, &BuildParams::default())
-        .map_err(|e| GpuError::Fault(e.to_string()))?;
-    let rays = RaySets::new(&rs, opts.width, opts.height);
-    let sets: [(&'static str, &[BenchRay], bool); 3] = [
+    let rs = RenderScene::new(scene, &BuildParams::default())?;
+    // Everything but a studio's ground is the subject.
+    let ground = scene
+        .material_names
+        .iter()
+        .position(|n| n == studio::GROUND_MATERIAL);
+    let subject: Vec<bool> = rs
+        .bvh
+        .order
+        .iter()
+        .map(|&i| Some(scene.mesh.triangles[i as usize].material as usize) != ground)
+        .collect();
+    let rays = RaySets::new(&rs, &subject, opts.width, opts.height);
+    out.push(summarize(name, "host", "primary_hits", "fraction", vec![rays.primary_hits]));
+    out.push(summarize(
+        name,
+        "host",
+        "primary_fill_hits",
+        "fraction",
+        vec![rays.primary_fill_hits],
+    ));
+    if let Some(dir) = rays_out {
+        write_rays(
+            dir,
+            name,
+            &rs,
+            &[("primary", &rays.primary), ("primary_fill", &rays.primary_fill)],
+        )?;
+    }
+    let sets: [(&'static str, &[BenchRay], bool); 4] = [
         ("primary_rays", &rays.primary[..], false),
+        ("primary_fill_rays", &rays.primary_fill[..], false),
         ("incoherent_rays", &rays.incoherent[..], false),
         ("shadow_rays", &rays.shadow[..], true),
     ];
@@ -223,14 +343,11 @@ pub fn bench_scene(
                     .par_iter()
                     .map(|(r, t)| {
                         if any {
-                            traverse_any(&rs.bvh.nodes, &rs.tris, r, *t, |k, u, v| {
+                            rs.wide.traverse_any(&rs.tris, r, *t, |k, u, v| {
                                 alpha_test(&rs, k, u, v)
                             }) as usize
                         } else {
-                            traverse_closest(&rs.bvh.nodes, &rs.tris, r, *t, |k, u, v| {
-                                alpha_test(&rs, k, u, v)
-                            })
-                            .is_some() as usize
+                            closest(&rs, r, *t).is_some() as usize
                         }
                     })
                     .sum();

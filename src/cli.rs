@@ -95,6 +95,10 @@ pub struct BenchArgs {
     /// Print one JSON array instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Also write each scene's triangles and primary rays into this folder, as raw
+    /// little-endian floats (see bench/README.md), for comparisons with other ray tracers.
+    #[arg(long, value_name = "DIR")]
+    pub rays_out: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -508,6 +512,11 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
     if args.width == 0 || args.height == 0 || args.spp == 0 || args.repeats == 0 {
         bail!("--width, --height, --spp and --repeats must be at least 1");
     }
+    if let Some(dir) = &args.rays_out
+        && !dir.is_dir()
+    {
+        bail!("--rays-out {}: not a folder", dir.display());
+    }
     let mut scenes: Vec<PathBuf> = args.scenes.clone();
     if scenes.is_empty() {
         scenes.push(PathBuf::from("builtin:cornell"));
@@ -575,6 +584,7 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
             gpu.as_ref(),
             args.device != Some(BenchDevice::Gpu),
             &opts,
+            args.rays_out.as_deref(),
         )?;
         if !args.json {
             for m in &measures {

@@ -530,6 +530,15 @@ impl Film {
     }
 }
 
+/// Writes `bytes` to `path` as [`Film`]'s images are written: complete or not at all.
+pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), FilmError> {
+    write_atomically(path, |tmp| {
+        let mut out = std::io::BufWriter::new(std::fs::File::create(tmp).map_err(|e| e.to_string())?);
+        std::io::Write::write_all(&mut out, bytes).map_err(|e| e.to_string())?;
+        finish_file(out)
+    })
+}
+
 /// Writes `path` through `encode` into a temporary sibling, renamed into place once
 /// complete; the temporary file is removed on failure.
 fn write_atomically(

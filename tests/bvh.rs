@@ -5,7 +5,9 @@ mod common;
 
 use common::rand::hashed_unit;
 use glam::Vec3;
-use meshtrace::bvh::{BuildParams, Bvh, solid, traverse_any, traverse_closest, validate};
+use meshtrace::bvh::Hit;
+use meshtrace::bvh::wide::WIDTH;
+use meshtrace::bvh::{BuildParams, Bvh, WideBvh, solid, traverse_any, traverse_closest, validate};
 use meshtrace::geometry::{ShearedRay, T_INF, TriVerts, intersect_triangle};
 use meshtrace::math::{Aabb, Ray};
 use meshtrace::scene::{self, sphere::icosphere};
@@ -60,6 +62,8 @@ fn check_rays(name: &str, corners: &[[Vec3; 3]], n_rays: u32) {
     let bounds: Vec<Aabb> = corners.iter().map(|c| Aabb::from_points(c)).collect();
     let bvh = Bvh::build(&bounds, &BuildParams::default()).expect("the tree fits the stack");
     validate(&bvh, &bounds).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let wide = WideBvh::collapse(&bvh.nodes);
+    validate_wide(&wide, &bvh, corners.len()).unwrap_or_else(|e| panic!("{name}: {e}"));
     let tris: Vec<TriVerts> = bvh
         .order
         .iter()
@@ -104,17 +108,30 @@ fn check_rays(name: &str, corners: &[[Vec3; 3]], n_rays: u32) {
                     best = Some((h.t, k as u32));
                 }
             }
-            let hit = traverse_closest(&bvh.nodes, &tris, ray, T_INF, solid);
-            let any = traverse_any(&bvh.nodes, &tris, ray, T_INF, solid);
-            let same = match (best, hit) {
+            let same = |hit: Option<Hit>| match (best, hit) {
                 (None, None) => true,
                 // The same distance from a different triangle: a ray through a shared edge.
                 (Some((t, k)), Some(h)) => h.tri == k || h.t == t,
                 _ => false,
             };
-            let any_ok = any == best.is_some();
-            (!same || !any_ok)
-                .then(|| format!("ray {i}: brute force {best:?}, bvh {hit:?}, any-hit {any}"))
+            // The binary tree (the GPU's), the wide one (the CPU's) and its portable test.
+            let hits = [
+                traverse_closest(&bvh.nodes, &tris, ray, T_INF, solid),
+                wide.traverse_closest(&tris, ray, T_INF, solid),
+                wide.portable().traverse_closest(&tris, ray, T_INF, solid),
+            ];
+            let anys = [
+                traverse_any(&bvh.nodes, &tris, ray, T_INF, solid),
+                wide.traverse_any(&tris, ray, T_INF, solid),
+                wide.portable().traverse_any(&tris, ray, T_INF, solid),
+            ];
+            let all_same = hits.iter().all(|&h| same(h)) && hits[1] == hits[2];
+            let any_ok = anys.iter().all(|&a| a == best.is_some());
+            (!all_same || !any_ok).then(|| {
+                format!(
+                    "ray {i}: brute force {best:?}, binary/wide/portable {hits:?}, any-hit {anys:?}"
+                )
+            })
         })
         .collect();
     let hits = rays.len();
@@ -130,6 +147,15 @@ fn check_rays(name: &str, corners: &[[Vec3; 3]], n_rays: u32) {
             assert!(
                 !traverse_any(&bvh.nodes, &tris, ray, h.t * 0.999, solid),
                 "{name}: any-hit beyond t_max"
+            );
+            assert!(
+                !wide.traverse_any(&tris, ray, h.t * 0.999, solid),
+                "{name}: wide any-hit beyond t_max"
+            );
+            assert!(
+                wide.traverse_closest(&tris, ray, h.t * 0.999, solid)
+                    .is_none(),
+                "{name}: wide closest hit beyond t_max"
             );
             assert!(traverse_any(
                 &bvh.nodes,
@@ -250,4 +276,50 @@ fn build_is_independent_of_the_thread_count() {
     assert!(one.nodes.len() > 10_000);
     assert!(one.nodes == four.nodes, "the trees differ");
     assert_eq!(one.order, four.order);
+}
+
+/// The wide tree's invariants: every leaf slot is one of the binary tree's leaves, together
+/// they hold each triangle once, every interior slot's node is reached once, and each
+/// node's slots in use come first.
+fn validate_wide(wide: &WideBvh, bvh: &Bvh, n: usize) -> Result<(), String> {
+    let leaves: std::collections::HashSet<(u32, u32)> = bvh
+        .nodes
+        .iter()
+        .filter(|b| b.is_leaf())
+        .map(|b| (b.left_or_first, b.count))
+        .collect();
+    let mut covered = vec![false; n];
+    let mut reached = vec![false; wide.nodes.len()];
+    let mut stack = vec![0usize];
+    while let Some(i) = stack.pop() {
+        if std::mem::replace(&mut reached[i], true) {
+            return Err(format!("wide node {i} is reached twice"));
+        }
+        let node = &wide.nodes[i];
+        let len = node.len();
+        if len == 0 || (len..WIDTH).any(|k| node.lo[0][k] != f32::INFINITY) {
+            return Err(format!("wide node {i} has {len} slots, not first"));
+        }
+        for k in 0..len {
+            if node.count[k] > 0 {
+                if !leaves.contains(&(node.child[k], node.count[k])) {
+                    return Err(format!("wide node {i} slot {k} is no binary leaf"));
+                }
+                for t in node.child[k]..node.child[k] + node.count[k] {
+                    if std::mem::replace(&mut covered[t as usize], true) {
+                        return Err(format!("triangle slot {t} is in two wide leaves"));
+                    }
+                }
+            } else {
+                stack.push(node.child[k] as usize);
+            }
+        }
+    }
+    if let Some(i) = reached.iter().position(|r| !r) {
+        return Err(format!("wide node {i} is never reached"));
+    }
+    match covered.iter().position(|c| !c) {
+        Some(t) => Err(format!("triangle slot {t} is in no wide leaf")),
+        None => Ok(()),
+    }
 }

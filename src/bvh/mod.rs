@@ -2,16 +2,19 @@
 //!
 //! `build` makes a binned-SAH tree and lays it out depth-first as the 32-byte
 //! [`BvhNode`]s that both the CPU and the GPU traverse, `traverse` holds the closest-hit
-//! and any-hit kernels, and `validate` checks the invariants the kernels rely on.
+//! and any-hit kernels, and `validate` checks the invariants the kernels rely on. `wide`
+//! collapses the tree into the 8-wide one that the CPU renderer traverses.
 //! This module does no I/O.
 
 mod build;
 mod traverse;
 mod validate;
+pub mod wide;
 
 pub use build::{BuildParams, MAX_BINS};
 pub use traverse::{Hit, solid, traverse_any, traverse_closest, traverse_closest_counted};
 pub use validate::validate;
+pub use wide::WideBvh;
 
 use crate::math::Aabb;
 use bytemuck::{Pod, Zeroable};

@@ -15,7 +15,7 @@ use super::rng::{self, Rng};
 use super::sampling::power_heuristic;
 use super::texture::{alpha_test, material_at, normal_mapped, triangle_uv};
 use super::{RenderScene, TRI_SMOOTH, TRI_TANGENT, TRI_UV};
-use crate::bvh::{Hit, traverse_any, traverse_closest, traverse_closest_counted};
+use crate::bvh::{Hit, traverse_closest_counted};
 use crate::film::NO_ID;
 use crate::geometry::{self, T_INF};
 use crate::math::{Ray, onb_from_normal};
@@ -129,11 +129,12 @@ pub fn path_start(ray: Ray) -> PathState {
 /// mirror: shaders/integrator.wgsl `path_step`
 #[inline]
 pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: u32) -> bool {
-    let (nodes, tris) = (&scene.bvh.nodes, &scene.tris);
+    // The CPU traverses the wide tree, which finds the hits the GPU's binary tree finds.
+    let (wide, tris) = (&scene.wide, &scene.tris);
     st.rays += 1;
-    let Some(hit) = traverse_closest(nodes, tris, &st.ray, T_INF, |t, u, v| {
-        alpha_test(scene, t, u, v)
-    }) else {
+    let Some(hit) =
+        wide.traverse_closest(tris, &st.ray, T_INF, |t, u, v| alpha_test(scene, t, u, v))
+    else {
         let w = if st.prev_delta || scene.sky_pmf == 0.0 {
             1.0
         } else {
@@ -198,13 +199,9 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
                 let f = bsdf_eval(mat, wo, wi);
                 if f != Vec3::ZERO {
                     st.rays += 1;
-                    if !traverse_any(
-                        nodes,
-                        tris,
-                        &Ray::new(ls.origin, ls.wi),
-                        ls.t_max,
-                        |t, u, v| alpha_test(scene, t, u, v),
-                    ) {
+                    if !wide.traverse_any(tris, &Ray::new(ls.origin, ls.wi), ls.t_max, |t, u, v| {
+                        alpha_test(scene, t, u, v)
+                    }) {
                         let w = if ls.delta {
                             1.0
                         } else {

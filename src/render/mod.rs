@@ -16,7 +16,7 @@ pub mod rng;
 pub mod sampling;
 pub mod texture;
 
-use crate::bvh::{BuildParams, Bvh, BvhError};
+use crate::bvh::{BuildParams, Bvh, BvhError, WideBvh};
 use crate::film::Film;
 use crate::film::srgb8_to_linear;
 use crate::geometry::{self, TriVerts};
@@ -165,6 +165,9 @@ pub const SKY_EMITTER: u32 = u32::MAX;
 #[derive(Clone, Debug)]
 pub struct RenderScene {
     pub bvh: Bvh,
+    /// The same tree collapsed to eight children a node, which the CPU renderer traverses
+    /// (the GPU traverses `bvh`).
+    pub wide: WideBvh,
     pub tris: Vec<TriVerts>,
     pub shading: Vec<TriShading>,
     /// Texture coordinates of every triangle, or empty when the scene has no textures.
@@ -298,6 +301,7 @@ impl RenderScene {
             .chain((0..=255u8).map(|k| k as f32 / 255.0))
             .collect();
         let mut rs = Self {
+            wide: WideBvh::collapse(&bvh.nodes),
             bvh,
             tris,
             shading,

@@ -296,7 +296,7 @@ impl Builder {
             return Ok(Sky::Constant(Vec3::ZERO));
         }
         let ground = self.add_material(
-            "studio ground",
+            studio::GROUND_MATERIAL,
             Material::diffuse(Vec3::splat(studio::GROUND_ALBEDO)),
         );
         // The ground is an object of its own, after the mesh's.

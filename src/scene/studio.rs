@@ -104,6 +104,9 @@ pub fn ground(bounds: &Aabb) -> MeshPart {
     }
 }
 
+/// The name of the studio ground's material, which tells the ground from the mesh.
+pub const GROUND_MATERIAL: &str = "studio ground";
+
 /// The albedo of the studio ground: a light neutral grey.
 pub const GROUND_ALBEDO: f32 = 0.6;
 

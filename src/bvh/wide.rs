@@ -1,0 +1,504 @@
+//! An 8-wide BVH for the CPU renderer, collapsed from the binary SAH tree: each node holds
+//! the boxes of up to eight children as a struct of arrays, which one AVX2 instruction
+//! sequence tests against a ray at once (a portable loop elsewhere), and the traversal
+//! visits the hit children nearest first.
+//!
+//! The leaves are the binary tree's leaves, over the same leaf-ordered triangles, and the
+//! triangle test is the same function: the wide traversal returns the binary traversal's
+//! hit (the same triangle, distance and barycentrics), except where two triangles are hit at
+//! exactly the same distance, where either may be returned. The GPU keeps the binary tree
+//! (`shaders/traverse.wgsl`), which [`super::traverse_closest`] mirrors.
+
+use super::{BvhNode, Hit, STACK_SIZE};
+use crate::geometry::{SLAB_SLACK, ShearedRay, T_INF, TriVerts, intersect_triangle, safe_inverse};
+use crate::math::Ray;
+use std::mem::MaybeUninit;
+
+/// Children per node.
+pub const WIDTH: usize = 8;
+
+/// One node (256 bytes, four cache lines). Slot `k` is a child box
+/// `lo[axis][k] ..= hi[axis][k]`; an interior child (`count[k] == 0`) is node `child[k]`,
+/// a leaf holds triangles `child[k] .. child[k] + count[k]`. Unused slots have `+inf` in
+/// both corners, a box that every ray misses (the inverse direction is never 0 or NaN).
+#[repr(C, align(64))]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WideNode {
+    pub lo: [[f32; WIDTH]; 3],
+    pub hi: [[f32; WIDTH]; 3],
+    pub child: [u32; WIDTH],
+    pub count: [u32; WIDTH],
+}
+
+impl WideNode {
+    const UNUSED: Self = Self {
+        lo: [[f32::INFINITY; WIDTH]; 3],
+        hi: [[f32::INFINITY; WIDTH]; 3],
+        child: [0; WIDTH],
+        count: [0; WIDTH],
+    };
+
+    /// The slots in use (they come first).
+    pub fn len(&self) -> usize {
+        (0..WIDTH)
+            .take_while(|&k| self.lo[0][k] != f32::INFINITY)
+            .count()
+    }
+
+    /// Whether no slot is in use (never true of a node of a built tree).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// The wide tree; node 0 is the root. An empty scene has no nodes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct WideBvh {
+    pub nodes: Vec<WideNode>,
+}
+
+impl WideBvh {
+    /// Collapses a flattened binary tree: from each wide node's place in the binary tree,
+    /// the interior child of largest surface area is replaced by its two children until
+    /// there are eight or only leaves are left (the SAH's choice of what to test together).
+    pub fn collapse(binary: &[BvhNode]) -> Self {
+        let Some(root) = binary.first() else {
+            return Self::default();
+        };
+        if root.count == 0 && root.left_or_first == 0 {
+            return Self::default();
+        }
+        let area = |k: u32| {
+            let e = binary[k as usize].bounds().extent();
+            e.x * e.y + e.y * e.z + e.z * e.x
+        };
+        let mut nodes = vec![WideNode::UNUSED];
+        // (wide node to fill, binary node it stands for)
+        let mut work = vec![(0usize, 0u32)];
+        while let Some((w, b)) = work.pop() {
+            let mut kids: Vec<u32> = if binary[b as usize].is_leaf() {
+                vec![b]
+            } else {
+                vec![b + 1, binary[b as usize].left_or_first]
+            };
+            while kids.len() < WIDTH {
+                let widest = (0..kids.len())
+                    .filter(|&i| !binary[kids[i] as usize].is_leaf())
+                    .max_by(|&i, &j| area(kids[i]).total_cmp(&area(kids[j])));
+                let Some(i) = widest else { break };
+                let k = kids[i];
+                kids[i] = k + 1;
+                kids.push(binary[k as usize].left_or_first);
+            }
+            let mut node = WideNode::UNUSED;
+            for (slot, &k) in kids.iter().enumerate() {
+                let n = &binary[k as usize];
+                for axis in 0..3 {
+                    node.lo[axis][slot] = n.min[axis];
+                    node.hi[axis][slot] = n.max[axis];
+                }
+                if n.is_leaf() {
+                    node.child[slot] = n.left_or_first;
+                    node.count[slot] = n.count;
+                } else {
+                    node.child[slot] = nodes.len() as u32;
+                    work.push((nodes.len(), k));
+                    nodes.push(WideNode::UNUSED);
+                }
+            }
+            nodes[w] = node;
+        }
+        Self { nodes }
+    }
+
+    /// The nearest intersection with `0 < t < t_max`, as [`super::traverse_closest`] finds
+    /// it; masked triangles count where `accept(tri, u, v)` says so.
+    pub fn traverse_closest(
+        &self,
+        tris: &[TriVerts],
+        ray: &Ray,
+        t_max: f32,
+        accept: impl FnMut(u32, f32, f32) -> bool,
+    ) -> Option<Hit> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, the only requirement of `closest_avx2`.
+            return unsafe { closest_avx2(self, tris, ray, t_max, accept) };
+        }
+        closest::<Portable>(self, tris, ray, t_max, accept)
+    }
+
+    /// Whether anything lies on the ray with `0 < t < t_max`, as [`super::traverse_any`]
+    /// decides it.
+    pub fn traverse_any(
+        &self,
+        tris: &[TriVerts],
+        ray: &Ray,
+        t_max: f32,
+        accept: impl FnMut(u32, f32, f32) -> bool,
+    ) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, the only requirement of `any_avx2`.
+            return unsafe { any_avx2(self, tris, ray, t_max, accept) };
+        }
+        any::<Portable>(self, tris, ray, t_max, accept)
+    }
+
+    /// The same traversals with the portable box test whatever the CPU, so that tests can
+    /// compare the two box tests.
+    pub fn portable(&self) -> PortableWide<'_> {
+        PortableWide(self)
+    }
+}
+
+/// [`WideBvh`] traversed with the portable box test only.
+pub struct PortableWide<'a>(&'a WideBvh);
+
+impl PortableWide<'_> {
+    /// [`WideBvh::traverse_closest`] without SIMD.
+    pub fn traverse_closest(
+        &self,
+        tris: &[TriVerts],
+        ray: &Ray,
+        t_max: f32,
+        accept: impl FnMut(u32, f32, f32) -> bool,
+    ) -> Option<Hit> {
+        closest::<Portable>(self.0, tris, ray, t_max, accept)
+    }
+
+    /// [`WideBvh::traverse_any`] without SIMD.
+    pub fn traverse_any(
+        &self,
+        tris: &[TriVerts],
+        ray: &Ray,
+        t_max: f32,
+        accept: impl FnMut(u32, f32, f32) -> bool,
+    ) -> bool {
+        any::<Portable>(self.0, tris, ray, t_max, accept)
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn closest_avx2(
+    bvh: &WideBvh,
+    tris: &[TriVerts],
+    ray: &Ray,
+    t_max: f32,
+    accept: impl FnMut(u32, f32, f32) -> bool,
+) -> Option<Hit> {
+    closest::<Avx2>(bvh, tris, ray, t_max, accept)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn any_avx2(
+    bvh: &WideBvh,
+    tris: &[TriVerts],
+    ray: &Ray,
+    t_max: f32,
+    accept: impl FnMut(u32, f32, f32) -> bool,
+) -> bool {
+    any::<Avx2>(bvh, tris, ray, t_max, accept)
+}
+
+/// A ray as the box test takes it.
+struct BoxRay {
+    origin: [f32; 3],
+    inv_dir: [f32; 3],
+}
+
+/// The slab test of a node's eight boxes against a ray: the mask of the boxes hit with
+/// `t_near <= t_far` and each box's `t_near`, computed as `geometry::intersect_aabb` does
+/// (the same rounding, and the same slack on `t_far`), so both implementations agree bit
+/// for bit.
+trait BoxTest {
+    fn hits(node: &WideNode, ray: &BoxRay, t_max: f32) -> (u32, [f32; WIDTH]);
+}
+
+/// `minps`/`maxps` semantics, so that the portable test rounds as the SIMD one does.
+#[inline(always)]
+fn min(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
+#[inline(always)]
+fn max(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+/// The box test as a loop over the slots.
+struct Portable;
+
+impl BoxTest for Portable {
+    #[inline(always)]
+    fn hits(node: &WideNode, ray: &BoxRay, t_max: f32) -> (u32, [f32; WIDTH]) {
+        let mut near = [0.0; WIDTH];
+        let mut mask = 0;
+        for k in 0..WIDTH {
+            let slab = |axis: usize| {
+                let t0 = (node.lo[axis][k] - ray.origin[axis]) * ray.inv_dir[axis];
+                let t1 = (node.hi[axis][k] - ray.origin[axis]) * ray.inv_dir[axis];
+                (min(t0, t1), max(t0, t1))
+            };
+            let ((nx, fx), (ny, fy), (nz, fz)) = (slab(0), slab(1), slab(2));
+            let n = max(max(max(nx, ny), nz), 0.0);
+            let f = min(min(min(min(fx, fy), fz), t_max) * SLAB_SLACK, T_INF);
+            near[k] = n;
+            mask |= ((n <= f) as u32) << k;
+        }
+        (mask, near)
+    }
+}
+
+/// The box test in AVX registers, eight slots at once.
+#[cfg(target_arch = "x86_64")]
+struct Avx2;
+
+#[cfg(target_arch = "x86_64")]
+impl BoxTest for Avx2 {
+    #[inline(always)]
+    fn hits(node: &WideNode, ray: &BoxRay, t_max: f32) -> (u32, [f32; WIDTH]) {
+        // SAFETY: only reached from `closest_avx2` and `any_avx2`, which run where the CPU
+        // has AVX2.
+        unsafe { hits_avx2(node, ray, t_max) }
+    }
+}
+
+/// [`Avx2`]'s test, as a function of its own so that the intrinsics inline into it.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn hits_avx2(node: &WideNode, ray: &BoxRay, t_max: f32) -> (u32, [f32; WIDTH]) {
+    use std::arch::x86_64::*;
+    // SAFETY (the loads and the store): each covers one whole `[f32; 8]`.
+    let (nx, fx) = unsafe { slab_avx2(&node.lo[0], &node.hi[0], ray.origin[0], ray.inv_dir[0]) };
+    let (ny, fy) = unsafe { slab_avx2(&node.lo[1], &node.hi[1], ray.origin[1], ray.inv_dir[1]) };
+    let (nz, fz) = unsafe { slab_avx2(&node.lo[2], &node.hi[2], ray.origin[2], ray.inv_dir[2]) };
+    let n = _mm256_max_ps(
+        _mm256_max_ps(_mm256_max_ps(nx, ny), nz),
+        _mm256_setzero_ps(),
+    );
+    let far = _mm256_min_ps(
+        _mm256_min_ps(_mm256_min_ps(fx, fy), fz),
+        _mm256_set1_ps(t_max),
+    );
+    let f = _mm256_min_ps(
+        _mm256_mul_ps(far, _mm256_set1_ps(SLAB_SLACK)),
+        _mm256_set1_ps(T_INF),
+    );
+    let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(n, f)) as u32;
+    let mut near = [0.0; WIDTH];
+    unsafe { _mm256_storeu_ps(near.as_mut_ptr(), n) };
+    (mask, near)
+}
+
+/// One axis of [`hits_avx2`]: each box's entry and exit distance along it.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn slab_avx2(
+    lo: &[f32; WIDTH],
+    hi: &[f32; WIDTH],
+    origin: f32,
+    inv_dir: f32,
+) -> (std::arch::x86_64::__m256, std::arch::x86_64::__m256) {
+    use std::arch::x86_64::*;
+    let o = _mm256_set1_ps(origin);
+    let inv = _mm256_set1_ps(inv_dir);
+    // SAFETY: the caller's; `lo` and `hi` are eight floats each.
+    let (lo, hi) = unsafe { (_mm256_loadu_ps(lo.as_ptr()), _mm256_loadu_ps(hi.as_ptr())) };
+    let t0 = _mm256_mul_ps(_mm256_sub_ps(lo, o), inv);
+    let t1 = _mm256_mul_ps(_mm256_sub_ps(hi, o), inv);
+    (_mm256_min_ps(t0, t1), _mm256_max_ps(t0, t1))
+}
+
+/// A child waiting on the stack: a node or a leaf, and where the ray enters its box.
+#[derive(Clone, Copy)]
+struct Entry {
+    child: u32,
+    count: u32,
+    t: f32,
+}
+
+/// Each level pushes at most `WIDTH - 1` children, and the wide tree is no deeper than the
+/// binary one.
+const STACK: usize = (WIDTH - 1) * STACK_SIZE + 1;
+
+/// A traversal stack that is not initialised: entries are read only below `len`.
+struct Stack {
+    entries: [MaybeUninit<Entry>; STACK],
+    len: usize,
+}
+
+impl Stack {
+    #[inline(always)]
+    fn new() -> Self {
+        Self {
+            entries: [const { MaybeUninit::uninit() }; STACK],
+            len: 0,
+        }
+    }
+
+    #[inline(always)]
+    fn push(&mut self, e: Entry) {
+        self.entries[self.len] = MaybeUninit::new(e);
+        self.len += 1;
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<Entry> {
+        self.len = self.len.checked_sub(1)?;
+        // SAFETY: every slot below the old length was written by `push`.
+        Some(unsafe { self.entries[self.len].assume_init() })
+    }
+}
+
+#[inline(always)]
+fn box_ray(ray: &Ray) -> BoxRay {
+    BoxRay {
+        origin: ray.origin.to_array(),
+        inv_dir: safe_inverse(ray.dir).to_array(),
+    }
+}
+
+#[inline(always)]
+fn entry(node: &WideNode, k: usize, t: f32) -> Entry {
+    Entry {
+        child: node.child[k],
+        count: node.count[k],
+        t,
+    }
+}
+
+#[inline(always)]
+fn closest<B: BoxTest>(
+    bvh: &WideBvh,
+    tris: &[TriVerts],
+    ray: &Ray,
+    t_max: f32,
+    mut accept: impl FnMut(u32, f32, f32) -> bool,
+) -> Option<Hit> {
+    if bvh.nodes.is_empty() {
+        return None;
+    }
+    let sheared = ShearedRay::new(ray);
+    let r = box_ray(ray);
+    let mut best = None;
+    let mut t_best = t_max;
+    let mut stack = Stack::new();
+    let mut cur = Entry {
+        child: 0,
+        count: 0,
+        t: 0.0,
+    };
+    loop {
+        if cur.count > 0 {
+            for i in cur.child..cur.child + cur.count {
+                let tri = &tris[i as usize];
+                if let Some(h) = intersect_triangle(&sheared, tri, t_best)
+                    && (!tri.is_masked() || accept(i, h.u, h.v))
+                {
+                    t_best = h.t;
+                    best = Some(Hit {
+                        t: h.t,
+                        u: h.u,
+                        v: h.v,
+                        tri: i,
+                    });
+                }
+            }
+        } else {
+            let node = &bvh.nodes[cur.child as usize];
+            let (mut mask, near) = B::hits(node, &r, t_best);
+            if mask != 0 {
+                let first = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                if mask == 0 {
+                    cur = entry(node, first, near[first]);
+                    continue;
+                }
+                // Two or more: sort by entry distance, go on with the nearest and push the
+                // others farthest first.
+                let mut order = [0usize; WIDTH];
+                let mut n = 0;
+                let mut m = mask | (1 << first);
+                while m != 0 {
+                    let k = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    let mut j = n;
+                    while j > 0 && near[order[j - 1]] < near[k] {
+                        order[j] = order[j - 1];
+                        j -= 1;
+                    }
+                    order[j] = k;
+                    n += 1;
+                }
+                for &k in &order[..n - 1] {
+                    stack.push(entry(node, k, near[k]));
+                }
+                let k = order[n - 1];
+                cur = entry(node, k, near[k]);
+                continue;
+            }
+        }
+        // The next child whose box still starts before the nearest hit (with the slab
+        // test's slack, so that no box the test would accept is skipped).
+        let bound = min(t_best * SLAB_SLACK, T_INF);
+        loop {
+            let Some(e) = stack.pop() else {
+                return best;
+            };
+            if e.t <= bound {
+                cur = e;
+                break;
+            }
+        }
+    }
+}
+
+#[inline(always)]
+fn any<B: BoxTest>(
+    bvh: &WideBvh,
+    tris: &[TriVerts],
+    ray: &Ray,
+    t_max: f32,
+    mut accept: impl FnMut(u32, f32, f32) -> bool,
+) -> bool {
+    if bvh.nodes.is_empty() {
+        return false;
+    }
+    let sheared = ShearedRay::new(ray);
+    let r = box_ray(ray);
+    let mut stack = Stack::new();
+    let mut cur = Entry {
+        child: 0,
+        count: 0,
+        t: 0.0,
+    };
+    loop {
+        if cur.count > 0 {
+            for i in cur.child..cur.child + cur.count {
+                let tri = &tris[i as usize];
+                if intersect_triangle(&sheared, tri, t_max)
+                    .is_some_and(|h| !tri.is_masked() || accept(i, h.u, h.v))
+                {
+                    return true;
+                }
+            }
+        } else {
+            let node = &bvh.nodes[cur.child as usize];
+            let (mut mask, near) = B::hits(node, &r, t_max);
+            while mask != 0 {
+                let k = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                stack.push(entry(node, k, near[k]));
+            }
+        }
+        let Some(e) = stack.pop() else {
+            return false;
+        };
+        cur = e;
+    }
+}
