@@ -79,7 +79,10 @@ fn camera_rays(cam: &CameraRays) -> Vec<BenchRay> {
     (0..cam.width * cam.height)
         .map(|i| {
             let rng = Rng::new(i, 0, 0x0bec);
-            (generate_camera_ray(cam, i % cam.width, i / cam.width, &rng), T_INF)
+            (
+                generate_camera_ray(cam, i % cam.width, i / cam.width, &rng),
+                T_INF,
+            )
         })
         .collect()
 }
@@ -88,7 +91,9 @@ fn camera_rays(cam: &CameraRays) -> Vec<BenchRay> {
 fn closest(scene: &RenderScene, ray: &Ray, t_max: f32) -> Option<Hit> {
     scene
         .wide
-        .traverse_closest(&scene.tris, ray, t_max, |k, u, v| alpha_test(scene, k, u, v))
+        .traverse_closest(&scene.tris, ray, t_max, |k, u, v| {
+            alpha_test(scene, k, u, v)
+        })
 }
 
 /// The share of `rays` whose closest hit is on a triangle that `subject` marks.
@@ -303,7 +308,13 @@ pub fn bench_scene(
         .map(|&i| Some(scene.mesh.triangles[i as usize].material as usize) != ground)
         .collect();
     let rays = RaySets::new(&rs, &subject, opts.width, opts.height);
-    out.push(summarize(name, "host", "primary_hits", "fraction", vec![rays.primary_hits]));
+    out.push(summarize(
+        name,
+        "host",
+        "primary_hits",
+        "fraction",
+        vec![rays.primary_hits],
+    ));
     out.push(summarize(
         name,
         "host",
@@ -316,7 +327,10 @@ pub fn bench_scene(
             dir,
             name,
             &rs,
-            &[("primary", &rays.primary), ("primary_fill", &rays.primary_fill)],
+            &[
+                ("primary", &rays.primary),
+                ("primary_fill", &rays.primary_fill),
+            ],
         )?;
     }
     let sets: [(&'static str, &[BenchRay], bool); 4] = [
@@ -343,9 +357,9 @@ pub fn bench_scene(
                     .par_iter()
                     .map(|(r, t)| {
                         if any {
-                            rs.wide.traverse_any(&rs.tris, r, *t, |k, u, v| {
-                                alpha_test(&rs, k, u, v)
-                            }) as usize
+                            rs.wide
+                                .traverse_any(&rs.tris, r, *t, |k, u, v| alpha_test(&rs, k, u, v))
+                                as usize
                         } else {
                             closest(&rs, r, *t).is_some() as usize
                         }

@@ -533,7 +533,8 @@ impl Film {
 /// Writes `bytes` to `path` as [`Film`]'s images are written: complete or not at all.
 pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), FilmError> {
     write_atomically(path, |tmp| {
-        let mut out = std::io::BufWriter::new(std::fs::File::create(tmp).map_err(|e| e.to_string())?);
+        let mut out =
+            std::io::BufWriter::new(std::fs::File::create(tmp).map_err(|e| e.to_string())?);
         std::io::Write::write_all(&mut out, bytes).map_err(|e| e.to_string())?;
         finish_file(out)
     })

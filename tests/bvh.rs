@@ -6,7 +6,7 @@ mod common;
 use common::rand::hashed_unit;
 use glam::Vec3;
 use meshtrace::bvh::Hit;
-use meshtrace::bvh::wide::WIDTH;
+use meshtrace::bvh::wide::{LEAF_MAX, WIDTH};
 use meshtrace::bvh::{BuildParams, Bvh, WideBvh, solid, traverse_any, traverse_closest, validate};
 use meshtrace::geometry::{ShearedRay, T_INF, TriVerts, intersect_triangle};
 use meshtrace::math::{Aabb, Ray};
@@ -62,13 +62,13 @@ fn check_rays(name: &str, corners: &[[Vec3; 3]], n_rays: u32) {
     let bounds: Vec<Aabb> = corners.iter().map(|c| Aabb::from_points(c)).collect();
     let bvh = Bvh::build(&bounds, &BuildParams::default()).expect("the tree fits the stack");
     validate(&bvh, &bounds).unwrap_or_else(|e| panic!("{name}: {e}"));
-    let wide = WideBvh::collapse(&bvh.nodes);
-    validate_wide(&wide, &bvh, corners.len()).unwrap_or_else(|e| panic!("{name}: {e}"));
     let tris: Vec<TriVerts> = bvh
         .order
         .iter()
         .map(|&i| TriVerts::new(corners[i as usize]))
         .collect();
+    let wide = WideBvh::collapse(&bvh.nodes, &tris);
+    validate_wide(&wide, &tris).unwrap_or_else(|e| panic!("{name}: {e}"));
     let all = bounds.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
     let rays = rays(all, n_rays);
     // Bounding spheres (inflated by 1e-4 of the scene size) let the brute force skip
@@ -278,20 +278,17 @@ fn build_is_independent_of_the_thread_count() {
     assert_eq!(one.order, four.order);
 }
 
-/// The wide tree's invariants: every leaf slot is one of the binary tree's leaves, together
-/// they hold each triangle once, every interior slot's node is reached once, and each
-/// node's slots in use come first.
-fn validate_wide(wide: &WideBvh, bvh: &Bvh, n: usize) -> Result<(), String> {
-    let leaves: std::collections::HashSet<(u32, u32)> = bvh
-        .nodes
-        .iter()
-        .filter(|b| b.is_leaf())
-        .map(|b| (b.left_or_first, b.count))
-        .collect();
-    let mut covered = vec![false; n];
+/// The wide tree's invariants: every slot's box holds what the slot leads to, the leaves'
+/// packs hold each triangle once (its corners, in lanes that come first), every interior
+/// slot's node is reached once, and each node's slots in use come first.
+fn validate_wide(wide: &WideBvh, tris: &[TriVerts]) -> Result<(), String> {
+    let mut covered = vec![false; tris.len()];
     let mut reached = vec![false; wide.nodes.len()];
-    let mut stack = vec![0usize];
-    while let Some(i) = stack.pop() {
+    let mut stack = vec![(
+        0usize,
+        Aabb::from_points(&[Vec3::splat(f32::MIN), Vec3::splat(f32::MAX)]),
+    )];
+    while let Some((i, parent)) = stack.pop() {
         if std::mem::replace(&mut reached[i], true) {
             return Err(format!("wide node {i} is reached twice"));
         }
@@ -301,17 +298,58 @@ fn validate_wide(wide: &WideBvh, bvh: &Bvh, n: usize) -> Result<(), String> {
             return Err(format!("wide node {i} has {len} slots, not first"));
         }
         for k in 0..len {
-            if node.count[k] > 0 {
-                if !leaves.contains(&(node.child[k], node.count[k])) {
-                    return Err(format!("wide node {i} slot {k} is no binary leaf"));
+            let b = Aabb {
+                min: Vec3::new(node.lo[0][k], node.lo[1][k], node.lo[2][k]),
+                max: Vec3::new(node.hi[0][k], node.hi[1][k], node.hi[2][k]),
+            };
+            if !parent.contains(&b) {
+                return Err(format!("wide node {i} slot {k} pokes out of its parent"));
+            }
+            if node.count[k] == 0 {
+                stack.push((node.child[k] as usize, b));
+                continue;
+            }
+            let packs = node.child[k] as usize..(node.child[k] + node.count[k]) as usize;
+            let lanes: Vec<(usize, usize)> = packs
+                .flat_map(|p| (0..WIDTH).map(move |l| (p, l)))
+                .collect();
+            if lanes.len() > LEAF_MAX.next_multiple_of(WIDTH as u32) as usize {
+                return Err(format!(
+                    "wide node {i} slot {k} has {} packs",
+                    node.count[k]
+                ));
+            }
+            let used = lanes
+                .iter()
+                .take_while(|&&(p, l)| wide.packs[p].tri[l] != u32::MAX)
+                .count();
+            if used == 0
+                || lanes[used..]
+                    .iter()
+                    .any(|&(p, l)| wide.packs[p].tri[l] != u32::MAX)
+            {
+                return Err(format!(
+                    "wide node {i} slot {k}: lanes in use do not come first"
+                ));
+            }
+            for &(p, l) in &lanes[..used] {
+                let pack = &wide.packs[p];
+                let t = pack.tri[l] as usize;
+                let slot = covered
+                    .get_mut(t)
+                    .ok_or(format!("pack {p} names triangle {t}"))?;
+                if std::mem::replace(slot, true) {
+                    return Err(format!("triangle slot {t} is in two wide leaves"));
                 }
-                for t in node.child[k]..node.child[k] + node.count[k] {
-                    if std::mem::replace(&mut covered[t as usize], true) {
-                        return Err(format!("triangle slot {t} is in two wide leaves"));
+                let corners = tris[t].corners();
+                for (c, corner) in corners.iter().enumerate() {
+                    if (0..3).any(|a| pack.v[3 * c + a][l] != corner[a]) {
+                        return Err(format!("pack {p} lane {l} does not hold triangle {t}"));
                     }
                 }
-            } else {
-                stack.push(node.child[k] as usize);
+                if !b.contains(&Aabb::from_points(&corners)) {
+                    return Err(format!("wide node {i} slot {k} does not hold triangle {t}"));
+                }
             }
         }
     }

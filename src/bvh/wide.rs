@@ -3,8 +3,11 @@
 //! sequence tests against a ray at once (a portable loop elsewhere), and the traversal
 //! visits the hit children nearest first.
 //!
-//! The leaves are the binary tree's leaves, over the same leaf-ordered triangles, and the
-//! triangle test is the same function: the wide traversal returns the binary traversal's
+//! A binary subtree of at most [`LEAF_MAX`] triangles becomes one leaf, over the same
+//! leaf-ordered triangles, copied into packs of eight as a struct of arrays: one AVX2
+//! sequence computes the eight edge functions of the watertight test and keeps the lanes
+//! whose signs allow a hit, and only those go through the scalar test. Being the same
+//! function, the scalar test makes the wide traversal return the binary traversal's
 //! hit (the same triangle, distance and barycentrics), except where two triangles are hit at
 //! exactly the same distance, where either may be returned. The GPU keeps the binary tree
 //! (`shaders/traverse.wgsl`), which [`super::traverse_closest`] mirrors.
@@ -14,12 +17,25 @@ use crate::geometry::{SLAB_SLACK, ShearedRay, T_INF, TriVerts, intersect_triangl
 use crate::math::Ray;
 use std::mem::MaybeUninit;
 
-/// Children per node.
+/// Children per node, and triangles per pack.
 pub const WIDTH: usize = 8;
+
+/// The most triangles of a leaf: a binary subtree of at most this many becomes one leaf.
+pub const LEAF_MAX: u32 = 8;
+
+/// Up to eight triangles of a leaf as a struct of arrays: corner `c`'s axis `a` of lane `l`
+/// is `v[3 * c + a][l]`, and `tri[l]` is the lane's leaf-order triangle index, `u32::MAX`
+/// for an unused lane.
+#[repr(C, align(64))]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriPack {
+    pub v: [[f32; WIDTH]; 9],
+    pub tri: [u32; WIDTH],
+}
 
 /// One node (256 bytes, four cache lines). Slot `k` is a child box
 /// `lo[axis][k] ..= hi[axis][k]`; an interior child (`count[k] == 0`) is node `child[k]`,
-/// a leaf holds triangles `child[k] .. child[k] + count[k]`. Unused slots have `+inf` in
+/// a leaf is packs `child[k] .. child[k] + count[k]`. Unused slots have `+inf` in
 /// both corners, a box that every ray misses (the inverse direction is never 0 or NaN).
 #[repr(C, align(64))]
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -55,35 +71,55 @@ impl WideNode {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct WideBvh {
     pub nodes: Vec<WideNode>,
+    /// The leaves' triangles, each leaf's in consecutive packs.
+    pub packs: Vec<TriPack>,
 }
 
 impl WideBvh {
-    /// Collapses a flattened binary tree: from each wide node's place in the binary tree,
-    /// the interior child of largest surface area is replaced by its two children until
-    /// there are eight or only leaves are left (the SAH's choice of what to test together).
-    pub fn collapse(binary: &[BvhNode]) -> Self {
+    /// Collapses a flattened binary tree over the leaf-ordered `tris`: a subtree of at most
+    /// [`LEAF_MAX`] triangles becomes a leaf, and from each wide node's place in the binary
+    /// tree, the interior child of largest surface area is replaced by its two children
+    /// until there are eight or only leaves are left (the SAH's choice of what to test
+    /// together).
+    pub fn collapse(binary: &[BvhNode], tris: &[TriVerts]) -> Self {
         let Some(root) = binary.first() else {
             return Self::default();
         };
         if root.count == 0 && root.left_or_first == 0 {
             return Self::default();
         }
+        // Each subtree's triangles are a contiguous range of the leaf order: its first and
+        // how many (children come after their parent).
+        let mut range = vec![(0u32, 0u32); binary.len()];
+        for i in (0..binary.len()).rev() {
+            let b = &binary[i];
+            range[i] = if b.is_leaf() {
+                (b.left_or_first, b.count)
+            } else {
+                let (l, r) = (range[i + 1], range[b.left_or_first as usize]);
+                (l.0.min(r.0), l.1 + r.1)
+            };
+        }
+        let leaf = |k: u32| binary[k as usize].is_leaf() || range[k as usize].1 <= LEAF_MAX;
         let area = |k: u32| {
             let e = binary[k as usize].bounds().extent();
             e.x * e.y + e.y * e.z + e.z * e.x
         };
-        let mut nodes = vec![WideNode::UNUSED];
+        let mut out = Self {
+            nodes: vec![WideNode::UNUSED],
+            packs: Vec::new(),
+        };
         // (wide node to fill, binary node it stands for)
         let mut work = vec![(0usize, 0u32)];
         while let Some((w, b)) = work.pop() {
-            let mut kids: Vec<u32> = if binary[b as usize].is_leaf() {
+            let mut kids: Vec<u32> = if leaf(b) {
                 vec![b]
             } else {
                 vec![b + 1, binary[b as usize].left_or_first]
             };
             while kids.len() < WIDTH {
                 let widest = (0..kids.len())
-                    .filter(|&i| !binary[kids[i] as usize].is_leaf())
+                    .filter(|&i| !leaf(kids[i]))
                     .max_by(|&i, &j| area(kids[i]).total_cmp(&area(kids[j])));
                 let Some(i) = widest else { break };
                 let k = kids[i];
@@ -97,18 +133,24 @@ impl WideBvh {
                     node.lo[axis][slot] = n.min[axis];
                     node.hi[axis][slot] = n.max[axis];
                 }
-                if n.is_leaf() {
-                    node.child[slot] = n.left_or_first;
-                    node.count[slot] = n.count;
+                if leaf(k) {
+                    let (first, count) = range[k as usize];
+                    node.child[slot] = out.packs.len() as u32;
+                    node.count[slot] = count.div_ceil(WIDTH as u32);
+                    out.packs.extend(
+                        (first..first + count).step_by(WIDTH).map(|start| {
+                            pack(tris, start..(start + WIDTH as u32).min(first + count))
+                        }),
+                    );
                 } else {
-                    node.child[slot] = nodes.len() as u32;
-                    work.push((nodes.len(), k));
-                    nodes.push(WideNode::UNUSED);
+                    node.child[slot] = out.nodes.len() as u32;
+                    work.push((out.nodes.len(), k));
+                    out.nodes.push(WideNode::UNUSED);
                 }
             }
-            nodes[w] = node;
+            out.nodes[w] = node;
         }
-        Self { nodes }
+        out
     }
 
     /// The nearest intersection with `0 < t < t_max`, as [`super::traverse_closest`] finds
@@ -203,6 +245,44 @@ fn any_avx2(
     any::<Avx2>(bvh, tris, ray, t_max, accept)
 }
 
+/// Triangles `range` of `tris` as a pack.
+fn pack(tris: &[TriVerts], range: std::ops::Range<u32>) -> TriPack {
+    let mut p = TriPack {
+        v: [[0.0; WIDTH]; 9],
+        tri: [u32::MAX; WIDTH],
+    };
+    for (lane, i) in range.enumerate() {
+        let t = &tris[i as usize];
+        for (c, corner) in [t.v0, t.v1, t.v2].iter().enumerate() {
+            for (axis, &x) in corner[..3].iter().enumerate() {
+                p.v[3 * c + axis][lane] = x;
+            }
+        }
+        p.tri[lane] = i;
+    }
+    p
+}
+
+/// A ray as the triangle filter takes it: [`ShearedRay`]'s frame, with the axes that
+/// become x, y and z and the origin in that order.
+struct TriRay {
+    axes: [usize; 3],
+    origin: [f32; 3],
+    shear: [f32; 2],
+}
+
+#[inline(always)]
+fn tri_ray(sheared: &ShearedRay) -> TriRay {
+    let kz = sheared.kz as usize;
+    let axes = [(kz + 1) % 3, (kz + 2) % 3, kz];
+    let o = sheared.origin.to_array();
+    TriRay {
+        axes,
+        origin: axes.map(|a| o[a]),
+        shear: [sheared.shear.x, sheared.shear.y],
+    }
+}
+
 /// A ray as the box test takes it.
 struct BoxRay {
     origin: [f32; 3],
@@ -215,6 +295,9 @@ struct BoxRay {
 /// for bit.
 trait BoxTest {
     fn hits(node: &WideNode, ray: &BoxRay, t_max: f32) -> (u32, [f32; WIDTH]);
+
+    /// The lanes of `pack` that `intersect_triangle` may hit: a superset of its hits.
+    fn candidates(pack: &TriPack, ray: &TriRay) -> u32;
 }
 
 /// `minps`/`maxps` semantics, so that the portable test rounds as the SIMD one does.
@@ -236,7 +319,7 @@ impl BoxTest for Portable {
     fn hits(node: &WideNode, ray: &BoxRay, t_max: f32) -> (u32, [f32; WIDTH]) {
         let mut near = [0.0; WIDTH];
         let mut mask = 0;
-        for k in 0..WIDTH {
+        for (k, near) in near.iter_mut().enumerate() {
             let slab = |axis: usize| {
                 let t0 = (node.lo[axis][k] - ray.origin[axis]) * ray.inv_dir[axis];
                 let t1 = (node.hi[axis][k] - ray.origin[axis]) * ray.inv_dir[axis];
@@ -245,10 +328,16 @@ impl BoxTest for Portable {
             let ((nx, fx), (ny, fy), (nz, fz)) = (slab(0), slab(1), slab(2));
             let n = max(max(max(nx, ny), nz), 0.0);
             let f = min(min(min(min(fx, fy), fz), t_max) * SLAB_SLACK, T_INF);
-            near[k] = n;
+            *near = n;
             mask |= ((n <= f) as u32) << k;
         }
         (mask, near)
+    }
+
+    /// Every lane in use: the scalar test decides.
+    #[inline(always)]
+    fn candidates(pack: &TriPack, _ray: &TriRay) -> u32 {
+        (0..WIDTH).fold(0, |m, l| m | (((pack.tri[l] != u32::MAX) as u32) << l))
     }
 }
 
@@ -264,6 +353,63 @@ impl BoxTest for Avx2 {
         // has AVX2.
         unsafe { hits_avx2(node, ray, t_max) }
     }
+
+    #[inline(always)]
+    fn candidates(pack: &TriPack, ray: &TriRay) -> u32 {
+        // SAFETY: as for `hits`.
+        unsafe { candidates_avx2(pack, ray) }
+    }
+}
+
+/// The edge functions of `intersect_triangle`, computed as it computes them (so that a
+/// lane is dropped only where it would return no hit) for eight triangles at once; the
+/// lanes in use whose three signs do not disagree.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn candidates_avx2(pack: &TriPack, ray: &TriRay) -> u32 {
+    use std::arch::x86_64::*;
+    let [ax, ay, az] = ray.axes;
+    let (sx, sy) = (_mm256_set1_ps(ray.shear[0]), _mm256_set1_ps(ray.shear[1]));
+    let (ox, oy, oz) = (
+        _mm256_set1_ps(ray.origin[0]),
+        _mm256_set1_ps(ray.origin[1]),
+        _mm256_set1_ps(ray.origin[2]),
+    );
+    // SAFETY: each load reads one whole `[f32; 8]` or `[u32; 8]`.
+    let load = |row: &[f32; WIDTH]| unsafe { _mm256_loadu_ps(row.as_ptr()) };
+    // A corner translated, permuted and sheared: (x + Sx z, y + Sy z).
+    let corner = |c: usize| {
+        let x = _mm256_sub_ps(load(&pack.v[3 * c + ax]), ox);
+        let y = _mm256_sub_ps(load(&pack.v[3 * c + ay]), oy);
+        let z = _mm256_sub_ps(load(&pack.v[3 * c + az]), oz);
+        (
+            _mm256_add_ps(x, _mm256_mul_ps(sx, z)),
+            _mm256_add_ps(y, _mm256_mul_ps(sy, z)),
+        )
+    };
+    let ((p0x, p0y), (p1x, p1y), (p2x, p2y)) = (corner(0), corner(1), corner(2));
+    let e0 = _mm256_sub_ps(_mm256_mul_ps(p1x, p2y), _mm256_mul_ps(p1y, p2x));
+    let e1 = _mm256_sub_ps(_mm256_mul_ps(p2x, p0y), _mm256_mul_ps(p2y, p0x));
+    let e2 = _mm256_sub_ps(_mm256_mul_ps(p0x, p1y), _mm256_mul_ps(p0y, p1x));
+    let zero = _mm256_setzero_ps();
+    let lt = |e| _mm256_cmp_ps::<_CMP_LT_OQ>(e, zero);
+    let gt = |e| _mm256_cmp_ps::<_CMP_GT_OQ>(e, zero);
+    let (lt0, gt0, lt1, gt1, lt2, gt2) = (lt(e0), gt(e0), lt(e1), gt(e1), lt(e2), gt(e2));
+    let reject = _mm256_or_ps(
+        _mm256_or_ps(_mm256_and_ps(lt0, gt1), _mm256_and_ps(gt0, lt1)),
+        _mm256_or_ps(
+            _mm256_and_ps(lt2, _mm256_or_ps(gt0, gt1)),
+            _mm256_and_ps(gt2, _mm256_or_ps(lt0, lt1)),
+        ),
+    );
+    // SAFETY: as above.
+    let tri = unsafe { _mm256_loadu_si256(pack.tri.as_ptr().cast()) };
+    let unused = _mm256_castsi256_ps(_mm256_cmpeq_epi32(tri, _mm256_set1_epi32(-1)));
+    _mm256_movemask_ps(_mm256_andnot_ps(
+        _mm256_or_ps(reject, unused),
+        _mm256_castsi256_ps(_mm256_set1_epi32(-1)),
+    )) as u32
 }
 
 /// [`Avx2`]'s test, as a function of its own so that the intrinsics inline into it.
@@ -384,6 +530,7 @@ fn closest<B: BoxTest>(
         return None;
     }
     let sheared = ShearedRay::new(ray);
+    let tr = tri_ray(&sheared);
     let r = box_ray(ray);
     let mut best = None;
     let mut t_best = t_max;
@@ -395,18 +542,23 @@ fn closest<B: BoxTest>(
     };
     loop {
         if cur.count > 0 {
-            for i in cur.child..cur.child + cur.count {
-                let tri = &tris[i as usize];
-                if let Some(h) = intersect_triangle(&sheared, tri, t_best)
-                    && (!tri.is_masked() || accept(i, h.u, h.v))
-                {
-                    t_best = h.t;
-                    best = Some(Hit {
-                        t: h.t,
-                        u: h.u,
-                        v: h.v,
-                        tri: i,
-                    });
+            for pack in &bvh.packs[cur.child as usize..(cur.child + cur.count) as usize] {
+                let mut lanes = B::candidates(pack, &tr);
+                while lanes != 0 {
+                    let i = pack.tri[lanes.trailing_zeros() as usize];
+                    lanes &= lanes - 1;
+                    let tri = &tris[i as usize];
+                    if let Some(h) = intersect_triangle(&sheared, tri, t_best)
+                        && (!tri.is_masked() || accept(i, h.u, h.v))
+                    {
+                        t_best = h.t;
+                        best = Some(Hit {
+                            t: h.t,
+                            u: h.u,
+                            v: h.v,
+                            tri: i,
+                        });
+                    }
                 }
             }
         } else {
@@ -470,6 +622,7 @@ fn any<B: BoxTest>(
         return false;
     }
     let sheared = ShearedRay::new(ray);
+    let tr = tri_ray(&sheared);
     let r = box_ray(ray);
     let mut stack = Stack::new();
     let mut cur = Entry {
@@ -479,12 +632,17 @@ fn any<B: BoxTest>(
     };
     loop {
         if cur.count > 0 {
-            for i in cur.child..cur.child + cur.count {
-                let tri = &tris[i as usize];
-                if intersect_triangle(&sheared, tri, t_max)
-                    .is_some_and(|h| !tri.is_masked() || accept(i, h.u, h.v))
-                {
-                    return true;
+            for pack in &bvh.packs[cur.child as usize..(cur.child + cur.count) as usize] {
+                let mut lanes = B::candidates(pack, &tr);
+                while lanes != 0 {
+                    let i = pack.tri[lanes.trailing_zeros() as usize];
+                    lanes &= lanes - 1;
+                    let tri = &tris[i as usize];
+                    if intersect_triangle(&sheared, tri, t_max)
+                        .is_some_and(|h| !tri.is_masked() || accept(i, h.u, h.v))
+                    {
+                        return true;
+                    }
                 }
             }
         } else {

@@ -301,7 +301,7 @@ impl RenderScene {
             .chain((0..=255u8).map(|k| k as f32 / 255.0))
             .collect();
         let mut rs = Self {
-            wide: WideBvh::collapse(&bvh.nodes),
+            wide: WideBvh::collapse(&bvh.nodes, &tris),
             bvh,
             tris,
             shading,
