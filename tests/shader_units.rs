@@ -445,7 +445,9 @@ const MIRROR: Bounds = Bounds {
     other_tri_fraction: 2e-3,
     same_t: 1e-5,
     t_rel: 1e-5,
+    t_floor: 0.0,
     uv_rel: 1e-5,
+    uv_floor: 0.1,
     any_edge_fraction: 1e-3,
 };
 

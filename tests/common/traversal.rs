@@ -80,9 +80,12 @@ pub struct Bounds {
     /// Another triangle at the same t (within `same_t`, relative): a shared edge or corner.
     pub other_tri_fraction: f64,
     pub same_t: f64,
-    /// Relative errors of t and of u, v on the same triangle, scaled by the cosine.
+    /// Relative errors of t and of u, v on the same triangle, scaled by the cosine, of t
+    /// over max(t, `t_floor`) and of u, v over max(u or v, `uv_floor`).
     pub t_rel: f64,
+    pub t_floor: f32,
     pub uv_rel: f64,
+    pub uv_floor: f32,
     /// Any-hit answers that differ, where the closest hits already differed at an edge.
     pub any_edge_fraction: f64,
 }
@@ -105,8 +108,14 @@ pub fn check_traversal(
     let mut fail = Failures::new(name);
     let mut edge = Tally::new("hit/miss differs near an edge", bounds.edge_fraction);
     let mut other_tri = Tally::new("another triangle at the same t", bounds.other_tri_fraction);
-    let mut t_err = Worst::new("t (relative)", bounds.t_rel);
-    let mut uv_err = Worst::new("u, v (relative, abs 0.1)", bounds.uv_rel);
+    let mut t_err = Worst::new(
+        format!("t (relative, floor {})", bounds.t_floor),
+        bounds.t_rel,
+    );
+    let mut uv_err = Worst::new(
+        format!("u, v (relative, floor {})", bounds.uv_floor),
+        bounds.uv_rel,
+    );
     let mut any_edge = Tally::new("any-hit differs near an edge", bounds.any_edge_fraction);
     let mut hits = 0;
     let near_edge_of = |ray: &Ray, tri: u32| {
@@ -134,8 +143,9 @@ pub fn check_traversal(
             }
             Some(h) if gtri == h.tri => {
                 let cos = plane_hit_f64(&ray, &tris[h.tri as usize]).3.min(1.0);
-                t_err.add(rel(h.t, gt, 0.0) * cos, show);
-                uv_err.add(rel(h.u, gu, 0.1).max(rel(h.v, gv, 0.1)) * cos, show);
+                t_err.add(rel(h.t, gt, bounds.t_floor) * cos, show);
+                let f = bounds.uv_floor;
+                uv_err.add(rel(h.u, gu, f).max(rel(h.v, gv, f)) * cos, show);
             }
             Some(h) if gtri != u32::MAX => {
                 if rel(h.t, gt, 0.0) <= bounds.same_t {
