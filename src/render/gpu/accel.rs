@@ -7,10 +7,9 @@ use crate::geometry::TriVerts;
 use wgpu::util::DeviceExt;
 
 /// How the GPU renderer finds the triangles a ray hits.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Accel {
     /// Hardware ray queries where the adapter offers them, else the software BVH.
-    #[default]
     Auto,
     /// The software BVH walk of `shaders/traverse.wgsl`, on any adapter.
     Software,
