@@ -26,6 +26,9 @@ use std::time::Instant;
 pub struct Measure {
     pub scene: String,
     pub device: String,
+    /// How a GPU measure found hits ("hardware" ray queries or the "software" BVH); `None`
+    /// on the host and the CPU.
+    pub accel: Option<&'static str>,
     pub measure: &'static str,
     pub unit: &'static str,
     pub median: f64,
@@ -207,6 +210,7 @@ fn summarize(
     Measure {
         scene: scene.to_string(),
         device: device.to_string(),
+        accel: None,
         measure,
         unit,
         median: rates[rates.len() / 2],
@@ -379,8 +383,9 @@ pub fn bench_scene(
         push_path(&mut out, name, "cpu", rates, path_rays as f64 / samples);
     }
     if let Some(ctx) = gpu {
+        let first = out.len();
         let mut renderer = GpuRenderer::new(ctx, &rs)?;
-        let source = shader::bench_source();
+        let source = shader::bench_source(ctx.ray_query);
         for (measure, set, any) in sets {
             let entry = if any { "bench_any" } else { "bench_closest" };
             let kernel = Kernel::new(&renderer, &settings, &source, entry)?;
@@ -398,6 +403,14 @@ pub fn bench_scene(
             Ok(start.elapsed().as_secs_f64())
         })?;
         push_path(&mut out, name, "gpu", rates, path_rays as f64 / samples);
+        let accel = if ctx.ray_query {
+            "hardware"
+        } else {
+            "software"
+        };
+        for m in &mut out[first..] {
+            m.accel = Some(accel);
+        }
     }
     Ok(out)
 }
@@ -474,7 +487,7 @@ pub fn to_json(measures: &[Measure]) -> String {
         .iter()
         .map(|m| {
             format!(
-                "  {{\"scene\": \"{}\", \"device\": \"{}\", \"measure\": \"{}\", \"unit\": \"{}\", \"median\": {}, \"min\": {}, \"max\": {}, \"repeats\": {}}}",
+                "  {{\"scene\": \"{}\", \"device\": \"{}\", \"measure\": \"{}\", \"unit\": \"{}\", \"median\": {}, \"min\": {}, \"max\": {}, \"repeats\": {}, \"accel\": {}}}",
                 esc(&m.scene),
                 esc(&m.device),
                 m.measure,
@@ -482,7 +495,8 @@ pub fn to_json(measures: &[Measure]) -> String {
                 m.median,
                 m.min,
                 m.max,
-                m.repeats
+                m.repeats,
+                m.accel.map_or("null".to_string(), |a| format!("\"{a}\""))
             )
         })
         .collect();

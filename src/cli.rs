@@ -11,7 +11,7 @@ use meshtrace::denoise::Denoiser;
 use meshtrace::film::{Aov, Film, Format};
 use meshtrace::math::Aabb;
 use meshtrace::render::backend::{Backend, DeviceChoice};
-use meshtrace::render::gpu::{self, GpuError};
+use meshtrace::render::gpu::{self, Accel, GpuError};
 use meshtrace::render::{LIGHT_EMITTER, RenderJob, RenderScene, SKY_EMITTER};
 use meshtrace::scene::studio::{BareOptions, Up};
 use meshtrace::scene::{self, Scene, TextureFormat, builtin, load::validate_settings};
@@ -78,6 +78,10 @@ pub struct BenchArgs {
     /// GPU adapter: an index or a name substring from `meshtrace adapters`.
     #[arg(long)]
     pub adapter: Option<String>,
+    /// How the GPU finds ray hits: hardware ray queries where the adapter offers them
+    /// (auto), the software BVH, or hardware ray queries (an error without them).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub accel: AccelArg,
     /// Worker threads for the CPU path (default: one per core).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -99,6 +103,39 @@ pub struct BenchArgs {
     /// little-endian floats (see bench/README.md), for comparisons with other ray tracers.
     #[arg(long, value_name = "DIR")]
     pub rays_out: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum AccelArg {
+    /// Hardware ray queries where the adapter offers them, else the software BVH.
+    Auto,
+    /// The software BVH walk, on any adapter.
+    Software,
+    /// Hardware ray queries; an error on an adapter without them.
+    Hardware,
+}
+
+impl AccelArg {
+    fn accel(self) -> Accel {
+        match self {
+            Self::Auto => Accel::Auto,
+            Self::Software => Accel::Software,
+            Self::Hardware => Accel::Hardware,
+        }
+    }
+}
+
+/// The backend for `choice` with `--adapter` and `--accel`; `--accel hardware` with
+/// `--device cpu` is an error (the CPU has only the software BVH).
+fn choose_backend(
+    choice: DeviceChoice,
+    adapter: Option<&str>,
+    accel: AccelArg,
+) -> Result<(Backend, Option<String>)> {
+    if choice == DeviceChoice::Cpu && accel == AccelArg::Hardware {
+        bail!("--accel hardware needs the GPU renderer; drop --device cpu or use --accel auto");
+    }
+    Ok(Backend::choose(choice, adapter, accel.accel())?)
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -137,6 +174,10 @@ pub struct RenderArgs {
     /// GPU adapter: an index or a name substring from `meshtrace adapters` (or set WGPU_ADAPTER_NAME).
     #[arg(long)]
     pub adapter: Option<String>,
+    /// How the GPU finds ray hits: hardware ray queries where the adapter offers them
+    /// (auto), the software BVH, or hardware ray queries (an error without them).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub accel: AccelArg,
     /// Worker threads for the CPU path (default: one per core).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -322,7 +363,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         Some(Device::Cpu) => DeviceChoice::Cpu,
         Some(Device::Gpu) => DeviceChoice::Gpu,
     };
-    let (backend, notice) = Backend::choose(choice, args.adapter.as_deref())?;
+    let (backend, notice) = choose_backend(choice, args.adapter.as_deref(), args.accel)?;
     if let Some(notice) = notice {
         if !args.quiet {
             eprintln!("notice: {notice}");
@@ -496,12 +537,17 @@ pub fn adapters() -> Result<()> {
     }
     for a in list {
         out!(
-            "{}  {}  ({}, {}, {})",
+            "{}  {}  ({}, {}, {}; {})",
             a.index,
             a.name,
             a.backend,
             a.device_type,
-            a.driver
+            a.driver,
+            if a.ray_query {
+                "ray queries"
+            } else {
+                "no ray queries"
+            }
         );
     }
     Ok(())
@@ -533,7 +579,7 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
         Some(BenchDevice::Cpu) => DeviceChoice::Cpu,
         Some(BenchDevice::Gpu | BenchDevice::All) => DeviceChoice::Gpu,
     };
-    let (backend, notice) = Backend::choose(choice, args.adapter.as_deref())?;
+    let (backend, notice) = choose_backend(choice, args.adapter.as_deref(), args.accel)?;
     if let Some(notice) = notice {
         eprintln!("notice: {notice}; measuring the CPU only");
     }
@@ -552,8 +598,11 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
             "CPU: {} ({} threads){}",
             cpu_name(),
             rayon::current_num_threads(),
-            gpu.as_ref()
-                .map_or(String::new(), |g| format!("; GPU: {}", g.adapter.name))
+            gpu.as_ref().map_or(String::new(), |g| format!(
+                "; GPU: {} ({})",
+                g.adapter.name,
+                g.accel_name()
+            ))
         );
         out!(
             "{:<22} {:<6} {:<16} {:>12} {:>18}  unit",

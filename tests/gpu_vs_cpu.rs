@@ -3,7 +3,7 @@
 mod common;
 
 use common::scenes::{cornell, square};
-use common::stats::mean_and_sd;
+use common::stats::{fraction_close, mean_and_sd, pixel_channels as channels};
 use common::{cpu_render, gpu_render};
 use meshtrace::film::Film;
 use meshtrace::render::RenderJob;
@@ -15,24 +15,6 @@ fn bits(film: &Film) -> Vec<u32> {
     film.sum
         .iter()
         .flat_map(|p| p.to_array().map(f32::to_bits))
-        .collect()
-}
-
-/// The fraction of pixel channels of `gpu` within float rounding (1e-3 relative) of `cpu`.
-fn fraction_close(gpu: &[f64], cpu: &[f64]) -> f64 {
-    let close = gpu
-        .iter()
-        .zip(cpu)
-        .filter(|(g, c)| (*g - *c).abs() <= 1e-3 * c.abs() + 1e-5)
-        .count();
-    close as f64 / gpu.len() as f64
-}
-
-fn channels(film: &Film) -> Vec<f64> {
-    film.mean()
-        .iter()
-        .flat_map(|p| p.to_array())
-        .map(f64::from)
         .collect()
 }
 

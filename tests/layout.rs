@@ -20,17 +20,24 @@ fn parse_and_validate(what: &str, source: &str) -> naga::Module {
     module
 }
 
-/// Every module the host compiles, one per entry-point file; the test module first.
+/// Every module the host compiles, one per entry-point file and traversal (the software
+/// BVH, then hardware ray queries); the test module with the software BVH first.
 fn modules() -> Vec<(String, naga::Module)> {
-    type Source = fn() -> String;
+    type Source = fn(bool) -> String;
     let sources: [(&str, Source); 3] = [
         ("test_source", shader::test_source),
         ("render_source", shader::render_source),
         ("bench_source", shader::bench_source),
     ];
-    sources
+    [false, true]
         .iter()
-        .map(|&(name, source)| (name.to_string(), parse_and_validate(name, &source())))
+        .flat_map(|&ray_query| {
+            sources.iter().map(move |&(name, source)| {
+                let name = format!("{name}({ray_query})");
+                let module = parse_and_validate(&name, &source(ray_query));
+                (name, module)
+            })
+        })
         .collect()
 }
 

@@ -13,11 +13,10 @@ use common::materials::{ggx_tolerance, material_name, shape_wo};
 use common::rand::SplitMix;
 use common::scenes::{add_sphere, cornell, scene};
 use common::stats::{Failures, Tally, Worst, rel, rel3};
+use common::traversal::{Bounds, check_traversal, near_edge, plane_hit_f64, traversal_rays};
 use glam::{Vec2, Vec3};
-use meshtrace::bvh::{BuildParams, solid, traverse_any, traverse_closest};
-use meshtrace::geometry::{
-    ShearedRay, T_INF, TriVerts, intersect_aabb, intersect_triangle, safe_inverse,
-};
+use meshtrace::bvh::{BuildParams, solid};
+use meshtrace::geometry::{ShearedRay, T_INF, intersect_aabb, intersect_triangle, safe_inverse};
 use meshtrace::math::Ray;
 use meshtrace::render::bsdf::{bsdf_eval, bsdf_pdf, bsdf_sample, fresnel_dielectric};
 use meshtrace::render::camera::{CameraRays, generate_camera_ray, pixel_centre_ray};
@@ -132,29 +131,6 @@ fn mesh_scene() -> (RenderScene, RenderSettings) {
     assert!(rs.emitters.len() >= 50, "{} emitters", rs.emitters.len());
     assert!(rs.shading.iter().any(|s| s.flags & TRI_SMOOTH != 0));
     (rs, settings)
-}
-
-/// (t, u, v, cosine between ray and plane) of the ray's meeting with the triangle's plane,
-/// in f64: the reference that says whether a case is close to an edge or grazing.
-fn plane_hit_f64(ray: &Ray, tri: &TriVerts) -> (f64, f64, f64, f64) {
-    let [v0, v1, v2] = tri.corners().map(|c| c.as_dvec3());
-    let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
-    let e1 = v1 - v0;
-    let e2 = v2 - v0;
-    let p = d.cross(e2);
-    let det = e1.dot(p);
-    let s = o - v0;
-    let u = s.dot(p) / det;
-    let q = s.cross(e1);
-    let v = d.dot(q) / det;
-    let t = e2.dot(q) / det;
-    let cos = det.abs() / (e1.cross(e2).length() * d.length()).max(f64::MIN_POSITIVE);
-    (t, u, v, cos)
-}
-
-/// Whether barycentrics (u, v) lie within `eps` of the triangle's boundary.
-fn near_edge(u: f64, v: f64, eps: f64) -> bool {
-    u.abs() < eps || v.abs() < eps || (1.0 - u - v).abs() < eps || (1.0 - u).abs() < eps
 }
 
 // ---------------------------------------------------------------------------------------
@@ -400,37 +376,6 @@ fn intersect_aabb_matches() {
     );
 }
 
-/// Rays through the mesh scene: aimed at random triangles, random, from outside, and short.
-fn traversal_rays(rs: &RenderScene, r: &mut SplitMix, n: usize) -> Vec<Case> {
-    let root = rs.bvh.nodes[0].bounds();
-    let mut cases = Vec::with_capacity(n);
-    while cases.len() < n {
-        let kind = r.below(10);
-        let origin = if kind < 8 {
-            root.center() + root.extent() * r.vec3(-0.6, 0.6)
-        } else {
-            root.center() + r.unit_vector() * root.extent().length()
-        };
-        let dir = if kind < 5 {
-            let tri = rs.tris[r.below(rs.tris.len())].corners();
-            let bary = sample_uniform_triangle(Vec2::new(r.unit(), r.unit()));
-            let p = (1.0 - bary.x - bary.y) * tri[0] + bary.x * tri[1] + bary.y * tri[2];
-            (p - origin) * r.range(0.5, 2.0)
-        } else if kind < 8 {
-            r.unit_vector()
-        } else {
-            root.center() + root.extent() * r.vec3(-0.5, 0.5) - origin
-        };
-        let t_max = if r.chance(0.15) {
-            r.range(0.0, 3.0)
-        } else {
-            T_INF
-        };
-        cases.push([word(origin, 0), word(dir, b(t_max))]);
-    }
-    cases
-}
-
 /// The GPU twin of tests/properties.rs `no_ray_escapes_a_closed_mesh`: every ray of
 /// [`common::scenes::closed_mesh_probe`] hits the mesh (closest and any hit), however the driver
 /// contracts the arithmetic.
@@ -492,99 +437,29 @@ fn no_ray_escapes_a_closed_mesh() {
     );
 }
 
+/// The software walk's bounds: the WGSL twin runs the CPU's test, so only the rounding of
+/// a driver's contracted arithmetic separates them.
+const MIRROR: Bounds = Bounds {
+    edge: 1e-5,
+    edge_fraction: 1e-3,
+    other_tri_fraction: 2e-3,
+    same_t: 1e-5,
+    t_rel: 1e-5,
+    t_floor: 0.0,
+    uv_rel: 1e-5,
+    uv_floor: 0.1,
+    any_edge_fraction: 1e-3,
+};
+
 #[test]
 fn traverse_matches() {
     let Some(ctx) = common::gpu("traverse_matches") else {
         return;
     };
     let (rs, settings) = mesh_scene();
-    let (nodes, tris) = (&rs.bvh.nodes, &rs.tris);
     let mut r = SplitMix::new(4);
     let cases = traversal_rays(&rs, &mut r, 20_000);
-    let out = run(&ctx, &rs, &settings, "test_traverse", &cases);
-    let mut fail = Failures::new("test_traverse");
-    let mut edge = Tally::new("hit/miss differs within 1e-5 of an edge", 1e-3);
-    let mut other_tri = Tally::new("another triangle at the same t (1e-5)", 2e-3);
-    let mut t_err = Worst::new("t (relative)", 1e-5);
-    let mut uv_err = Worst::new("u, v (relative, abs 1e-6)", 1e-5);
-    let mut any_edge = Tally::new("any-hit differs within 1e-5 of an edge", 1e-3);
-    let mut hits = 0;
-    let near_edge_of = |ray: &Ray, tri: u32| {
-        let (_, u, v, cos) = plane_hit_f64(ray, &tris[tri as usize]);
-        near_edge(u, v, 1e-5 / cos.max(1e-6))
-    };
-    for (c, o) in cases.iter().zip(&out) {
-        let ray = Ray::new(v3(c[0]), v3(c[1]));
-        let t_max = f(c[1][3]);
-        let cpu = traverse_closest(nodes, tris, &ray, t_max, solid);
-        let cpu_any = traverse_any(nodes, tris, &ray, t_max, solid);
-        let (gtri, gt, gu, gv) = (o[0][0], f(o[0][1]), f(o[0][2]), f(o[0][3]));
-        let gpu_any = o[1][0] == 1;
-        let show = || {
-            format!(
-                "ray {ray:?} t_max {t_max}: CPU {cpu:?} any {cpu_any}; GPU tri {gtri} t {gt} u {gu} v {gv} any {gpu_any}"
-            )
-        };
-        hits += cpu.is_some() as usize;
-        match cpu {
-            None if gtri == u32::MAX => {
-                if gt != t_max {
-                    fail.add(|| format!("miss reports t {gt}: {}", show()));
-                }
-            }
-            Some(h) if gtri == h.tri => {
-                let cos = plane_hit_f64(&ray, &tris[h.tri as usize]).3.min(1.0);
-                t_err.add(rel(h.t, gt, 0.0) * cos, show);
-                uv_err.add(rel(h.u, gu, 0.1).max(rel(h.v, gv, 0.1)) * cos, show);
-            }
-            Some(h) if gtri != u32::MAX => {
-                if rel(h.t, gt, 0.0) <= 1e-5 {
-                    other_tri.add(show);
-                } else if near_edge_of(&ray, h.tri) || near_edge_of(&ray, gtri) {
-                    // One device slipped through an edge the other hit, reaching another
-                    // triangle behind it.
-                    edge.add(show);
-                } else {
-                    fail.add(show);
-                }
-            }
-            Some(h) => {
-                if near_edge_of(&ray, h.tri) {
-                    edge.add(show);
-                } else {
-                    fail.add(show);
-                }
-            }
-            None => {
-                if near_edge_of(&ray, gtri) {
-                    edge.add(show);
-                } else {
-                    fail.add(show);
-                }
-            }
-        }
-        if cpu_any != cpu.is_some() {
-            fail.add(|| format!("CPU any-hit disagrees with closest: {}", show()));
-        }
-        if gpu_any != cpu_any {
-            // Only where the closest hit already differed at an edge.
-            let edgy = cpu.is_some_and(|h| near_edge_of(&ray, h.tri))
-                || (gtri != u32::MAX && near_edge_of(&ray, gtri));
-            if edgy {
-                any_edge.add(show);
-            } else {
-                fail.add(|| format!("any-hit differs: {}", show()));
-            }
-        }
-    }
-    eprintln!("test_traverse: {} cases, {hits} CPU hits", cases.len());
-    fail.check(cases.len());
-    edge.check("test_traverse", cases.len());
-    other_tri.check("test_traverse", cases.len());
-    any_edge.check("test_traverse", cases.len());
-    t_err.check("test_traverse");
-    uv_err.check("test_traverse");
-    assert!(hits > cases.len() / 3, "{hits}");
+    check_traversal("test_traverse", &ctx, &rs, &settings, &cases, solid, MIRROR);
 }
 
 #[test]

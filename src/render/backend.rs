@@ -1,10 +1,11 @@
 //! Which renderer runs a render: the one rule that `render`, `bench` and the tests share.
 //! A hardware GPU renders by default; a software Vulkan adapter (lavapipe) gives way to
 //! the CPU renderer, which is faster on the same cores and makes the same image, unless the
-//! GPU is asked for (`--device gpu`, or an adapter named by `--adapter` or
-//! `WGPU_ADAPTER_NAME`); with no adapter at all the CPU renders.
+//! GPU is asked for (`--device gpu`, `--accel hardware`, or an adapter named by `--adapter`
+//! or `WGPU_ADAPTER_NAME`); with no adapter at all the CPU renders. On the GPU, `--accel`
+//! chooses between hardware ray queries and the software BVH ([`Accel`]).
 
-use super::gpu::{self, GpuContext, GpuError, GpuRenderer};
+use super::gpu::{self, Accel, GpuContext, GpuError, GpuRenderer};
 use super::{RenderJob, RenderScene, cpu};
 use crate::film::Film;
 
@@ -25,27 +26,29 @@ pub enum Backend {
 }
 
 impl Backend {
-    /// Applies the rule to `choice` and `adapter` (an index or a name substring). Returns
-    /// the backend and, when the CPU was chosen for want of a usable GPU, a notice saying
-    /// why.
+    /// Applies the rule to `choice` and `adapter` (an index or a name substring), opening
+    /// a GPU with `accel`. Returns the backend and, when the CPU was chosen for want of a
+    /// usable GPU, a notice saying why.
     pub fn choose(
         choice: DeviceChoice,
         adapter: Option<&str>,
+        accel: Accel,
     ) -> Result<(Self, Option<String>), GpuError> {
+        let open = || Ok(Self::Gpu(Box::new(GpuContext::new(adapter, accel)?)));
         match choice {
             DeviceChoice::Cpu => Ok((Self::Cpu, None)),
-            DeviceChoice::Gpu => Ok((Self::Gpu(Box::new(GpuContext::new(adapter)?)), None)),
+            DeviceChoice::Gpu => Ok((open()?, None)),
             DeviceChoice::Auto => match gpu::choose_adapter(adapter) {
                 // Software adapters are ranked last, so this one is all there is; no device
-                // is opened for it.
-                Ok((summary, false)) if summary.software => Ok((
+                // is opened for it unless hardware ray queries are asked for.
+                Ok((summary, false)) if summary.software && accel != Accel::Hardware => Ok((
                     Self::Cpu,
                     Some(format!(
                         "the Vulkan adapter, {}, is a software driver; rendering with the faster CPU renderer (--device gpu uses the adapter anyway)",
                         summary.name
                     )),
                 )),
-                Ok(_) => Ok((Self::Gpu(Box::new(GpuContext::new(adapter)?)), None)),
+                Ok(_) => Ok((open()?, None)),
                 Err(GpuError::NoAdapter) => Ok((
                     Self::Cpu,
                     Some(
@@ -58,11 +61,11 @@ impl Backend {
         }
     }
 
-    /// The device's name for messages: the adapter's, or "the CPU".
+    /// The device's name for messages: the adapter's with how it finds hits, or "the CPU".
     pub fn name(&self) -> String {
         match self {
             Self::Cpu => "the CPU".into(),
-            Self::Gpu(ctx) => ctx.adapter.name.clone(),
+            Self::Gpu(ctx) => format!("{} ({})", ctx.adapter.name, ctx.accel_name()),
         }
     }
 

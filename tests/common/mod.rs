@@ -9,6 +9,7 @@
 //! - [`materials`]: BSDF test helpers (material names, directions, GGX conditioning).
 //! - [`chi2`]: the chi-square goodness-of-fit test of sampled directions.
 //! - [`kernels`]: running the WGSL test kernels (case packing, bits, BSDF cases).
+//! - [`traversal`]: the GPU's traversal against the CPU's over random rays, with bounds.
 //!
 //! Every test file that says `mod common;` compiles all of it, hence `dead_code` is allowed.
 #![allow(dead_code)]
@@ -22,23 +23,40 @@ pub mod rand;
 pub mod scenes;
 pub mod stats;
 pub mod studio;
+pub mod traversal;
 
 use meshtrace::film::Film;
-use meshtrace::render::gpu::{GpuContext, GpuError, GpuRenderer};
+use meshtrace::render::gpu::{Accel, GpuContext, GpuError, GpuRenderer};
 use meshtrace::render::{RenderJob, RenderScene, cpu};
 
-/// The test's GPU, or `None` (after saying "skipped: no adapter") where there is none.
-/// With `MESHTRACE_REQUIRE_GPU=1`, as CI sets it, a missing adapter fails the test instead,
-/// so a broken driver set-up can never pass silently.
+/// The test's GPU, tracing with the software BVH (the WGSL twin of the CPU's walk), or
+/// `None` (after saying "skipped: no adapter") where there is none. With
+/// `MESHTRACE_REQUIRE_GPU=1`, as CI sets it, a missing adapter fails the test instead, so a
+/// broken driver set-up can never pass silently.
 pub fn gpu(test: &str) -> Option<GpuContext> {
     let required = std::env::var("MESHTRACE_REQUIRE_GPU").is_ok_and(|v| v == "1");
-    match GpuContext::new(None) {
+    match GpuContext::new(None, Accel::Software) {
         Ok(ctx) => Some(ctx),
         Err(GpuError::NoAdapter) if !required => {
             eprintln!("{test}: skipped: no adapter");
             None
         }
         Err(e) => panic!("{test}: MESHTRACE_REQUIRE_GPU=1 but the GPU is unusable: {e}"),
+    }
+}
+
+/// The test's GPU tracing with hardware ray queries, or `None` (after saying why) where
+/// there is no adapter or it offers no ray queries. With `MESHTRACE_REQUIRE_RAY_QUERY=1`,
+/// as CI sets it for its Mesa 25 lavapipe step, either fails the test instead.
+pub fn ray_query_gpu(test: &str) -> Option<GpuContext> {
+    let required = std::env::var("MESHTRACE_REQUIRE_RAY_QUERY").is_ok_and(|v| v == "1");
+    match GpuContext::new(None, Accel::Hardware) {
+        Ok(ctx) => Some(ctx),
+        Err(e @ (GpuError::NoAdapter | GpuError::NoRayQuery(_))) if !required => {
+            eprintln!("{test}: skipped: {e}");
+            None
+        }
+        Err(e) => panic!("{test}: MESHTRACE_REQUIRE_RAY_QUERY=1 but ray queries are unusable: {e}"),
     }
 }
 

@@ -3,6 +3,7 @@
 //! ([`Tally`]) and collect hard failures ([`Failures`]), each printing what it saw.
 
 use glam::Vec3;
+use meshtrace::film::Film;
 
 /// Mean and unbiased variance of `values`.
 fn mean_and_variance<T: Copy + Into<f64>>(values: &[T]) -> (f64, f64) {
@@ -205,4 +206,23 @@ impl Failures {
             self.list.join("\n")
         );
     }
+}
+
+/// The fraction of pixel channels of `gpu` within float rounding (1e-3 relative) of `cpu`.
+pub fn fraction_close(gpu: &[f64], cpu: &[f64]) -> f64 {
+    let close = gpu
+        .iter()
+        .zip(cpu)
+        .filter(|(g, c)| (*g - *c).abs() <= 1e-3 * c.abs() + 1e-5)
+        .count();
+    close as f64 / gpu.len() as f64
+}
+
+/// A film's mean pixel values, channel by channel.
+pub fn pixel_channels(film: &Film) -> Vec<f64> {
+    film.mean()
+        .iter()
+        .flat_map(|p| p.to_array())
+        .map(f64::from)
+        .collect()
 }

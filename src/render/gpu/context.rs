@@ -1,7 +1,7 @@
 //! Adapters and devices: listing what Vulkan offers, choosing one, and opening it with its
 //! real limits (never wgpu's conservative defaults, which would cap storage bindings).
 
-use super::GpuError;
+use super::{Accel, GpuError};
 use std::sync::{Arc, Mutex};
 
 /// One adapter as `meshtrace adapters` lists it.
@@ -15,6 +15,8 @@ pub struct AdapterSummary {
     /// A driver that runs on the CPU, such as lavapipe: the GPU renderer works there, but
     /// the CPU renderer is faster on the same cores.
     pub software: bool,
+    /// Whether the adapter offers hardware ray queries (wgpu's `EXPERIMENTAL_RAY_QUERY`).
+    pub ray_query: bool,
 }
 
 fn instance() -> wgpu::Instance {
@@ -42,6 +44,9 @@ fn summary(index: usize, a: &wgpu::Adapter) -> AdapterSummary {
         device_type: format!("{:?}", info.device_type),
         driver,
         software: info.device_type == wgpu::DeviceType::Cpu,
+        ray_query: a
+            .features()
+            .contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY),
     }
 }
 
@@ -62,23 +67,46 @@ pub struct GpuContext {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub limits: wgpu::Limits,
+    /// Whether this device traces with hardware ray queries (`shaders/ray_query.wgsl`)
+    /// rather than the software BVH (`shaders/traverse.wgsl`).
+    pub ray_query: bool,
     fault: Arc<Mutex<Option<String>>>,
 }
 
 impl GpuContext {
     /// Opens the adapter named by `spec` (an index or a case-insensitive name substring),
     /// else by `WGPU_ADAPTER_NAME`, else the first of the best kind: discrete, integrated,
-    /// virtual, other, and software last.
-    pub fn new(spec: Option<&str>) -> Result<Self, GpuError> {
+    /// virtual, other, and software last. `accel` says whether it traces with hardware ray
+    /// queries ([`Accel::resolve`]).
+    pub fn new(spec: Option<&str>, accel: Accel) -> Result<Self, GpuError> {
         let all = adapters(&instance());
         let (index, _) = choose(&all, spec)?;
         let adapter = &all[index];
+        let summary = summary(index, adapter);
+        let ray_query = accel.resolve(&summary.name, summary.ray_query)?;
+        // The adapter's own limits, acceleration-structure ones included (wgpu reports
+        // them whether or not the feature is asked for).
         let limits = adapter.limits();
+        let (required_features, experimental_features) = if ray_query {
+            // SAFETY: wgpu asks for this token before it enables any EXPERIMENTAL_ feature,
+            // as an acknowledgement that their implementation may still have bugs. meshtrace
+            // uses only what `shaders/ray_query.wgsl` and `SceneAccel` need (one BLAS in one
+            // TLAS, queries from a compute shader), which tests/ray_query.rs checks against
+            // the software BVH.
+            (wgpu::Features::EXPERIMENTAL_RAY_QUERY, unsafe {
+                wgpu::ExperimentalFeatures::enabled()
+            })
+        } else {
+            (
+                wgpu::Features::empty(),
+                wgpu::ExperimentalFeatures::disabled(),
+            )
+        };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("meshtrace"),
-            required_features: wgpu::Features::empty(),
+            required_features,
             required_limits: limits.clone(),
-            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            experimental_features,
             memory_hints: wgpu::MemoryHints::Performance,
             trace: wgpu::Trace::Off,
         }))
@@ -97,12 +125,22 @@ impl GpuContext {
             }
         });
         Ok(Self {
-            adapter: summary(index, adapter),
+            adapter: summary,
             device,
             queue,
             limits,
+            ray_query,
             fault,
         })
+    }
+
+    /// How this device finds hits, for messages: "hardware ray queries" or "software BVH".
+    pub fn accel_name(&self) -> &'static str {
+        if self.ray_query {
+            "hardware ray queries"
+        } else {
+            "software BVH"
+        }
     }
 
     /// The first error the device reported since it was opened, if any.

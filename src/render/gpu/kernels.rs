@@ -98,6 +98,11 @@ pub fn run_test_kernel(
 ) -> Result<Vec<[u32; 4]>, GpuError> {
     assert!(input.len() % 2 == 0, "two input words per case");
     let renderer = GpuRenderer::new(ctx, scene)?;
-    let kernel = Kernel::new(&renderer, settings, &shader::test_source(), entry)?;
+    let kernel = Kernel::new(
+        &renderer,
+        settings,
+        &shader::test_source(ctx.ray_query),
+        entry,
+    )?;
     Ok(kernel.run(input, input.len() / 2, input.len())?.0)
 }

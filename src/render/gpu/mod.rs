@@ -3,11 +3,13 @@
 //!
 //! The host uploads the tables of [`RenderScene`](crate::render::RenderScene) unchanged,
 //! so the GPU traces exactly the paths the CPU renderer traces for the same
-//! (pixel, sample, seed). `context` opens devices, `params` holds the uniform block,
+//! (pixel, sample, seed). `context` opens devices, `accel` builds the acceleration structure
+//! of hardware ray queries (`--accel`), `params` holds the uniform block,
 //! `layout` describes the host-shared structs, `shader` generates and joins the WGSL, `tables` uploads the scene, `pipelines` compiles entry
 //! points, `session` is the renderer ([`GpuRenderer`]) and `kernels` runs the shader
 //! unit-test and ray-throughput entry points against it.
 
+mod accel;
 mod context;
 pub mod kernels;
 pub mod layout;
@@ -17,6 +19,7 @@ mod session;
 pub mod shader;
 pub mod tables;
 
+pub use accel::Accel;
 pub use context::{AdapterSummary, GpuContext, choose_adapter, list_adapters};
 pub use session::{GpuRenderer, PATHS_PER_DISPATCH};
 pub use tables::TABLE_WIDTH;
@@ -42,6 +45,10 @@ pub enum GpuError {
         /// The adapter limit that sets `limit`, as wgpu names it, with its value.
         rule: String,
     },
+    #[error(
+        "--accel hardware: the adapter {0} offers no hardware ray queries; use --accel auto or --accel software"
+    )]
+    NoRayQuery(String),
     #[error("GPU error: {0}")]
     Fault(String),
 }

@@ -169,7 +169,7 @@ impl GpuRenderer {
             None => Pipeline::new(
                 &self.ctx,
                 &self.tables.layout,
-                &shader::render_source(),
+                &shader::render_source(self.ctx.ray_query),
                 "render",
                 0,
                 2,

@@ -2,11 +2,13 @@
 //! generated from the Rust side (the shared constants, the table bindings and loaders),
 //! then the library files of `shaders/`, then one entry-point file: `render.wgsl` (the
 //! render kernel), `tests.wgsl` (the shader unit-test kernels) or `bench.wgsl` (the
-//! ray-throughput kernels).
+//! ray-throughput kernels). A device that traces with hardware ray queries gets
+//! `ray_query.wgsl` in place of `traverse.wgsl` (the same functions over the scene's TLAS),
+//! the `enable wgpu_ray_query;` directive and the TLAS binding.
 
 use super::layout::StructLayout;
 use super::params::{Params, SKY_CONSTANT, SKY_ENVIRONMENT, SKY_GRADIENT};
-use super::tables::{Element, TABLE_WIDTH, TABLES, wgsl_tables};
+use super::tables::{Element, TABLE_WIDTH, TABLES, wgsl_tables, wgsl_tlas};
 use crate::bvh::STACK_SIZE;
 use crate::film::{Aov, NO_ID};
 use crate::geometry::{GAMMA_2, GAMMA_3, SLAB_SLACK, T_INF};
@@ -125,7 +127,8 @@ macro_rules! shader {
     };
 }
 
-/// The shared library, in dependency order (struct types and bindings first).
+/// The shared library, in dependency order (struct types and bindings first): this part,
+/// then the traversal ([`TRAVERSE`] or [`RAY_QUERY`]), then [`SHADING`].
 const LIBRARY: &[Source] = &[
     shader!("types.wgsl"),
     shader!("math.wgsl"),
@@ -134,7 +137,10 @@ const LIBRARY: &[Source] = &[
     shader!("rng.wgsl"),
     shader!("sampling.wgsl"),
     shader!("geometry.wgsl"),
-    shader!("traverse.wgsl"),
+];
+
+/// The rest of the library, which calls the traversal.
+const SHADING: &[Source] = &[
     shader!("bsdf.wgsl"),
     shader!("camera.wgsl"),
     shader!("texture.wgsl"),
@@ -143,32 +149,53 @@ const LIBRARY: &[Source] = &[
     shader!("integrator.wgsl"),
 ];
 
+/// The software BVH walk.
+const TRAVERSE: Source = shader!("traverse.wgsl");
+/// Its replacement on a device that traces with hardware ray queries.
+const RAY_QUERY: Source = shader!("ray_query.wgsl");
+
 const RENDER: Source = shader!("render.wgsl");
 const TESTS: Source = shader!("tests.wgsl");
 const BENCH: Source = shader!("bench.wgsl");
 
-fn join(entry_points: Source) -> String {
-    let mut src = String::from("// ---- generated: src/render/gpu/shader.rs `wgsl_constants`\n");
+fn join(entry_points: Source, ray_query: bool) -> String {
+    let mut src = String::new();
+    if ray_query {
+        src += "enable wgpu_ray_query;\n\n";
+    }
+    src += "// ---- generated: src/render/gpu/shader.rs `wgsl_constants`\n";
     src += &wgsl_constants();
     src += "\n// ---- generated: src/render/gpu/tables.rs `wgsl_tables`\n";
     src += &wgsl_tables();
-    for (name, text) in LIBRARY.iter().chain([&entry_points]) {
+    if ray_query {
+        src += "\n// ---- generated: src/render/gpu/tables.rs `wgsl_tlas`\n";
+        src += &wgsl_tlas();
+    }
+    let traversal = if ray_query { RAY_QUERY } else { TRAVERSE };
+    for (name, text) in LIBRARY
+        .iter()
+        .chain([&traversal])
+        .chain(SHADING)
+        .chain([&entry_points])
+    {
         src.push_str(&format!("\n// ---- {name}\n{text}"));
     }
     src
 }
 
-/// The module with the `render` entry point.
-pub fn render_source() -> String {
-    join(RENDER)
+/// The module with the `render` entry point; with `ray_query`, traversing by hardware ray
+/// queries.
+pub fn render_source(ray_query: bool) -> String {
+    join(RENDER, ray_query)
 }
 
-/// The module with the `test_*` entry points.
-pub fn test_source() -> String {
-    join(TESTS)
+/// The module with the `test_*` entry points; with `ray_query`, as [`render_source`].
+pub fn test_source(ray_query: bool) -> String {
+    join(TESTS, ray_query)
 }
 
-/// The module with the `bench_*` ray-throughput entry points.
-pub fn bench_source() -> String {
-    join(BENCH)
+/// The module with the `bench_*` ray-throughput entry points; with `ray_query`, as
+/// [`render_source`].
+pub fn bench_source(ray_query: bool) -> String {
+    join(BENCH, ray_query)
 }

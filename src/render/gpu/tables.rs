@@ -4,6 +4,7 @@
 //! gather on every device, and a texture of 4096 × 16384 texels holds 1 GiB, far beyond
 //! some drivers' limits on a storage binding.
 
+use super::accel::SceneAccel;
 use super::layout::{Member, StructLayout, struct_layout};
 use super::params::Params;
 use super::{GpuContext, GpuError};
@@ -205,6 +206,14 @@ pub const TABLES: &[Table] = &[
     },
 ];
 
+/// The binding of the TLAS of hardware ray queries in the scene group, after the tables.
+pub const TLAS_BINDING: u32 = TABLES.len() as u32 + 1;
+
+/// The WGSL declaration of the TLAS (`scene_tlas`, read by `shaders/ray_query.wgsl`).
+pub fn wgsl_tlas() -> String {
+    format!("@group(0) @binding({TLAS_BINDING}) var scene_tlas: acceleration_structure;\n")
+}
+
 /// The WGSL bindings of the tables and their loaders: `fn load_node(i: u32) -> BvhNode`
 /// reads element `i` of table `nodes_tex` through `table_texel` (`shaders/bindings.wgsl`),
 /// member by member from the texel and component its Rust offset names.
@@ -283,20 +292,28 @@ fn struct_loader(t: &Table, layout: &StructLayout) -> String {
     )
 }
 
-/// A scene uploaded to one device: its table textures and the layout of the bind group
-/// (group 0) that holds them with a parameter block.
+/// A scene uploaded to one device: its table textures, on a device that traces with ray
+/// queries its acceleration structure, and the layout of the bind group (group 0) that
+/// holds them with a parameter block.
 pub struct SceneTables {
     views: Vec<wgpu::TextureView>,
+    accel: Option<SceneAccel>,
     pub layout: wgpu::BindGroupLayout,
 }
 
 impl SceneTables {
-    /// Uploads every table, checking each against the adapter's limits.
+    /// Uploads every table, checking each against the adapter's limits, and builds the
+    /// acceleration structure where `ctx` traces with ray queries.
     pub fn new(ctx: &GpuContext, scene: &RenderScene) -> Result<Self, GpuError> {
         let views = TABLES
             .iter()
             .map(|t| table_texture(ctx, t.what, (t.bytes)(scene)))
             .collect::<Result<Vec<_>, _>>()?;
+        let accel = if ctx.ray_query {
+            Some(SceneAccel::new(ctx, &scene.tris)?)
+        } else {
+            None
+        };
         let mut entries = vec![wgpu::BindGroupLayoutEntry {
             binding: 0,
             visibility: wgpu::ShaderStages::COMPUTE,
@@ -319,6 +336,16 @@ impl SceneTables {
                 count: None,
             }),
         );
+        if accel.is_some() {
+            entries.push(wgpu::BindGroupLayoutEntry {
+                binding: TLAS_BINDING,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::AccelerationStructure {
+                    vertex_return: false,
+                },
+                count: None,
+            });
+        }
         let layout = ctx
             .device
             .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -326,10 +353,14 @@ impl SceneTables {
                 entries: &entries,
             });
         ctx.check()?;
-        Ok(Self { views, layout })
+        Ok(Self {
+            views,
+            accel,
+            layout,
+        })
     }
 
-    /// The scene bind group: `params` (one [`Params`] block) and the tables.
+    /// The scene bind group: `params` (one [`Params`] block), the tables and the TLAS.
     pub fn bind_group(&self, ctx: &GpuContext, params: &wgpu::Buffer) -> wgpu::BindGroup {
         let mut entries = vec![wgpu::BindGroupEntry {
             binding: 0,
@@ -344,6 +375,12 @@ impl SceneTables {
                     resource: wgpu::BindingResource::TextureView(v),
                 }),
         );
+        if let Some(accel) = &self.accel {
+            entries.push(wgpu::BindGroupEntry {
+                binding: TLAS_BINDING,
+                resource: wgpu::BindingResource::AccelerationStructure(&accel.tlas),
+            });
+        }
         ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("scene"),
             layout: &self.layout,
