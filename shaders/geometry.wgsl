@@ -86,19 +86,21 @@ fn intersect_triangle(ray: ShearedRay, tri: TriVerts, t_max: f32) -> TriHit {
         return miss;
     }
     let det = e0 + e1 + e2;
-    // Below the rounding bound the signs are noise: the ray runs in the plane of a
-    // (nearly) degenerate triangle.
-    if abs(det) <= edge_rounding(ray, tri, p0, p1, p2) {
-        return miss;
-    }
     let sz = ray.shear.z;
     let t_scaled = e0 * (sz * p0.z) + e1 * (sz * p1.z) + e2 * (sz * p2.z);
     let inv_det = 1.0 / det;
     let t = t_scaled * inv_det;
-    if t > 0.0 && t < t_max {
-        return TriHit(t, e1 * inv_det, e2 * inv_det, true);
+    // Out of range first (most candidates lie behind the ray or beyond the nearest hit):
+    // the rounding bound below is dearer, and either test alone rejects.
+    if !(t > 0.0 && t < t_max) {
+        return miss;
     }
-    return miss;
+    // Below the rounding bound the signs are noise: the ray runs in the plane of a
+    // (nearly) degenerate triangle. (A zero `det` always ends here.)
+    if abs(det) <= edge_rounding(ray, tri, p0, p1, p2) {
+        return miss;
+    }
+    return TriHit(t, e1 * inv_det, e2 * inv_det, true);
 }
 
 // Conservative entry distance into the box, or T_INF. mirror: src/geometry.rs `intersect_aabb`

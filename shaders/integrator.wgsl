@@ -124,7 +124,7 @@ fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
 
     // BSDF sampling.
     let bs = bsdf_sample(mat, wo, rng_1d(rng, (*st).depth, DIM_BSDF_LOBE),
-        vec2<f32>(rng_1d(rng, (*st).depth, DIM_BSDF_U), rng_1d(rng, (*st).depth, DIM_BSDF_V)));
+        rng_2d(rng, (*st).depth, DIM_BSDF_U));
     if !bs.valid {
         return true;
     }

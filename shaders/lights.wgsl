@@ -43,7 +43,7 @@ fn sample_light(p: vec3<f32>, ng: vec3<f32>, rng: Rng, depth: u32) -> LightSampl
     var none = LightSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, false, false);
     let k = sample_cdf(rng_1d(rng, depth, DIM_LIGHT_PICK));
     let light = load_emitter(k);
-    let u = vec2<f32>(rng_1d(rng, depth, DIM_LIGHT_U), rng_1d(rng, depth, DIM_LIGHT_V));
+    let u = rng_2d(rng, depth, DIM_LIGHT_U);
     if light == SKY_EMITTER {
         var wi = sample_uniform_sphere(u);
         var pdf = UNIFORM_SPHERE_PDF;

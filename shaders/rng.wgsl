@@ -36,14 +36,26 @@ fn sobol(index: u32, dim: u32) -> u32 {
 }
 
 // mirror: src/render/rng.rs `owen_scramble`
-fn owen_scramble(x_in: u32, seed: u32) -> u32 {
-    var x = reverseBits(x_in);
-    x += seed;
+fn owen_scramble(x: u32, seed: u32) -> u32 {
+    return reverseBits(owen_hash(reverseBits(x), seed));
+}
+
+// mirror: src/render/rng.rs `sobol_reversed`
+fn sobol_reversed(index: u32, dim: u32) -> u32 {
+    if dim == 0u {
+        return index;
+    }
+    return reverseBits(sobol(index, dim));
+}
+
+// mirror: src/render/rng.rs `owen_hash`
+fn owen_hash(x_in: u32, seed: u32) -> u32 {
+    var x = x_in + seed;
     x ^= x * 0x6c50b47cu;
     x ^= x * 0xb82f1e52u;
     x ^= x * 0xc7afe638u;
     x ^= x * 0x8d22f6e6u;
-    return reverseBits(x);
+    return x;
 }
 
 // mirror: src/render/rng.rs `dim_pair`
@@ -71,7 +83,16 @@ fn rng_u32(rng: Rng, bounce: u32, dim: u32) -> u32 {
     let pc = dim_pair(dim);
     let seeds = pcg4d(vec4<u32>(rng.pixel, bounce * DIMS_PER_BOUNCE + pc.x, rng.seed, 0x5eedu));
     let index = owen_scramble(rng.sample, seeds.x);
-    return owen_scramble(sobol(index, pc.y), seeds[1u + pc.y]);
+    return reverseBits(owen_hash(sobol_reversed(index, pc.y), seeds[1u + pc.y]));
+}
+
+// mirror: src/render/rng.rs `Rng::rng_2d`
+fn rng_2d(rng: Rng, bounce: u32, dim: u32) -> vec2<f32> {
+    let seeds = pcg4d(vec4<u32>(rng.pixel, bounce * DIMS_PER_BOUNCE + dim, rng.seed, 0x5eedu));
+    let index = owen_scramble(rng.sample, seeds.x);
+    return vec2<f32>(
+        u32_to_unit(reverseBits(owen_hash(index, seeds.y))),
+        u32_to_unit(reverseBits(owen_hash(sobol_reversed(index, 1u), seeds.z))));
 }
 
 // mirror: src/render/rng.rs `Rng::rng_1d`

@@ -35,7 +35,8 @@ fn case_ray(i: u32) -> Ray {
     return Ray(f4(case_in(i, 0u)).xyz, f4(case_in(i, 1u)).xyz);
 }
 
-// in: (pixel, sample, seed, bounce * 16 + dim) | out: (rng_u32, rng_1d bits, pcg4d.yz)
+// in: (pixel, sample, seed, bounce * 16 + dim) | out: (rng_u32, rng_1d bits, rng_2d bits
+// of the pair of dim), pcg4d
 @compute @workgroup_size(64)
 fn test_rng(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = case_index(gid);
@@ -45,7 +46,8 @@ fn test_rng(@builtin(global_invocation_id) gid: vec3<u32>) {
     let bounce = k.w / DIMS_PER_BOUNCE;
     let dim = k.w % DIMS_PER_BOUNCE;
     let h = pcg4d(vec4<u32>(k.x, k.y, k.w, k.z));
-    case_out(i, vec4<u32>(rng_u32(rng, bounce, dim), bitcast<u32>(rng_1d(rng, bounce, dim)), h.y, h.z), h);
+    let pair = bitcast<vec2<u32>>(rng_2d(rng, bounce, dim_pair(dim).x));
+    case_out(i, vec4<u32>(rng_u32(rng, bounce, dim), bitcast<u32>(rng_1d(rng, bounce, dim)), pair), h);
 }
 
 // in: (origin, tri index), (dir, t_max) | out: (hit, t, u, v)

@@ -143,15 +143,21 @@ pub fn intersect_triangle(ray: &ShearedRay, tri: &TriVerts, t_max: f32) -> Optio
         return None;
     }
     let det = e0 + e1 + e2;
-    if det.abs() <= edge_rounding(ray, tri, [p0, p1, p2]) {
-        // The signs are rounding noise: the ray runs in the plane of a (nearly)
-        // degenerate triangle, where a "hit" could lie anywhere along it.
-        return None;
-    }
     let t_scaled = e0 * (s.z * p0.z) + e1 * (s.z * p1.z) + e2 * (s.z * p2.z);
     let inv_det = 1.0 / det;
     let t = t_scaled * inv_det;
-    (t > 0.0 && t < t_max).then_some(TriHit {
+    // Out of range first (most candidates lie behind the ray or beyond the nearest hit):
+    // the rounding bound below is dearer, and either test alone rejects.
+    if !(t > 0.0 && t < t_max) {
+        return None;
+    }
+    if det.abs() <= edge_rounding(ray, tri, [p0, p1, p2]) {
+        // The signs are rounding noise: the ray runs in the plane of a (nearly)
+        // degenerate triangle, where a "hit" could lie anywhere along it. (A zero `det`
+        // always ends here.)
+        return None;
+    }
+    Some(TriHit {
         t,
         u: e1 * inv_det,
         v: e2 * inv_det,
@@ -172,7 +178,8 @@ pub const GAMMA_3: f32 = gamma(3.0);
 
 /// A bound on the rounding of the sum of [`intersect_triangle`]'s edge functions: that of
 /// the sheared corners (`γ(3)` of their unsheared terms) carried through the products,
-/// plus that of the products themselves. Only called for hits, so its cost is rarely paid.
+/// plus that of the products themselves. Only called for hits within the ray's extent, so
+/// its cost is rarely paid.
 /// mirror: shaders/geometry.wgsl `edge_rounding`
 fn edge_rounding(ray: &ShearedRay, tri: &TriVerts, p: [Vec3; 3]) -> f32 {
     let s = ray.shear;

@@ -23,7 +23,7 @@ use meshtrace::render::camera::{CameraRays, generate_camera_ray, pixel_centre_ra
 use meshtrace::render::environment::{env_pdf, env_radiance, sample_env};
 use meshtrace::render::gpu::GpuContext;
 use meshtrace::render::integrator::{first_hit, trace_path};
-use meshtrace::render::rng::{DIMS_PER_BOUNCE, Rng, pcg4d};
+use meshtrace::render::rng::{DIMS_PER_BOUNCE, Rng, dim_pair, pcg4d};
 use meshtrace::render::sampling::{
     cosine_hemisphere_pdf, power_heuristic, sample_cdf, sample_concentric_disk,
     sample_cosine_hemisphere, sample_uniform_triangle,
@@ -176,12 +176,13 @@ fn rng_matches_bit_for_bit() {
         let rng = Rng::new(k[0], k[1], k[2]);
         let (bounce, dim) = (k[3] / DIMS_PER_BOUNCE, k[3] % DIMS_PER_BOUNCE);
         let h = pcg4d([k[0], k[1], k[3], k[2]]);
+        let pair = rng.rng_2d(bounce, dim_pair(dim).0);
         let want = [
             [
                 rng.rng_u32(bounce, dim),
                 rng.rng_1d(bounce, dim).to_bits(),
-                h[1],
-                h[2],
+                pair.x.to_bits(),
+                pair.y.to_bits(),
             ],
             h,
         ];

@@ -47,20 +47,14 @@ impl CameraRays {
 /// the pixel) and, for a thin lens, a uniform point on the aperture.
 /// mirror: shaders/camera.wgsl `generate_camera_ray`
 pub fn generate_camera_ray(cam: &CameraRays, px: u32, py: u32, rng: &Rng) -> Ray {
-    let jx = rng.rng_1d(0, rng::DIM_PIXEL_X);
-    let jy = rng.rng_1d(0, rng::DIM_PIXEL_Y);
+    let Vec2 { x: jx, y: jy } = rng.rng_2d(0, rng::DIM_PIXEL_X);
     let sx = (2.0 * (px as f32 + jx) / cam.width as f32 - 1.0) * cam.tan_half_vfov * cam.aspect;
     let sy = (1.0 - 2.0 * (py as f32 + jy) / cam.height as f32) * cam.tan_half_vfov;
     let dir = cam.forward + sx * cam.right + sy * cam.up;
     if cam.aperture <= 0.0 {
         return Ray::new(cam.position, dir.normalize());
     }
-    let lens = 0.5
-        * cam.aperture
-        * sample_concentric_disk(Vec2::new(
-            rng.rng_1d(0, rng::DIM_LENS_U),
-            rng.rng_1d(0, rng::DIM_LENS_V),
-        ));
+    let lens = 0.5 * cam.aperture * sample_concentric_disk(rng.rng_2d(0, rng::DIM_LENS_U));
     // `dir` has unit length along `forward`, so this point lies on the focal plane.
     let focus = cam.position + cam.focus_distance * dir;
     let origin = cam.position + lens.x * cam.right + lens.y * cam.up;

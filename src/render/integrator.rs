@@ -219,10 +219,7 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
         mat,
         wo,
         rng.rng_1d(st.depth, rng::DIM_BSDF_LOBE),
-        Vec2::new(
-            rng.rng_1d(st.depth, rng::DIM_BSDF_U),
-            rng.rng_1d(st.depth, rng::DIM_BSDF_V),
-        ),
+        rng.rng_2d(st.depth, rng::DIM_BSDF_U),
     ) else {
         return true;
     };

@@ -12,7 +12,7 @@ use super::texture::{alpha_test, material_at, triangle_uv};
 use super::{LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_SPOT, Light, RenderScene, SKY_EMITTER};
 use crate::geometry::{self, T_INF};
 use crate::scene::{NO_TEXTURE, Sky};
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 /// Radiance arriving along unit `dir` from outside the scene.
 /// mirror: shaders/lights.wgsl `sky_radiance`
@@ -73,10 +73,7 @@ pub fn sample_light(
 ) -> Option<LightSample> {
     let k = sample_cdf(&scene.emitter_cdf, rng.rng_1d(depth, rng::DIM_LIGHT_PICK));
     let light = scene.emitters[k];
-    let u = Vec2::new(
-        rng.rng_1d(depth, rng::DIM_LIGHT_U),
-        rng.rng_1d(depth, rng::DIM_LIGHT_V),
-    );
+    let u = rng.rng_2d(depth, rng::DIM_LIGHT_U);
     if light == SKY_EMITTER {
         let (wi, pdf) = match scene.sky {
             Sky::Environment { .. } => sample_env(scene, u),

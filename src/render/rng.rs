@@ -12,6 +12,8 @@
 //! seeds come from `pcg4d` (Jarzynski and Olano, "Hash Functions for GPU Rendering", JCGT
 //! 2020); everything is integer arithmetic and thus exact on every device.
 
+use glam::Vec2;
+
 /// Dimensions used by the camera at bounce 0.
 pub const DIM_PIXEL_X: u32 = 0;
 pub const DIM_PIXEL_Y: u32 = 1;
@@ -52,10 +54,11 @@ const SOBOL_1: [u32; 32] = [
     0x80808080, 0xc0c0c0c0, 0xa0a0a0a0, 0xf0f0f0f0, 0x88888888, 0xcccccccc, 0xaaaaaaaa, 0xffffffff,
 ];
 
-/// [`SOBOL_1`] applied to each byte of an index: entry `256 k + b` is the XOR of the
-/// matrix's columns for the set bits of byte value `b` in byte `k`, so that the product
-/// takes four lookups instead of a branch per bit (which random indices mispredict).
-const SOBOL_1_BYTES: [u32; 1024] = {
+/// [`SOBOL_1`] applied to each byte of an index, its columns bit-reversed: entry
+/// `256 k + b` is the XOR of the reversed columns for the set bits of byte value `b` in
+/// byte `k`, so that the product takes four lookups instead of a branch per bit (which
+/// random indices mispredict), and comes out in the bit order Owen scrambling works in.
+const SOBOL_1_REVERSED_BYTES: [u32; 1024] = {
     let mut table = [0u32; 1024];
     let mut i = 0;
     while i < 1024 {
@@ -64,7 +67,7 @@ const SOBOL_1_BYTES: [u32; 1024] = {
         let mut bit = 0;
         while bit < 8 {
             if (value >> bit) & 1 != 0 {
-                x ^= SOBOL_1[8 * byte + bit];
+                x ^= SOBOL_1[8 * byte + bit].reverse_bits();
             }
             bit += 1;
         }
@@ -77,10 +80,18 @@ const SOBOL_1_BYTES: [u32; 1024] = {
 /// Point `index` of Sobol dimension `dim` (0 or 1), as 32 bits of a fraction.
 /// mirror: shaders/rng.wgsl `sobol`
 pub fn sobol(index: u32, dim: u32) -> u32 {
+    sobol_reversed(index, dim).reverse_bits()
+}
+
+/// [`sobol`] with its bits reversed, the order [`owen_hash`] takes: the index itself in
+/// dimension 0, four table lookups in dimension 1.
+/// mirror: shaders/rng.wgsl `sobol_reversed`
+#[inline]
+pub fn sobol_reversed(index: u32, dim: u32) -> u32 {
     if dim == 0 {
-        return index.reverse_bits();
+        return index;
     }
-    let byte = |k: u32| SOBOL_1_BYTES[(256 * k + ((index >> (8 * k)) & 255)) as usize];
+    let byte = |k: u32| SOBOL_1_REVERSED_BYTES[(256 * k + ((index >> (8 * k)) & 255)) as usize];
     byte(0) ^ byte(1) ^ byte(2) ^ byte(3)
 }
 
@@ -88,13 +99,21 @@ pub fn sobol(index: u32, dim: u32) -> u32 {
 /// `seed`: Laine and Karras's permutation on the reversed bits, in Burley's 2020 form.
 /// mirror: shaders/rng.wgsl `owen_scramble`
 pub fn owen_scramble(x: u32, seed: u32) -> u32 {
-    let mut x = x.reverse_bits();
-    x = x.wrapping_add(seed);
+    owen_hash(x.reverse_bits(), seed).reverse_bits()
+}
+
+/// [`owen_scramble`] in reversed bit order: `owen_scramble(x, seed)` is
+/// `owen_hash(x.reverse_bits(), seed).reverse_bits()`, so a caller that holds reversed
+/// bits (as [`sobol_reversed`] gives them) saves a reversal.
+/// mirror: shaders/rng.wgsl `owen_hash`
+#[inline]
+pub fn owen_hash(x: u32, seed: u32) -> u32 {
+    let mut x = x.wrapping_add(seed);
     x ^= x.wrapping_mul(0x6c50b47c);
     x ^= x.wrapping_mul(0xb82f1e52);
     x ^= x.wrapping_mul(0xc7afe638);
     x ^= x.wrapping_mul(0x8d22f6e6);
-    x.reverse_bits()
+    x
 }
 
 /// The pair of dimensions `dim` draws from (numbered within a bounce), and which of its
@@ -142,10 +161,32 @@ impl Rng {
     /// component. mirror: shaders/rng.wgsl `rng_u32`
     pub fn rng_u32(&self, bounce: u32, dim: u32) -> u32 {
         let (pair, c) = dim_pair(dim);
+        let (seeds, index) = self.pair_index(bounce, pair);
+        owen_hash(sobol_reversed(index, c), seeds[1 + c as usize]).reverse_bits()
+    }
+
+    /// Both numbers of the pair that starts at dimension `dim` (pixel, lens, light or BSDF
+    /// u): `(rng_1d(bounce, dim), rng_1d(bounce, dim + 1))`, with the pair's seeds and
+    /// shuffled index computed once. mirror: shaders/rng.wgsl `rng_2d`
+    pub fn rng_2d(&self, bounce: u32, dim: u32) -> Vec2 {
+        debug_assert_eq!(
+            dim_pair(dim + 1),
+            (dim, 1),
+            "dimension {dim} starts no pair"
+        );
+        let (seeds, index) = self.pair_index(bounce, dim);
+        let component = |c: u32| {
+            u32_to_unit(owen_hash(sobol_reversed(index, c), seeds[1 + c as usize]).reverse_bits())
+        };
+        Vec2::new(component(0), component(1))
+    }
+
+    /// The seeds of (pixel, bounce, pair, seed) and the sample index shuffled by the first.
+    #[inline]
+    fn pair_index(&self, bounce: u32, pair: u32) -> ([u32; 4], u32) {
         let key = bounce.wrapping_mul(DIMS_PER_BOUNCE).wrapping_add(pair);
         let seeds = pcg4d([self.pixel, key, self.seed, 0x5eed]);
-        let index = owen_scramble(self.sample, seeds[0]);
-        owen_scramble(sobol(index, c), seeds[1 + c as usize])
+        (seeds, owen_scramble(self.sample, seeds[0]))
     }
 }
 
@@ -218,6 +259,35 @@ mod tests {
         assert_ne!(base, Rng::new(1, 2, 0).rng_u32(4, 5));
         assert_ne!(base, Rng::new(1, 2, 3).rng_u32(0, 5));
         assert_ne!(base, Rng::new(1, 2, 3).rng_u32(4, 0));
+    }
+
+    /// The byte tables give the generator matrix's product, and the pair draw gives what
+    /// its two single draws give.
+    #[test]
+    fn sobol_tables_and_pair_draws_agree_with_their_definitions() {
+        let mut x = 0x1234_5678u32;
+        for _ in 0..10_000 {
+            x = pcg4d([x, 1, 2, 3])[0];
+            let by_bits = (0..32)
+                .filter(|b| (x >> b) & 1 != 0)
+                .fold(0, |acc, b| acc ^ SOBOL_1[b]);
+            assert_eq!(sobol(x, 1), by_bits, "index {x:#x}");
+            assert_eq!(sobol(x, 0), x.reverse_bits());
+            assert_eq!(
+                owen_scramble(x, 77),
+                owen_hash(x.reverse_bits(), 77).reverse_bits()
+            );
+        }
+        for (pixel, sample, seed) in [(0, 0, 0), (9, 1234, 5), (u32::MAX, u32::MAX, 1)] {
+            let rng = Rng::new(pixel, sample, seed);
+            for bounce in [0, 1, 7] {
+                for dim in [DIM_PIXEL_X, DIM_LENS_U, DIM_LIGHT_U, DIM_BSDF_U] {
+                    let pair = rng.rng_2d(bounce, dim);
+                    assert_eq!(pair.x.to_bits(), rng.rng_1d(bounce, dim).to_bits());
+                    assert_eq!(pair.y.to_bits(), rng.rng_1d(bounce, dim + 1).to_bits());
+                }
+            }
+        }
     }
 
     #[test]
