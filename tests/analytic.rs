@@ -9,42 +9,10 @@
 
 mod common;
 
-use common::scenes::{add_box, scene, square};
-use common::stats::mean_and_stderr;
+use common::scenes::{add_box, emissive_enclosure, scene, square};
+use common::stats::assert_mean;
 use glam::Vec3;
-use meshtrace::bvh::BuildParams;
-use meshtrace::film::Film;
-use meshtrace::render::{RenderJob, RenderScene};
-use meshtrace::scene::{Camera, Material, Mesh, Scene, Sky};
-
-fn render_both(name: &str, scene: &Scene) -> Vec<(&'static str, Film)> {
-    let rs = RenderScene::new(scene, &BuildParams::default()).unwrap();
-    let job = RenderJob::new(scene.settings);
-    let mut out = vec![("cpu", common::cpu_render(&rs, &job))];
-    if let Some(ctx) = common::gpu(name) {
-        out.push(("gpu", common::gpu_render(&ctx, &rs, &job)));
-    }
-    out
-}
-
-/// Asserts every channel's image mean is `expect` within 5 standard errors, and that the
-/// standard error resolves a 1% bias.
-fn assert_mean(name: &str, device: &str, film: &Film, expect: Vec3) {
-    let mean = film.mean();
-    for c in 0..3 {
-        let values: Vec<f32> = mean.iter().map(|p| p[c]).collect();
-        let (m, se) = mean_and_stderr(&values);
-        let e = expect[c] as f64;
-        assert!(
-            se < 0.002 * e,
-            "{name}/{device}: channel {c}: standard error {se} too large to test"
-        );
-        assert!(
-            (m - e).abs() < 5.0 * se + 1e-6,
-            "{name}/{device}: channel {c}: mean {m}, expected {e} (se {se})"
-        );
-    }
-}
+use meshtrace::scene::{Camera, Material, Mesh, Sky};
 
 /// An open box (five faces) holding a cube, all diffuse of albedo 1, under a constant sky:
 /// whatever the geometry, every path ends in the sky carrying throughput 1, so every pixel
@@ -80,45 +48,18 @@ fn white_furnace_returns_the_sky_radiance() {
         Sky::Constant(sky),
         square(48, 64, 1000, 7),
     );
-    for (device, film) in render_both("white_furnace", &s) {
+    for (device, film) in common::render_both("white_furnace", &s) {
         assert_mean("white furnace", device, &film, sky);
     }
 }
 
-/// The camera inside a closed box whose walls all emit Le = 0.5 and reflect albedo 0.5:
-/// radiance L solves L = Le + albedo L, so L = 1 everywhere. This exercises next event
-/// estimation and both MIS weights: any error in them biases the result.
+/// The emissive enclosure (`common::scenes::emissive_enclosure`): radiance Le / (1 -
+/// albedo) everywhere. This exercises next event estimation and both MIS weights: any error
+/// in them biases the result.
 #[test]
 fn emissive_enclosure_returns_le_over_one_minus_albedo() {
-    let mut mesh = Mesh::default();
-    add_box(&mut mesh, Vec3::splat(-1.0), Vec3::splat(1.0), 0, true);
-    add_box(
-        &mut mesh,
-        Vec3::new(-0.5, -1.0, -0.5),
-        Vec3::new(0.0, -0.2, 0.1),
-        0,
-        false,
-    );
-    let mut wall = Material::diffuse(Vec3::new(0.5, 0.25, 0.75));
-    wall.emission = Vec3::new(0.5, 0.75, 0.25);
-    let expect = wall.emission / (Vec3::ONE - wall.albedo);
-    let camera = Camera::new(
-        Vec3::new(0.5, 0.5, 0.9),
-        Vec3::new(-0.3, -0.4, -1.0),
-        Vec3::Y,
-        70.0,
-        0.0,
-        None,
-    )
-    .unwrap();
-    let s = scene(
-        mesh,
-        vec![wall],
-        camera,
-        Sky::Constant(Vec3::ZERO),
-        square(48, 64, 64, 7),
-    );
-    for (device, film) in render_both("emissive_enclosure", &s) {
+    let (s, expect) = emissive_enclosure();
+    for (device, film) in common::render_both("emissive_enclosure", &s) {
         assert_mean("emissive enclosure", device, &film, expect);
     }
 }
@@ -174,7 +115,7 @@ fn emitter_seen_directly_returns_its_radiance() {
             square(16, 4, max_depth, 7),
         );
         let expect = if from_behind { Vec3::ZERO } else { le };
-        for (device, film) in render_both("direct_emitter", &s) {
+        for (device, film) in common::render_both("direct_emitter", &s) {
             for (i, p) in film.mean().iter().enumerate() {
                 assert_eq!(
                     *p, expect,
@@ -223,7 +164,7 @@ fn textured_emissive_enclosure_returns_le_over_one_minus_albedo() {
     let s = meshtrace::scene::load_scene(&dir.write("scene.toml", toml)).unwrap();
     let albedo = meshtrace::film::srgb8_to_linear(grey);
     let expect = emission / (1.0 - albedo);
-    for (device, film) in render_both("textured_emissive_enclosure", &s) {
+    for (device, film) in common::render_both("textured_emissive_enclosure", &s) {
         assert_mean("textured emissive enclosure", device, &film, expect);
     }
 }

@@ -6,11 +6,10 @@ mod common;
 
 use common::fs::TempDir;
 use glam::Vec3;
-use meshtrace::bvh::BuildParams;
 use meshtrace::film::{Aov, AovValues, Film, NO_ID};
+use meshtrace::render::RenderJob;
 use meshtrace::render::camera::{CameraRays, generate_camera_ray};
 use meshtrace::render::rng::Rng;
-use meshtrace::render::{RenderJob, RenderScene};
 use meshtrace::scene::{Scene, parse_scene};
 
 /// A scene file's text loaded from `dir` (its meshes beside it).
@@ -18,20 +17,14 @@ fn load(dir: &TempDir, text: &str) -> Scene {
     parse_scene(text, &dir.join("scene.toml")).unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// The film of `scene` with AOVs `aovs` on the CPU and, where there is one, the GPU.
 fn render_both(
     test: &str,
     scene: &Scene,
     aovs: &[Aov],
     transparent: bool,
 ) -> Vec<(&'static str, Film)> {
-    let rs = RenderScene::new(scene, &BuildParams::default()).expect("BVH");
     let job = RenderJob::new(scene.settings).with_aovs(Aov::mask(aovs), transparent);
-    let mut out = vec![("cpu", common::cpu_render(&rs, &job))];
-    if let Some(ctx) = common::gpu(test) {
-        out.push(("gpu", common::gpu_render(&ctx, &rs, &job)));
-    }
-    out
+    common::render_both_job(test, scene, &job)
 }
 
 fn f32s(film: &Film, aov: Aov) -> Vec<Vec<f32>> {

@@ -15,20 +15,9 @@ use common::rand::SplitMix;
 use common::stats::mean_and_stderr;
 use glam::{Vec2, Vec3};
 use meshtrace::bvh::BuildParams;
-use meshtrace::film::Film;
+use meshtrace::render::RenderScene;
 use meshtrace::render::environment::{env_pdf, sample_env};
-use meshtrace::render::{RenderJob, RenderScene};
-use meshtrace::scene::{Scene, load_scene};
-
-fn render_both(name: &str, scene: &Scene) -> Vec<(&'static str, Film)> {
-    let rs = RenderScene::new(scene, &BuildParams::default()).unwrap();
-    let job = RenderJob::new(scene.settings);
-    let mut out = vec![("cpu", common::cpu_render(&rs, &job))];
-    if let Some(ctx) = common::gpu(name) {
-        out.push(("gpu", common::gpu_render(&ctx, &rs, &job)));
-    }
-    out
-}
+use meshtrace::scene::load_scene;
 
 /// The test map's texel at (`row`, `column`), as its generator writes it.
 fn texel(row: i64, column: i64) -> Vec3 {
@@ -94,7 +83,7 @@ fn an_environment_seen_directly_reads_the_image_as_the_format_says() {
         let strength = 1.5;
         let scene = load_scene(&dir.write("scene.toml", looking(d, rotate, strength))).unwrap();
         let want = expected(d, rotate, strength);
-        for (device, film) in render_both("env_direct", &scene) {
+        for (device, film) in common::render_both("env_direct", &scene) {
             let got = film.mean()[0];
             let error = (got - want).abs().max_element() / want.max_element().max(1e-3);
             assert!(
@@ -133,7 +122,7 @@ fn a_constant_environment_is_a_white_furnace() {
         [[objects]]\nmesh = \"cube.obj\"\nmaterial = \"white\"\nscale = 0.7\nrotate = [10.0, 30.0, 0.0]\n\
         [[objects]]\nmesh = \"cube.obj\"\nmaterial = \"white\"\nscale = 0.3\ntranslate = [0.9, 0.8, 0.6]\n";
     let scene = load_scene(&dir.write("scene.toml", toml)).unwrap();
-    for (device, film) in render_both("env_furnace", &scene) {
+    for (device, film) in common::render_both("env_furnace", &scene) {
         let values: Vec<f32> = film.mean().iter().map(|p| p.y).collect();
         let (m, se) = mean_and_stderr(&values);
         assert!(

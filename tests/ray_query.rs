@@ -12,8 +12,8 @@ mod common;
 
 use common::fs::TempDir;
 use common::rand::SplitMix;
-use common::scenes::{add_box, add_sphere, cornell, scene, square};
-use common::stats::{fraction_close, mean_and_stderr, pixel_channels};
+use common::scenes::{add_sphere, cornell, emissive_enclosure, scene, square};
+use common::stats::{assert_mean, fraction_close, pixel_channels};
 use common::traversal::{Bounds, check_traversal, traversal_rays};
 use glam::Vec3;
 use meshtrace::bvh::{BuildParams, solid};
@@ -213,49 +213,8 @@ fn an_emissive_enclosure_renders_its_closed_form() {
     let Some(ctx) = common::ray_query_gpu("an_emissive_enclosure_renders_its_closed_form") else {
         return;
     };
-    let mut mesh = Mesh::default();
-    add_box(&mut mesh, Vec3::splat(-1.0), Vec3::splat(1.0), 0, true);
-    add_box(
-        &mut mesh,
-        Vec3::new(-0.5, -1.0, -0.5),
-        Vec3::new(0.0, -0.2, 0.1),
-        0,
-        false,
-    );
-    let mut wall = Material::diffuse(Vec3::new(0.5, 0.25, 0.75));
-    wall.emission = Vec3::new(0.5, 0.75, 0.25);
-    let expect = wall.emission / (Vec3::ONE - wall.albedo);
-    let camera = Camera::new(
-        Vec3::new(0.5, 0.5, 0.9),
-        Vec3::new(-0.3, -0.4, -1.0),
-        Vec3::Y,
-        70.0,
-        0.0,
-        None,
-    )
-    .expect("camera");
-    let s = scene(
-        mesh,
-        vec![wall],
-        camera,
-        Sky::Constant(Vec3::ZERO),
-        square(48, 64, 64, 7),
-    );
+    let (s, expect) = emissive_enclosure();
     let rs = RenderScene::new(&s, &BuildParams::default()).expect("BVH");
     let film = common::gpu_render(&ctx, &rs, &RenderJob::new(s.settings));
-    let mean = film.mean();
-    for c in 0..3 {
-        let values: Vec<f32> = mean.iter().map(|p| p[c]).collect();
-        let (m, se) = mean_and_stderr(&values);
-        let e = expect[c] as f64;
-        eprintln!("enclosure channel {c}: mean {m:.5}, expected {e:.5}, se {se:.5}");
-        assert!(
-            se < 0.002 * e,
-            "channel {c}: standard error {se} too large to test"
-        );
-        assert!(
-            (m - e).abs() < 5.0 * se + 1e-6,
-            "channel {c}: mean {m}, expected {e} (se {se})"
-        );
-    }
+    assert_mean("emissive enclosure", "ray queries", &film, expect);
 }

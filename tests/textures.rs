@@ -7,8 +7,8 @@ mod common;
 use common::fs::TempDir;
 use common::rand::SplitMix;
 use meshtrace::bvh::BuildParams;
-use meshtrace::film::{Film, srgb8_to_linear};
-use meshtrace::render::{RenderJob, RenderScene};
+use meshtrace::film::srgb8_to_linear;
+use meshtrace::render::RenderScene;
 use meshtrace::scene::{Scene, load_scene};
 
 /// A quad over [-1, 1]² at z = 0 facing +Z, OBJ texture coordinate (0, 0) at its
@@ -29,16 +29,6 @@ fn emitter_scene(dir: &TempDir, emission: &str, size: u32, spp: u32) -> Scene {
     );
     let path = dir.write("scene.toml", toml);
     load_scene(&path).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn render_both(name: &str, scene: &Scene) -> Vec<(&'static str, Film)> {
-    let rs = RenderScene::new(scene, &BuildParams::default()).unwrap();
-    let job = RenderJob::new(scene.settings);
-    let mut out = vec![("cpu", common::cpu_render(&rs, &job))];
-    if let Some(ctx) = common::gpu(name) {
-        out.push(("gpu", common::gpu_render(&ctx, &rs, &job)));
-    }
-    out
 }
 
 /// A bilinear, repeat-wrapped texture integrates to the mean of its texels, so an emitter
@@ -65,7 +55,7 @@ fn textured_emitter_renders_the_mean_of_its_texels() {
             expect[c] += strength * srgb8_to_linear(t[c]) as f64 / texels.len() as f64;
         }
     }
-    for (device, film) in render_both("textured_emitter", &scene) {
+    for (device, film) in common::render_both("textured_emitter", &scene) {
         let mean = film.mean();
         for c in 0..3 {
             let m = mean.iter().map(|p| p[c] as f64).sum::<f64>() / mean.len() as f64;
@@ -97,7 +87,7 @@ fn obj_texture_coordinates_put_the_image_the_right_way_up() {
     );
     dir.write_png("corners.png", 2, 2, &[red, green, blue, white]);
     let scene = emitter_scene(&dir, "{ texture = \"corners.png\" }", 32, 16);
-    for (device, film) in render_both("texture_orientation", &scene) {
+    for (device, film) in common::render_both("texture_orientation", &scene) {
         let mean = film.mean();
         for ((x, y), colour) in [
             ((8, 8), red),
@@ -137,7 +127,7 @@ fn a_uv_scale_tiles_in_the_files_own_terms() {
         32,
         16,
     );
-    for (device, film) in render_both("texture_scale", &scene) {
+    for (device, film) in common::render_both("texture_scale", &scene) {
         let mean = film.mean();
         for ((x, y), colour) in [((8, 15), red), ((24, 16), green)] {
             let p = mean[y * 32 + x];

@@ -60,6 +60,26 @@ pub fn ray_query_gpu(test: &str) -> Option<GpuContext> {
     }
 }
 
+/// `job` of `scene` on the CPU and, where there is a GPU (see [`gpu`]), on the GPU: the
+/// films with their device's name.
+pub fn render_both_job(
+    test: &str,
+    scene: &meshtrace::scene::Scene,
+    job: &RenderJob,
+) -> Vec<(&'static str, Film)> {
+    let rs = RenderScene::new(scene, &meshtrace::bvh::BuildParams::default()).expect("BVH");
+    let mut out = vec![("cpu", cpu_render(&rs, job))];
+    if let Some(ctx) = gpu(test) {
+        out.push(("gpu", gpu_render(&ctx, &rs, job)));
+    }
+    out
+}
+
+/// [`render_both_job`] of the scene's own settings.
+pub fn render_both(test: &str, scene: &meshtrace::scene::Scene) -> Vec<(&'static str, Film)> {
+    render_both_job(test, scene, &RenderJob::new(scene.settings))
+}
+
 /// The job rendered by the CPU renderer.
 pub fn cpu_render(scene: &RenderScene, job: &RenderJob) -> Film {
     cpu::render(scene, job, &|_| {})

@@ -180,3 +180,39 @@ pub fn closed_mesh_probe() -> ClosedMeshProbe {
         rays,
     }
 }
+
+/// The camera inside a closed box whose walls all emit Le and reflect albedo (a second box
+/// inside it): radiance L solves L = Le + albedo L, so L = Le / (1 - albedo) everywhere,
+/// through closest hits, shadow rays and both MIS weights. Returns the scene (48 x 48, 64
+/// spp, paths up to 64 segments) and that radiance.
+pub fn emissive_enclosure() -> (Scene, Vec3) {
+    let mut mesh = Mesh::default();
+    add_box(&mut mesh, Vec3::splat(-1.0), Vec3::splat(1.0), 0, true);
+    add_box(
+        &mut mesh,
+        Vec3::new(-0.5, -1.0, -0.5),
+        Vec3::new(0.0, -0.2, 0.1),
+        0,
+        false,
+    );
+    let mut wall = Material::diffuse(Vec3::new(0.5, 0.25, 0.75));
+    wall.emission = Vec3::new(0.5, 0.75, 0.25);
+    let expect = wall.emission / (Vec3::ONE - wall.albedo);
+    let camera = Camera::new(
+        Vec3::new(0.5, 0.5, 0.9),
+        Vec3::new(-0.3, -0.4, -1.0),
+        Vec3::Y,
+        70.0,
+        0.0,
+        None,
+    )
+    .expect("camera");
+    let s = scene(
+        mesh,
+        vec![wall],
+        camera,
+        Sky::Constant(Vec3::ZERO),
+        square(48, 64, 64, 7),
+    );
+    (s, expect)
+}
