@@ -236,10 +236,11 @@ def render_bench(rows):
             line.append("—" if r is None else num(r["median"]) if r["min"] == r["max"]
                         else f"{num(r['median'])} ({num(r['min'])}..{num(r['max'])})")
         body.append(line)
-    repeats = sorted({r["repeats"] for r in rows})
+    repeats = max(r["repeats"] for r in rows)
     return table(["measure", "device", "unit"] + scenes, body) + [
         "",
-        f"Median of {'/'.join(map(str, repeats))} timed runs after a warm-up (min..max). "
+        f"Median of {repeats} timed runs after a warm-up (min..max; `sah_cost` and the "
+        "hit shares are computed once). "
         "`*_hits`: share of the view's rays whose closest hit is on the mesh; "
         "`incoherent_rays`: a cosine (diffuse) bounce from each primary hit.",
     ]
