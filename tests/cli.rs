@@ -398,7 +398,10 @@ fn bench_reports_every_measure() {
     for (device, measure, unit) in [
         ("host", "bvh_build", "Mtris/s"),
         ("host", "sah_cost", "cost"),
+        ("host", "primary_hits", "fraction"),
+        ("host", "primary_fill_hits", "fraction"),
         ("cpu", "primary_rays", "Mrays/s"),
+        ("cpu", "primary_fill_rays", "Mrays/s"),
         ("cpu", "incoherent_rays", "Mrays/s"),
         ("cpu", "shadow_rays", "Mrays/s"),
         ("cpu", "path_samples", "Msamples/s"),
@@ -410,6 +413,37 @@ fn bench_reports_every_measure() {
         assert_eq!(json.matches(&object).count(), 1, "{object} in {json}");
     }
     assert!(json.trim_start().starts_with('[') && json.trim_end().ends_with(']'));
+    // --rays-out: the triangles (9 floats each) and both views' rays (8 floats each).
+    let rays = dir.path().join("rays");
+    std::fs::create_dir(&rays).unwrap();
+    let out = output(
+        &dir,
+        &[&small[..], &["--device", "cpu", "--rays-out", "rays"]].concat(),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let size = |name: &str| {
+        std::fs::metadata(rays.join(name))
+            .map(|m| m.len())
+            .unwrap_or(0)
+    };
+    assert_eq!(size("cornell.triangles.f32") % 36, 0);
+    assert!(size("cornell.triangles.f32") >= 36 * 30);
+    for view in ["primary", "primary_fill"] {
+        assert_eq!(
+            size(&format!("cornell.{view}.rays.f32")),
+            16 * 16 * 32,
+            "{view}"
+        );
+    }
+    assert_fails(
+        &dir,
+        &[&small[..], &["--rays-out", "nowhere"]].concat(),
+        &["--rays-out", "nowhere"],
+    );
     if common::gpu("bench_reports_every_measure, GPU part").is_none() {
         return;
     }
@@ -422,7 +456,7 @@ fn bench_reports_every_measure() {
         String::from_utf8_lossy(&out.stderr)
     );
     let ratios: Vec<&str> = table.lines().filter(|l| l.contains(" ratio ")).collect();
-    assert_eq!(ratios.len(), 5, "{table}");
+    assert_eq!(ratios.len(), 6, "{table}");
     assert!(ratios.iter().all(|l| l.ends_with("GPU/CPU")), "{table}");
 }
 
@@ -519,4 +553,28 @@ fn denoise_without_the_feature_says_how_to_get_it() {
             ],
         );
     }
+}
+
+/// `--accel hardware` is refused, naming why, by the CPU renderer and (where no adapter
+/// offers ray queries, as on the system's lavapipe) by the GPU renderer, writing nothing.
+#[test]
+fn hardware_ray_queries_are_refused_where_there_are_none() {
+    let dir = TempDir::new("accel");
+    let render = ["render", "builtin:cornell", "--spp", "1", "-o", "out.png"];
+    assert_fails(
+        &dir,
+        &[&render[..], &["--device", "cpu", "--accel", "hardware"]].concat(),
+        &["--accel hardware", "--device cpu"],
+    );
+    let adapters = output(&dir, &["adapters"]);
+    let list = String::from_utf8_lossy(&adapters.stdout);
+    if list.contains("; ray queries") || common::gpu("hardware ray queries refused").is_none() {
+        eprintln!("an adapter offers ray queries, or there is no GPU: the GPU case is skipped");
+        return;
+    }
+    assert_fails(
+        &dir,
+        &[&render[..], &["--accel", "hardware"]].concat(),
+        &["--accel hardware", "offers no hardware ray queries"],
+    );
 }
