@@ -268,7 +268,7 @@ fn pack(tris: &[TriVerts], range: std::ops::Range<u32>) -> TriPack {
 struct TriRay {
     axes: [usize; 3],
     origin: [f32; 3],
-    shear: [f32; 2],
+    shear: [f32; 3],
 }
 
 #[inline(always)]
@@ -279,7 +279,7 @@ fn tri_ray(sheared: &ShearedRay) -> TriRay {
     TriRay {
         axes,
         origin: axes.map(|a| o[a]),
-        shear: [sheared.shear.x, sheared.shear.y],
+        shear: sheared.shear.to_array(),
     }
 }
 
@@ -296,8 +296,9 @@ struct BoxRay {
 trait BoxTest {
     fn hits(node: &WideNode, ray: &BoxRay, t_max: f32) -> (u32, [f32; WIDTH]);
 
-    /// The lanes of `pack` that `intersect_triangle` may hit: a superset of its hits.
-    fn candidates(pack: &TriPack, ray: &TriRay) -> u32;
+    /// The lanes of `pack` that `intersect_triangle` may hit with `t < t_max`: a superset
+    /// of its hits.
+    fn candidates(pack: &TriPack, ray: &TriRay, t_max: f32) -> u32;
 }
 
 /// `minps`/`maxps` semantics, so that the portable test rounds as the SIMD one does.
@@ -336,7 +337,7 @@ impl BoxTest for Portable {
 
     /// Every lane in use: the scalar test decides.
     #[inline(always)]
-    fn candidates(pack: &TriPack, _ray: &TriRay) -> u32 {
+    fn candidates(pack: &TriPack, _ray: &TriRay, _t_max: f32) -> u32 {
         (0..WIDTH).fold(0, |m, l| m | (((pack.tri[l] != u32::MAX) as u32) << l))
     }
 }
@@ -355,19 +356,20 @@ impl BoxTest for Avx2 {
     }
 
     #[inline(always)]
-    fn candidates(pack: &TriPack, ray: &TriRay) -> u32 {
+    fn candidates(pack: &TriPack, ray: &TriRay, t_max: f32) -> u32 {
         // SAFETY: as for `hits`.
-        unsafe { candidates_avx2(pack, ray) }
+        unsafe { candidates_avx2(pack, ray, t_max) }
     }
 }
 
-/// The edge functions of `intersect_triangle`, computed as it computes them (so that a
-/// lane is dropped only where it would return no hit) for eight triangles at once; the
-/// lanes in use whose three signs do not disagree.
+/// The edge functions and the distance of `intersect_triangle`, computed as it computes
+/// them (so that a lane is dropped only where it would return no hit) for eight triangles
+/// at once: the lanes in use whose three signs do not disagree and whose `t` lies in
+/// (0, `t_max`). The scalar test then only checks the rounding bound.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-fn candidates_avx2(pack: &TriPack, ray: &TriRay) -> u32 {
+fn candidates_avx2(pack: &TriPack, ray: &TriRay, t_max: f32) -> u32 {
     use std::arch::x86_64::*;
     let [ax, ay, az] = ray.axes;
     let (sx, sy) = (_mm256_set1_ps(ray.shear[0]), _mm256_set1_ps(ray.shear[1]));
@@ -378,7 +380,7 @@ fn candidates_avx2(pack: &TriPack, ray: &TriRay) -> u32 {
     );
     // SAFETY: each load reads one whole `[f32; 8]` or `[u32; 8]`.
     let load = |row: &[f32; WIDTH]| unsafe { _mm256_loadu_ps(row.as_ptr()) };
-    // A corner translated, permuted and sheared: (x + Sx z, y + Sy z).
+    // A corner translated, permuted and sheared: (x + Sx z, y + Sy z, z).
     let corner = |c: usize| {
         let x = _mm256_sub_ps(load(&pack.v[3 * c + ax]), ox);
         let y = _mm256_sub_ps(load(&pack.v[3 * c + ay]), oy);
@@ -386,9 +388,10 @@ fn candidates_avx2(pack: &TriPack, ray: &TriRay) -> u32 {
         (
             _mm256_add_ps(x, _mm256_mul_ps(sx, z)),
             _mm256_add_ps(y, _mm256_mul_ps(sy, z)),
+            z,
         )
     };
-    let ((p0x, p0y), (p1x, p1y), (p2x, p2y)) = (corner(0), corner(1), corner(2));
+    let ((p0x, p0y, p0z), (p1x, p1y, p1z), (p2x, p2y, p2z)) = (corner(0), corner(1), corner(2));
     let e0 = _mm256_sub_ps(_mm256_mul_ps(p1x, p2y), _mm256_mul_ps(p1y, p2x));
     let e1 = _mm256_sub_ps(_mm256_mul_ps(p2x, p0y), _mm256_mul_ps(p2y, p0x));
     let e2 = _mm256_sub_ps(_mm256_mul_ps(p0x, p1y), _mm256_mul_ps(p0y, p1x));
@@ -403,13 +406,26 @@ fn candidates_avx2(pack: &TriPack, ray: &TriRay) -> u32 {
             _mm256_and_ps(gt2, _mm256_or_ps(lt0, lt1)),
         ),
     );
+    // t = (e0 Sz z0 + e1 Sz z1 + e2 Sz z2) / (e0 + e1 + e2), rounded as the scalar test
+    // rounds it (a division is exact-rounded, as its `1 / det` is).
+    let sz = _mm256_set1_ps(ray.shear[2]);
+    let det = _mm256_add_ps(_mm256_add_ps(e0, e1), e2);
+    let t_scaled = _mm256_add_ps(
+        _mm256_add_ps(
+            _mm256_mul_ps(e0, _mm256_mul_ps(sz, p0z)),
+            _mm256_mul_ps(e1, _mm256_mul_ps(sz, p1z)),
+        ),
+        _mm256_mul_ps(e2, _mm256_mul_ps(sz, p2z)),
+    );
+    let t = _mm256_mul_ps(t_scaled, _mm256_div_ps(_mm256_set1_ps(1.0), det));
+    let in_range = _mm256_and_ps(
+        _mm256_cmp_ps::<_CMP_GT_OQ>(t, zero),
+        _mm256_cmp_ps::<_CMP_LT_OQ>(t, _mm256_set1_ps(t_max)),
+    );
     // SAFETY: as above.
     let tri = unsafe { _mm256_loadu_si256(pack.tri.as_ptr().cast()) };
     let unused = _mm256_castsi256_ps(_mm256_cmpeq_epi32(tri, _mm256_set1_epi32(-1)));
-    _mm256_movemask_ps(_mm256_andnot_ps(
-        _mm256_or_ps(reject, unused),
-        _mm256_castsi256_ps(_mm256_set1_epi32(-1)),
-    )) as u32
+    _mm256_movemask_ps(_mm256_andnot_ps(_mm256_or_ps(reject, unused), in_range)) as u32
 }
 
 /// [`Avx2`]'s test, as a function of its own so that the intrinsics inline into it.
@@ -543,7 +559,7 @@ fn closest<B: BoxTest>(
     loop {
         if cur.count > 0 {
             for pack in &bvh.packs[cur.child as usize..(cur.child + cur.count) as usize] {
-                let mut lanes = B::candidates(pack, &tr);
+                let mut lanes = B::candidates(pack, &tr, t_best);
                 while lanes != 0 {
                     let i = pack.tri[lanes.trailing_zeros() as usize];
                     lanes &= lanes - 1;
@@ -633,7 +649,7 @@ fn any<B: BoxTest>(
     loop {
         if cur.count > 0 {
             for pack in &bvh.packs[cur.child as usize..(cur.child + cur.count) as usize] {
-                let mut lanes = B::candidates(pack, &tr);
+                let mut lanes = B::candidates(pack, &tr, t_max);
                 while lanes != 0 {
                     let i = pack.tri[lanes.trailing_zeros() as usize];
                     lanes &= lanes - 1;
