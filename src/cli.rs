@@ -196,8 +196,8 @@ pub struct RenderArgs {
     /// is not seen directly.
     #[arg(long)]
     pub transparent: bool,
-    /// On Ctrl-C, write no image (by default the samples finished so far are written;
-    /// checkpoints already written stay).
+    /// On Ctrl-C or SIGTERM, write no image (by default the samples finished so far are
+    /// written; checkpoints already written stay).
     #[arg(long)]
     pub no_partial: bool,
     /// The up axis of a bare mesh (.obj, .gltf, .glb). By default an OBJ whose extent is
@@ -281,7 +281,8 @@ fn set_threads(threads: Option<usize>) -> Result<()> {
     Ok(())
 }
 
-/// A render stopped by Ctrl-C; the binary exits with status 130 for it.
+/// A render stopped by Ctrl-C, or by SIGTERM or SIGHUP (what Slurm and Kubernetes send on
+/// a time-out or an eviction); the binary exits with status 130 for it.
 #[derive(Debug, thiserror::Error)]
 #[error("interrupted: {0}")]
 pub struct Interrupted(String);
@@ -332,13 +333,15 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     let mut job = RenderJob::new(settings).with_aovs(saved | guides, args.transparent);
     let cancel = Arc::new(AtomicBool::new(false));
     job.cancel = Some(cancel.clone());
+    // Ctrl-C, SIGTERM and SIGHUP (ctrlc's `termination` feature) end the render after the
+    // current pass, which is then written with its sample count.
     ctrlc::set_handler(move || {
         if cancel.swap(true, Ordering::SeqCst) {
-            // A second Ctrl-C: stop now, without waiting for the pass.
+            // A second signal: stop now, without waiting for the pass.
             std::process::exit(130);
         }
     })
-    .context("cannot install the Ctrl-C handler")?;
+    .context("cannot install the Ctrl-C and SIGTERM handler")?;
     if let Some(every) = args.checkpoint {
         if !(every > 0.0 && every.is_finite()) {
             bail!("--checkpoint must be a positive number of seconds");

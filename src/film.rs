@@ -214,6 +214,9 @@ pub enum FilmError {
     TransparentNotPng { path: String },
 }
 
+/// The EXR header attribute that records an image's samples per pixel.
+pub const SAMPLES_ATTRIBUTE: &str = "meshtrace.samples";
+
 impl Film {
     /// The channel that counts the rays each pixel's paths traced (camera, bounce and shadow
     /// rays), summed over its samples: the renderers' cost per pixel.
@@ -420,11 +423,12 @@ impl Film {
                 path: path.display().to_string(),
             });
         }
-        if self.saved_aovs == 0 {
-            return write_atomically(path, |tmp| self.encode(tmp, format));
-        }
+        // An EXR is always written by `encode_exr`, which records the sample count.
         if format == Format::Exr {
             return write_atomically(path, |tmp| self.encode_exr(tmp, true));
+        }
+        if self.saved_aovs == 0 {
+            return write_atomically(path, |tmp| self.encode(tmp, format));
         }
         write_atomically(&Self::aov_path(path), |tmp| self.encode_exr(tmp, false))?;
         write_atomically(path, |tmp| self.encode(tmp, format))
@@ -437,6 +441,10 @@ impl Film {
             AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes,
             WritableImage,
         };
+        let pixels = self.width as usize * self.height as usize;
+        if self.sum.len() != pixels {
+            return Err("film size mismatch".into());
+        }
         let mut channels = Vec::new();
         if radiance {
             let mean = self.mean();
@@ -459,9 +467,16 @@ impl Film {
             }
         }
         let size = (self.width as usize, self.height as usize);
+        // The samples per pixel the image holds: all of them, or those an interruption
+        // (Ctrl-C, SIGTERM) left.
+        let mut attributes = LayerAttributes::default();
+        attributes.other.insert(
+            exr::meta::attribute::Text::from(SAMPLES_ATTRIBUTE),
+            exr::meta::attribute::AttributeValue::I32(self.samples.min(i32::MAX as u32) as i32),
+        );
         let layer = Layer::new(
             size,
-            LayerAttributes::default(),
+            attributes,
             Encoding::FAST_LOSSLESS,
             AnyChannels::sort(channels.into()),
         );

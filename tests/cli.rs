@@ -306,12 +306,16 @@ fn a_render_writes_exactly_its_output() {
 #[test]
 fn interruption_writes_the_partial_image_unless_told_not_to() {
     let dir = TempDir::new("interrupt");
-    for (flag, expect_file, needle) in [
-        (None, true, "of 100000 spp"),
-        (Some("--no-partial"), false, "nothing written"),
+    // Ctrl-C, and SIGTERM as a scheduler sends it on a time-out or an eviction.
+    for (signal, flag, output, needle) in [
+        ("-INT", None, Some("part.png"), "of 100000 spp"),
+        ("-TERM", None, Some("part.exr"), "of 100000 spp"),
+        ("-INT", Some("--no-partial"), None, "nothing written"),
+        ("-TERM", Some("--no-partial"), None, "nothing written"),
     ] {
+        let out_name = output.unwrap_or("part.png");
         let mut args = vec![
-            "render", "-o", "part.png", "--spp", "100000", "--width", "64", "--height", "64",
+            "render", "-o", out_name, "--spp", "100000", "--width", "64", "--height", "64",
             "--device", "cpu",
         ];
         args.extend(flag);
@@ -323,27 +327,38 @@ fn interruption_writes_the_partial_image_unless_told_not_to() {
             .unwrap();
         std::thread::sleep(std::time::Duration::from_millis(1500));
         let killed = Command::new("kill")
-            .args(["-INT", &child.id().to_string()])
+            .args([signal, &child.id().to_string()])
             .status()
             .unwrap();
         assert!(killed.success());
         let out = child.wait_with_output().unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(130), "{stderr}");
+        assert_eq!(out.status.code(), Some(130), "{signal}: {stderr}");
         assert!(
             stderr.contains("interrupted") && stderr.contains(needle),
-            "{stderr}"
+            "{signal}: {stderr}"
         );
-        assert_eq!(
-            dir.entries(),
-            if expect_file {
-                vec!["part.png".to_string()]
-            } else {
-                vec![]
-            },
-            "{stderr}"
-        );
-        let _ = std::fs::remove_file(dir.join("part.png"));
+        let expect: Vec<String> = output.into_iter().map(String::from).collect();
+        assert_eq!(dir.entries(), expect, "{signal}: {stderr}");
+        if out_name.ends_with(".exr") && output.is_some() {
+            // The EXR says how many samples it holds: those the message reports.
+            let meta = exr::meta::MetaData::read_from_file(dir.join(out_name), false).unwrap();
+            let samples =
+                match meta.headers[0]
+                    .own_attributes
+                    .other
+                    .get(&exr::meta::attribute::Text::from(
+                        meshtrace::film::SAMPLES_ATTRIBUTE,
+                    )) {
+                    Some(exr::meta::attribute::AttributeValue::I32(n)) => *n,
+                    other => panic!("{signal}: samples attribute {other:?}"),
+                };
+            assert!(
+                samples > 0 && stderr.contains(&format!("with {samples} of 100000 spp")),
+                "{signal}: {samples} samples; {stderr}"
+            );
+        }
+        let _ = std::fs::remove_file(dir.join(out_name));
     }
 }
 
