@@ -5,8 +5,9 @@
 //!
 //! A binary subtree of at most [`LEAF_MAX`] triangles becomes one leaf, over the same
 //! leaf-ordered triangles, copied into packs of eight as a struct of arrays: one AVX2
-//! sequence computes the eight edge functions of the watertight test and keeps the lanes
-//! whose signs allow a hit, and only those go through the scalar test. Being the same
+//! sequence computes the eight edge functions and distances of the watertight test, as it
+//! rounds them, and keeps the lanes whose signs allow a hit within the ray's extent; only
+//! those go through the scalar test, which adds its rounding bound. Being the same
 //! function, the scalar test makes the wide traversal return the binary traversal's
 //! hit (the same triangle, distance and barycentrics), except where two triangles are hit at
 //! exactly the same distance, where either may be returned. The GPU keeps the binary tree
