@@ -1,10 +1,9 @@
 //! The command line: argument types (clap) and the commands they run. Only this module and
-//! `main` know about clap, indicatif or anyhow.
+//! `main` know about clap, indicatif (through `progress`) or anyhow.
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 use glam::Vec3;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use meshtrace::bvh::BuildParams;
 #[cfg(feature = "denoise")]
 use meshtrace::denoise::Denoiser;
@@ -15,11 +14,13 @@ use meshtrace::render::gpu::{self, Accel, GpuError};
 use meshtrace::render::{LIGHT_EMITTER, RenderJob, RenderScene, SKY_EMITTER};
 use meshtrace::scene::studio::{BareOptions, Up};
 use meshtrace::scene::{self, Scene, TextureFormat, builtin, load::validate_settings};
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
+
+mod progress;
+use progress::Progress;
 
 /// `println!` that returns an error instead of panicking when standard output is closed
 /// (`meshtrace info scene.toml | head`); `main` ends quietly on a broken pipe.
@@ -148,23 +149,28 @@ pub enum Device {
 
 #[derive(clap::Args)]
 pub struct RenderArgs {
-    /// Scene file, .obj mesh, .gltf/.glb file, or builtin:NAME; the built-in Cornell box when
-    /// omitted.
+    /// Scene file (.toml), bare mesh (.obj, .gltf, .glb), or builtin:NAME; the built-in
+    /// scenes are builtin:cornell (the Cornell box, the default when omitted).
     pub scene: Option<PathBuf>,
     /// Output image; the extension picks the format (.png .jpg .bmp .exr .hdr).
     #[arg(short, long, default_value = "render.png")]
     pub output: PathBuf,
-    /// Samples per pixel.
+    /// Samples per pixel [scene's [render] spp; else 64]. The flag wins over the scene
+    /// file, as for every setting below.
     #[arg(long)]
     pub spp: Option<u32>,
-    /// Longest path in segments from the camera (1 = emitters seen directly).
+    /// Longest path in segments from the camera, 1 = emitters seen directly [scene's
+    /// [render] max_depth; else 8].
     #[arg(long)]
     pub max_depth: Option<u32>,
+    /// Image width in pixels [scene's [render] width; else 640].
     #[arg(long)]
     pub width: Option<u32>,
+    /// Image height in pixels [scene's [render] height; else 480].
     #[arg(long)]
     pub height: Option<u32>,
-    /// Seed of the random sequences; the same seed gives the same image.
+    /// Seed of the random sequences; the same seed gives the same image [scene's [render]
+    /// seed; else 0].
     #[arg(long)]
     pub seed: Option<u32>,
     /// Renderer; by default the GPU on a hardware adapter, else the CPU (which is faster
@@ -358,8 +364,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             }),
         ));
     }
-    let total = settings.width as u64 * settings.height as u64 * settings.spp as u64;
-    let bar = progress_bar(total, args.quiet);
+    let progress = Progress::new(settings.width, settings.height, settings.spp, args.quiet);
     let start = Instant::now();
     let choice = match args.device {
         None => DeviceChoice::Auto,
@@ -372,11 +377,11 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             eprintln!("notice: {notice}");
         }
     }
-    let mut film = backend.render(&rs, &job, &|n| bar.inc(n))?;
+    let mut film = backend.render(&rs, &job, &|n| progress.inc(n))?;
     film.saved_aovs = saved;
     let rays = film.rays();
     let seconds = start.elapsed().as_secs_f64();
-    bar.finish_and_clear();
+    progress.finish();
     // The denoised image replaces the radiance, in the complete and the interrupted film.
     if let Some(d) = &denoiser {
         if film.samples > 0 && !(film.samples < settings.spp && args.no_partial) {
@@ -416,18 +421,6 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         );
     }
     Ok(())
-}
-
-fn progress_bar(total: u64, quiet: bool) -> ProgressBar {
-    if quiet || !std::io::stderr().is_terminal() {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {percent:>3}%  {per_sec} samples  ETA {eta}")
-            .expect("the template is valid"),
-    );
-    bar
 }
 
 pub fn info(path: &Path) -> Result<()> {

@@ -30,13 +30,15 @@ fn main() -> ExitCode {
         {
             ExitCode::SUCCESS
         }
+        // Stopped by Ctrl-C or SIGTERM: what the user asked for, so not an `error:`; the
+        // status still says the render is not complete.
+        Err(e) if e.is::<cli::Interrupted>() => {
+            eprintln!("{}", one_line(&e));
+            ExitCode::from(130)
+        }
         Err(e) => {
             eprintln!("error: {}", one_line(&e));
-            if e.is::<cli::Interrupted>() {
-                ExitCode::from(130)
-            } else {
-                ExitCode::FAILURE
-            }
+            ExitCode::FAILURE
         }
     }
 }

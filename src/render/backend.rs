@@ -44,7 +44,7 @@ impl Backend {
                 Ok((summary, false)) if summary.software && accel != Accel::Hardware => Ok((
                     Self::Cpu,
                     Some(format!(
-                        "the Vulkan adapter, {}, is a software driver; rendering with the faster CPU renderer (--device gpu uses the adapter anyway)",
+                        "{} is a software driver; rendering on the faster CPU (--device gpu to use it)",
                         summary.name
                     )),
                 )),
