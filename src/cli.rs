@@ -239,14 +239,20 @@ impl Denoiser {
 
 /// The denoiser `--denoise` asks for, made before the render so that a missing or unusable
 /// Open Image Denoise fails at once; `None` without `--denoise`.
-fn denoiser(wanted: bool) -> Result<Option<Denoiser>> {
+fn denoiser(wanted: bool, threads: Option<usize>) -> Result<Option<Denoiser>> {
     if !wanted {
         return Ok(None);
     }
     #[cfg(feature = "denoise")]
-    return Ok(Some(Denoiser::new()?));
+    return Ok(Some(match threads {
+        Some(n) => Denoiser::with_threads(n)?,
+        None => Denoiser::new()?,
+    }));
     #[cfg(not(feature = "denoise"))]
-    bail!("{NO_DENOISE}");
+    {
+        let _ = threads;
+        bail!("{NO_DENOISE}");
+    }
 }
 
 /// An axis for `--up`.
@@ -294,7 +300,7 @@ fn set_threads(threads: Option<usize>) -> Result<()> {
 pub struct Interrupted(String);
 
 pub fn render(args: &RenderArgs) -> Result<()> {
-    let denoiser = denoiser(args.denoise)?;
+    let denoiser = denoiser(args.denoise, args.threads)?;
     let aovs = match &args.aov {
         Some(list) => Aov::parse_list(list).context("--aov")?,
         None => Vec::new(),

@@ -32,10 +32,40 @@ pub struct Denoiser {
 }
 
 impl Denoiser {
-    /// A denoiser on the CPU.
+    /// A denoiser on the CPU, with as many threads as OIDN chooses (one per core).
     pub fn new() -> Result<Self, DenoiseError> {
         let device = oidn::Device::cpu().map_err(|e| DenoiseError::Oidn(e.to_string()))?;
         Ok(Self { device })
+    }
+
+    /// A denoiser on the CPU that uses at most `threads` threads (`--threads`), so that a
+    /// render confined to some cores is denoised on those too.
+    pub fn with_threads(threads: usize) -> Result<Self, DenoiseError> {
+        use oidn::sys::{
+            OIDNDeviceType_OIDN_DEVICE_TYPE_CPU, oidnCommitDevice, oidnNewDevice, oidnSetDeviceInt,
+        };
+        let threads = i32::try_from(threads).unwrap_or(i32::MAX);
+        // SAFETY: a new device is configured before its commit, as OIDN requires, and
+        // handed to `Device`, which owns and releases it from then on.
+        let device = unsafe {
+            let handle = oidnNewDevice(OIDNDeviceType_OIDN_DEVICE_TYPE_CPU);
+            if handle.is_null() {
+                return Err(DenoiseError::Oidn("cannot create a CPU device".into()));
+            }
+            oidnSetDeviceInt(handle, c"numThreads".as_ptr(), threads);
+            oidnCommitDevice(handle);
+            oidn::Device::from_raw(handle)
+        };
+        device
+            .get_error()
+            .map_err(|e| DenoiseError::Oidn(e.to_string()))?;
+        Ok(Self { device })
+    }
+
+    /// The threads the device runs (OIDN's `numThreads`; 0 where it chooses itself).
+    pub fn threads(&self) -> i32 {
+        // SAFETY: the device is valid while `self` is.
+        unsafe { oidn::sys::oidnGetDeviceInt(self.device.raw(), c"numThreads".as_ptr()) }
     }
 
     /// Denoises `color`, linear HDR radiance of `width` × `height` pixels in rows from the

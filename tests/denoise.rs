@@ -301,3 +301,27 @@ fn relmse_table() {
         raw256 / n
     );
 }
+
+/// `--threads N` confines the denoiser to N threads, and it still denoises: the image of a
+/// one-thread device equals that of the default one.
+#[test]
+fn a_denoiser_keeps_to_its_threads() {
+    let (rs, settings, _) = cornell_and_reference();
+    let film = render(&rs, settings, 4, 1);
+    let one = Denoiser::with_threads(1).expect("an OIDN CPU device of one thread");
+    assert_eq!(one.threads(), 1);
+    assert_eq!(Denoiser::with_threads(2).expect("two threads").threads(), 2);
+    let all = Denoiser::new().expect("an OIDN CPU device");
+    let a = one
+        .denoise(film.width, film.height, &pixels(&film), None, None)
+        .expect("denoise on one thread");
+    let b = all
+        .denoise(film.width, film.height, &pixels(&film), None, None)
+        .expect("denoise");
+    let worst = a
+        .iter()
+        .zip(&b)
+        .flat_map(|(x, y)| (0..3).map(move |c| (x[c] - y[c]).abs()))
+        .fold(0.0f32, f32::max);
+    assert!(worst < 1e-3, "one thread differs by {worst}");
+}
