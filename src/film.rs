@@ -423,11 +423,8 @@ impl Film {
                 path: path.display().to_string(),
             });
         }
-        // An EXR is always written by `encode_exr`, which records the sample count.
-        if format == Format::Exr {
-            return write_atomically(path, |tmp| self.encode_exr(tmp, true));
-        }
-        if self.saved_aovs == 0 {
+        // An EXR holds the AOVs itself; another format's go beside it.
+        if format == Format::Exr || self.saved_aovs == 0 {
             return write_atomically(path, |tmp| self.encode(tmp, format));
         }
         write_atomically(&Self::aov_path(path), |tmp| self.encode_exr(tmp, false))?;
@@ -489,16 +486,18 @@ impl Film {
         finish_file(out)
     }
 
+    /// The image in `format`: an EXR through [`Film::encode_exr`] (with the AOVs and the
+    /// sample count), the others through the `image` crate.
     fn encode(&self, tmp: &Path, format: Format) -> Result<(), String> {
         let (w, h) = (self.width, self.height);
-        let mean = self.mean();
         let image_format = match format {
-            Format::Exr => image::ImageFormat::OpenExr,
+            Format::Exr => return self.encode_exr(tmp, true),
             Format::Hdr => image::ImageFormat::Hdr,
             Format::Png => image::ImageFormat::Png,
             Format::Jpeg => image::ImageFormat::Jpeg,
             Format::Bmp => image::ImageFormat::Bmp,
         };
+        let mean = self.mean();
         let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
         let mut out = std::io::BufWriter::new(file);
         let result = match format {

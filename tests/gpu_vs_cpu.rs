@@ -3,7 +3,7 @@
 mod common;
 
 use common::scenes::{cornell, square};
-use common::stats::{fraction_close, mean_and_sd, pixel_channels as channels};
+use common::stats::{fraction_close, mean_and_sd, pixel_channels as channels, same_rays};
 use common::{cpu_render, gpu_render};
 use meshtrace::film::Film;
 use meshtrace::render::RenderJob;
@@ -80,9 +80,7 @@ fn gpu_replays_the_cpu_paths() {
     assert!(frac >= 0.99, "only {frac} of pixel channels agree");
     // The same paths trace the same rays: the films' `rays` channels agree pixel for pixel
     // but where rounding sent a path another way.
-    let rays = |f: &Film| f.channel(Film::RAYS).unwrap().data.clone();
-    let (g, c) = (rays(&gpu_film), rays(&cpu_film));
-    let same = g.iter().zip(&c).filter(|(a, b)| a == b).count() as f64 / g.len() as f64;
+    let same = same_rays(&gpu_film, &cpu_film);
     eprintln!(
         "{:.4}% of pixels traced the same rays ({} GPU, {} CPU)",
         100.0 * same,

@@ -13,11 +13,10 @@ mod common;
 use common::fs::TempDir;
 use common::rand::SplitMix;
 use common::scenes::{add_sphere, cornell, emissive_enclosure, scene, square};
-use common::stats::{assert_mean, fraction_close, pixel_channels};
+use common::stats::{assert_mean, fraction_close, pixel_channels, same_rays};
 use common::traversal::{Bounds, check_traversal, traversal_rays};
 use glam::Vec3;
 use meshtrace::bvh::{BuildParams, solid};
-use meshtrace::film::Film;
 use meshtrace::render::texture::alpha_test;
 use meshtrace::render::{RenderJob, RenderScene};
 use meshtrace::scene::{Camera, Material, Mesh, NO_NORMAL, NO_UV, RenderSettings, Sky, Triangle};
@@ -197,9 +196,7 @@ fn a_hardware_render_replays_the_cpu_paths() {
     let frac = fraction_close(&pixel_channels(&gpu), &pixel_channels(&cpu));
     eprintln!("{:.4}% of pixel channels agree to 1e-3", 100.0 * frac);
     assert!(frac >= 0.99, "only {frac} of pixel channels agree");
-    let rays = |f: &Film| f.channel(Film::RAYS).expect("rays").data.clone();
-    let (g, c) = (rays(&gpu), rays(&cpu));
-    let same = g.iter().zip(&c).filter(|(a, b)| a == b).count() as f64 / g.len() as f64;
+    let same = same_rays(&gpu, &cpu);
     eprintln!("{:.4}% of pixels traced the same rays", 100.0 * same);
     assert!(same >= 0.99, "only {same} of pixels traced the same rays");
 }

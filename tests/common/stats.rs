@@ -218,6 +218,14 @@ pub fn fraction_close(gpu: &[f64], cpu: &[f64]) -> f64 {
     close as f64 / gpu.len() as f64
 }
 
+/// The share of pixels whose paths traced as many rays in `a` as in `b` (the films'
+/// [`Film::RAYS`] channels): paths that replay each other.
+pub fn same_rays(a: &Film, b: &Film) -> f64 {
+    let rays = |f: &Film| f.channel(Film::RAYS).expect("a rays channel").data.clone();
+    let (a, b) = (rays(a), rays(b));
+    a.iter().zip(&b).filter(|(x, y)| x == y).count() as f64 / a.len() as f64
+}
+
 /// A film's mean pixel values, channel by channel.
 pub fn pixel_channels(film: &Film) -> Vec<f64> {
     film.mean()
