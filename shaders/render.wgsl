@@ -1,11 +1,12 @@
 // The render kernel: one invocation per pixel, tracing this dispatch's samples.
 
-// The film, params.film_texels texels per pixel: the radiance sum (xyz) and the index of
-// the pixel's next sample (w, as a float: exact to 2^24), then one texel per film channel,
-// the first being the `rays` channel (its x counts the rays traced), then one per AOV in
-// params.aovs, in the order of their bits.
+// The film, params.film_texels texels per pixel, each texel four exact fixed-point sums
+// (fixed.wgsl `Texel`: two vec4<u32>): the radiance sum (xyz) and the index of the pixel's
+// next sample (w, as a plain integer), then one texel per film channel, the first being
+// the `rays` channel (its x counts the rays traced), then one per AOV in params.aovs, in
+// the order of their bits.
 // mirror: src/film.rs `Film::texels_per_pixel`
-@group(1) @binding(0) var<storage, read_write> film: array<vec4<f32>>;
+@group(1) @binding(0) var<storage, read_write> film: array<Texel>;
 
 // [0]: invocations whose work a driver's loop limit cut short; [1]: always 0, read where
 // the compiler must not know it. The host reads them as `Status` (render/gpu/session.rs).
@@ -19,7 +20,7 @@ fn is_finite3(v: vec3<f32>) -> bool {
 // A pixel's AOV accumulators: a texel per AOV, indexed by its bit's position, as the AOV's
 // film channel holds it. mirror: src/render/cpu.rs `AovSums`
 struct AovSums {
-    t: array<vec4<f32>, 7>,
+    t: array<Texel, 7>,
 }
 
 // The film texel of the AOV of bit `bit` for the pixel whose first texel is `base`.
@@ -29,21 +30,22 @@ fn aov_texel(base: u32, bit: u32) -> u32 {
 
 // mirror: src/render/cpu.rs `add_aov_sample`
 fn add_aov_sample(sums: ptr<function, AovSums>, fh: FirstHit) {
-    (*sums).t[6].x += f32(fh.cost);
+    (*sums).t[6] = texel_add((*sums).t[6], vec4<f32>(f32(fh.cost), 0.0, 0.0, 0.0));
     if !fh.hit {
         return;
     }
     let depth = dot(fh.p - params.cam_position, params.cam_forward);
-    (*sums).t[0] += vec4<f32>(depth, 0.0, 0.0, 1.0);
-    (*sums).t[1] += vec4<f32>(fh.normal, 1.0);
-    (*sums).t[2] += vec4<f32>(fh.albedo, 1.0);
-    (*sums).t[3] += vec4<f32>(1.0, 0.0, 0.0, 1.0);
+    (*sums).t[0] = texel_add((*sums).t[0], vec4<f32>(depth, 0.0, 0.0, 1.0));
+    (*sums).t[1] = texel_add((*sums).t[1], vec4<f32>(fh.normal, 1.0));
+    (*sums).t[2] = texel_add((*sums).t[2], vec4<f32>(fh.albedo, 1.0));
+    (*sums).t[3] = texel_add((*sums).t[3], vec4<f32>(1.0, 0.0, 0.0, 1.0));
 }
 
 // mirror: src/render/cpu.rs `set_aov_ids`
 fn set_aov_ids(sums: ptr<function, AovSums>, fh: FirstHit) {
-    (*sums).t[4] = vec4<f32>(f32(fh.object & 0xffffu), f32(fh.object >> 16u), 0.0, 1.0);
-    (*sums).t[5] = vec4<f32>(f32(fh.material & 0xffffu), f32(fh.material >> 16u), 0.0, 1.0);
+    let none = Texel(vec4<u32>(0u), vec4<u32>(0u));
+    (*sums).t[4] = texel_add(none, vec4<f32>(f32(fh.object & 0xffffu), f32(fh.object >> 16u), 0.0, 1.0));
+    (*sums).t[5] = texel_add(none, vec4<f32>(f32(fh.material & 0xffffu), f32(fh.material >> 16u), 0.0, 1.0));
 }
 
 // A sample's camera ray. With AOVs, also adds its first hit to `sums` (and with sample 0
@@ -81,10 +83,10 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let pixel = y * params.width + x;
     let base = pixel * params.film_texels;
-    let start = film[base];
-    var radiance = start.xyz;
-    var rays = film[base + 1u].x;
-    var s = max(params.sample_start, u32(start.w));
+    // The radiance texel's w holds the next sample's index as is (adding 0 keeps it).
+    var radiance = film[base];
+    var rays = film[base + 1u];
+    var s = max(params.sample_start, radiance.zw.z);
     if s >= params.sample_end {
         return;
     }
@@ -102,9 +104,9 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     loop {
         if path_step(&st, rng) {
             if is_finite3(st.radiance) && seen {
-                radiance += st.radiance;
+                radiance = texel_add(radiance, vec4<f32>(st.radiance, 0.0));
             }
-            rays += f32(st.rays);
+            rays = texel_add(rays, vec4<f32>(f32(st.rays), 0.0, 0.0, 0.0));
             s += 1u;
             if s >= params.sample_end {
                 break;
@@ -125,8 +127,9 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         atomicAdd(&status[0], 1u);
         return;
     }
-    film[base] = vec4<f32>(radiance, f32(s));
-    film[base + 1u].x = rays;
+    radiance.zw.z = s;
+    film[base] = radiance;
+    film[base + 1u] = rays;
     for (var k = 0u; k < 7u; k++) {
         if (params.aovs & (1u << k)) != 0u {
             film[aov_texel(base, 1u << k)] = sums.t[k];

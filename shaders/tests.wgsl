@@ -209,3 +209,17 @@ fn test_environment(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = sample_env(u);
     case_out(i, u4(vec4<f32>(env_radiance(dir), env_pdf(dir))), u4(vec4<f32>(e.dir, e.pdf)));
 }
+
+// in: (v0 bits, v1 bits, a.lo, a.hi), (b.lo, b.hi, -, -) | out: (to_fixed(v0), to_fixed(v1)),
+// (fixed_add(a, b), texel_add of (v0, v1, 0, 1) to (a, b, a, b) in its first two sums)
+@compute @workgroup_size(64)
+fn test_fixed(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = case_index(gid);
+    if i >= case_count() { return; }
+    let k = case_in(i, 0u);
+    let b = case_in(i, 1u).xy;
+    let v0 = bitcast<f32>(k.x);
+    let v1 = bitcast<f32>(k.y);
+    let t = texel_add(Texel(vec4<u32>(k.zw, b), vec4<u32>(k.zw, b)), vec4<f32>(v0, v1, 0.0, 1.0));
+    case_out(i, vec4<u32>(to_fixed(v0), to_fixed(v1)), vec4<u32>(fixed_add(k.zw, b), t.xy.zw));
+}

@@ -7,9 +7,10 @@ use glam::Vec3;
 use meshtrace::bvh::BuildParams;
 #[cfg(feature = "denoise")]
 use meshtrace::denoise::Denoiser;
-use meshtrace::film::{Aov, Film, Format};
+use meshtrace::film::{Aov, Film, Format, PartHeader};
 use meshtrace::math::Aabb;
 use meshtrace::render::backend::{Backend, DeviceChoice};
+use meshtrace::render::digest::render_digest;
 use meshtrace::render::gpu::{self, Accel, GpuError};
 use meshtrace::render::{LIGHT_EMITTER, RenderJob, RenderScene, SKY_EMITTER};
 use meshtrace::scene::studio::{BareOptions, Up};
@@ -19,7 +20,9 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+mod merge;
 mod progress;
+pub use merge::{MergeArgs, merge};
 use progress::Progress;
 
 /// `println!` that returns an error instead of panicking when standard output is closed
@@ -52,6 +55,9 @@ pub enum Command {
         /// Scene file, .obj mesh, .gltf/.glb file, or builtin:NAME.
         scene: PathBuf,
     },
+    /// Add the part files of one render (`render --part K/N`) into its image: bit for bit
+    /// one render of all the samples on the same device.
+    Merge(MergeArgs),
     /// List the Vulkan adapters; pick one with --adapter INDEX or a name substring.
     Adapters,
     /// Measure BVH build, ray and path-tracing throughput of both renderers.
@@ -218,6 +224,23 @@ pub struct RenderArgs {
     /// written as rendered). Needs a build with `--features denoise`.
     #[arg(long)]
     pub denoise: bool,
+    /// Render only part K of N (K from 0) of the samples, into an .exr part file that
+    /// `meshtrace merge` combines with the others: the merged image has the bits of one
+    /// render of all the samples on the same device.
+    #[arg(long, value_name = "K/N")]
+    pub part: Option<String>,
+}
+
+/// `--part K/N`: K from 0, below N.
+fn parse_part(text: &str) -> Result<(u32, u32)> {
+    let pair = text
+        .split_once('/')
+        .and_then(|(k, n)| Some((k.trim().parse::<u32>().ok()?, n.trim().parse::<u32>().ok()?)));
+    match pair {
+        Some((k, n)) if k < n => Ok((k, n)),
+        Some((k, n)) => bail!("--part {k}/{n}: K counts from 0 and must be below N"),
+        None => bail!("--part `{text}`: not K/N (such as 0/4)"),
+    }
 }
 
 /// What `--denoise` says in a build without the `denoise` feature.
@@ -300,13 +323,27 @@ fn set_threads(threads: Option<usize>) -> Result<()> {
 pub struct Interrupted(String);
 
 pub fn render(args: &RenderArgs) -> Result<()> {
+    let part = args.part.as_deref().map(parse_part).transpose()?;
+    if part.is_some() {
+        if args.denoise {
+            bail!(
+                "--denoise applies to a whole image: denoise when merging the parts, not in a part"
+            );
+        }
+        if Format::from_path(&args.output)? != Format::Exr {
+            bail!(
+                "{}: --part writes an .exr part file (it carries the exact sums `meshtrace merge` adds); give a .exr output",
+                args.output.display()
+            );
+        }
+    }
     let denoiser = denoiser(args.denoise, args.threads)?;
     let aovs = match &args.aov {
         Some(list) => Aov::parse_list(list).context("--aov")?,
         None => Vec::new(),
     };
-    Film::check_writable(&args.output, args.transparent)?;
-    if !aovs.is_empty() && Format::from_path(&args.output)? != Format::Exr {
+    Film::check_writable(&args.output, args.transparent && part.is_none())?;
+    if !aovs.is_empty() && part.is_none() && Format::from_path(&args.output)? != Format::Exr {
         Film::check_writable(&Film::aov_path(&args.output), false)?;
     }
     set_threads(args.threads)?;
@@ -333,6 +370,15 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         bail!("--{}: {message}", field.replace('_', "-"));
     }
     let settings = *s;
+    if let Some((_, n)) = part
+        && n > settings.spp
+    {
+        bail!(
+            "--part: {n} parts of {} spp would leave some empty; use at most {} parts",
+            settings.spp,
+            settings.spp
+        );
+    }
     let rs = RenderScene::new(&scene, &BuildParams::default())?;
     // The denoiser is guided by the first surface's albedo and normal, which the film then
     // holds whether or not they are written.
@@ -343,6 +389,38 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         0
     };
     let mut job = RenderJob::new(settings).with_aovs(saved | guides, args.transparent);
+    let samples = match part {
+        Some((k, n)) => PartHeader::range(k, n, settings.spp),
+        None => 0..settings.spp,
+    };
+    job = job.with_samples(samples.clone());
+    let choice = match args.device {
+        None => DeviceChoice::Auto,
+        Some(Device::Cpu) => DeviceChoice::Cpu,
+        Some(Device::Gpu) => DeviceChoice::Gpu,
+    };
+    let (backend, notice) = choose_backend(choice, args.adapter.as_deref(), args.accel)?;
+    if let Some(notice) = notice {
+        if !args.quiet {
+            eprintln!("notice: {notice}");
+        }
+    }
+    // A part file records which render it belongs to; any other output is an image.
+    let header = part.map(|(index, count)| PartHeader {
+        index,
+        count,
+        start: samples.start,
+        end: samples.end,
+        spp: settings.spp,
+        seed: settings.seed,
+        device: backend.device_id(),
+        digest: render_digest(&rs, &job),
+    });
+    let output = args.output.clone();
+    let write = Arc::new(move |film: &Film| match &header {
+        Some(h) => film.save_part(&output, h),
+        None => film.save(&output),
+    });
     let cancel = Arc::new(AtomicBool::new(false));
     job.cancel = Some(cancel.clone());
     // Ctrl-C, SIGTERM and SIGHUP (ctrlc's `termination` feature) end the render after the
@@ -358,31 +436,21 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         if !(every > 0.0 && every.is_finite()) {
             bail!("--checkpoint must be a positive number of seconds");
         }
-        let out = args.output.clone();
+        let write = write.clone();
         job.checkpoint = Some((
             Duration::from_secs_f64(every),
             Arc::new(move |film: &Film| {
                 let mut film = film.clone();
                 film.saved_aovs = saved;
-                if let Err(e) = film.save(&out) {
+                if let Err(e) = write(&film) {
                     eprintln!("warning: checkpoint not written: {e}");
                 }
             }),
         ));
     }
-    let progress = Progress::new(settings.width, settings.height, settings.spp, args.quiet);
+    let wanted = samples.end - samples.start;
+    let progress = Progress::new(settings.width, settings.height, wanted, args.quiet);
     let start = Instant::now();
-    let choice = match args.device {
-        None => DeviceChoice::Auto,
-        Some(Device::Cpu) => DeviceChoice::Cpu,
-        Some(Device::Gpu) => DeviceChoice::Gpu,
-    };
-    let (backend, notice) = choose_backend(choice, args.adapter.as_deref(), args.accel)?;
-    if let Some(notice) = notice {
-        if !args.quiet {
-            eprintln!("notice: {notice}");
-        }
-    }
     let mut film = backend.render(&rs, &job, &|n| progress.inc(n))?;
     film.saved_aovs = saved;
     let rays = film.rays();
@@ -390,36 +458,41 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     progress.finish();
     // The denoised image replaces the radiance, in the complete and the interrupted film.
     if let Some(d) = &denoiser {
-        if film.samples > 0 && !(film.samples < settings.spp && args.no_partial) {
+        if film.samples > 0 && !(film.samples < wanted && args.no_partial) {
             d.denoise_film(&mut film)?;
         }
     }
-    if film.samples < settings.spp {
+    if film.samples < wanted {
         let what = if args.no_partial {
             format!(
-                "at {} of {} spp; nothing written (--no-partial)",
-                film.samples, settings.spp
+                "at {} of {wanted} spp; nothing written (--no-partial)",
+                film.samples
             )
         } else if film.samples == 0 {
             "before the first pass finished; nothing written".to_string()
         } else {
-            film.save(&args.output)?;
+            write(&film)?;
             format!(
-                "wrote {} with {} of {} spp",
+                "wrote {} with {} of {wanted} spp",
                 args.output.display(),
                 film.samples,
-                settings.spp
             )
         };
         return Err(Interrupted(what).into());
     }
-    film.save(&args.output)?;
+    write(&film)?;
     if !args.quiet {
+        let what = match part {
+            Some((k, n)) => format!(
+                "part {k}/{n} (samples {}..{} of {})",
+                samples.start, samples.end, settings.spp
+            ),
+            None => format!("{} spp", settings.spp),
+        };
         eprintln!(
-            "{}x{} at {} spp on {} in {:.2} s ({:.2} Mrays/s) -> {}",
+            "{}x{} at {what} on {} in {:.2} s ({:.2} Mrays/s) -> {}",
             settings.width,
             settings.height,
-            settings.spp,
             backend.name(),
             seconds,
             rays as f64 / seconds / 1e6,

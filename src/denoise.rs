@@ -154,9 +154,8 @@ impl Denoiser {
             albedo.as_deref(),
             normal.as_deref(),
         )?;
-        let samples = film.samples as f32;
-        for (sum, d) in film.sum.iter_mut().zip(&denoised) {
-            *sum = Vec3::from(*d) * samples;
+        for (i, d) in denoised.iter().enumerate() {
+            film.set_mean(i, Vec3::from(*d));
         }
         Ok(())
     }

@@ -10,8 +10,12 @@
 //! output as extra channels of the one part, and beside any other output into one
 //! `<stem>.aovs.exr`; object and material ids are 32-bit unsigned channels there.
 
+use crate::fixed::{self, FIXED_FRACTION_BITS, Texel, fixed_add, from_fixed};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
+
+mod part;
+pub use part::PartHeader;
 
 /// How a channel combines the samples of a pixel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -134,26 +138,30 @@ pub enum AovValues {
     U32(Vec<u32>),
 }
 
-/// One named per-pixel channel beyond radiance. A pixel's entry is one texel, as in the
-/// GPU's accumulation buffer: up to three components in `xyz`, and in `w` what the
-/// accumulation rule needs.
+/// One named per-pixel channel beyond radiance. A pixel's entry is one texel of exact
+/// fixed-point sums ([`crate::fixed`]), as in the GPU's accumulation buffer: up to three
+/// components in `xyz`, and in `w` what the accumulation rule needs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Channel {
     pub name: String,
     /// Components used, 1 to 3.
     pub components: usize,
     pub accumulation: Accumulation,
-    pub data: Vec<[f32; 4]>,
+    pub data: Vec<Texel>,
 }
 
 /// Accumulated samples: per-pixel sums of radiance, plus the named channels, each with
-/// its accumulation rule. The first channel is always [`Film::RAYS`].
+/// its accumulation rule. The first channel is always [`Film::RAYS`]. Every sum is exact
+/// ([`crate::fixed`]), so films of disjoint sample ranges merge into the bits of one render.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Film {
     pub width: u32,
     pub height: u32,
-    /// `sum[y * width + x]` is the sum of that pixel's radiance samples.
-    pub sum: Vec<Vec3>,
+    /// `sum[y * width + x]` is the fixed-point sum of that pixel's radiance samples.
+    pub sum: Vec<[i64; 3]>,
+    /// The first sample the film holds: its samples are `first_sample..first_sample +
+    /// samples`.
+    pub first_sample: u32,
     /// Samples per pixel in `sum` and in the channels.
     pub samples: u32,
     pub channels: Vec<Channel>,
@@ -208,6 +216,8 @@ pub enum FilmError {
     Io { path: String, message: String },
     #[error("unknown AOV `{name}`; the AOVs are {valid}")]
     UnknownAov { name: String, valid: String },
+    #[error("{path}: not a part file of `meshtrace render --part`: {message}")]
+    NotAPart { path: String, message: String },
     #[error(
         "{path}: a transparent render is written as a PNG (its alpha channel is the coverage); give a .png output"
     )]
@@ -227,7 +237,8 @@ impl Film {
         let mut film = Self {
             width,
             height,
-            sum: vec![Vec3::ZERO; width as usize * height as usize],
+            sum: vec![[0; 3]; width as usize * height as usize],
+            first_sample: 0,
             samples: 0,
             channels: Vec::new(),
             transparent: false,
@@ -303,7 +314,7 @@ impl Film {
             name: name.to_string(),
             components,
             accumulation,
-            data: vec![[0.0; 4]; self.sum.len()],
+            data: vec![[0; 4]; self.sum.len()],
         });
     }
 
@@ -319,47 +330,59 @@ impl Film {
 
     /// The rays traced for all the film's samples.
     pub fn rays(&self) -> u64 {
-        self.channel(Self::RAYS)
-            .map_or(0, |c| c.data.iter().map(|t| t[0] as u64).sum())
+        self.channel(Self::RAYS).map_or(0, |c| {
+            c.data
+                .iter()
+                .map(|t| (t[0] >> FIXED_FRACTION_BITS) as u64)
+                .sum()
+        })
     }
 
     /// The per-pixel mean radiance.
     pub fn mean(&self) -> Vec<Vec3> {
-        let inv = if self.samples == 0 {
-            0.0
-        } else {
-            1.0 / self.samples as f32
-        };
-        self.sum.iter().map(|&s| s * inv).collect()
+        self.sum.iter().map(|&s| self.mean_of(s)).collect()
+    }
+
+    /// The mean of a pixel's radiance sum over the film's samples (0 with none).
+    fn mean_of(&self, sum: [i64; 3]) -> Vec3 {
+        if self.samples == 0 {
+            return Vec3::ZERO;
+        }
+        let n = self.samples as f64;
+        Vec3::from(sum.map(|s| (from_fixed(s) / n) as f32))
+    }
+
+    /// Sets pixel `i`'s radiance sum to that of `samples` samples of mean `mean` (the
+    /// denoiser replaces the image this way).
+    pub fn set_mean(&mut self, i: usize, mean: Vec3) {
+        self.sum[i] = fixed::to_fixed3(mean * self.samples as f32);
     }
 
     /// A channel's per-pixel values by its rule: the mean over all samples, the mean over
     /// the samples that hit, or the centre ray's value. `None` for a pixel that has none
     /// (no sample hit, or its centre ray is not in this film).
     pub fn channel_values(&self, channel: &Channel) -> Vec<Option<[f32; 3]>> {
-        let inv = if self.samples == 0 {
-            0.0
-        } else {
-            1.0 / self.samples as f32
-        };
-        let scaled = |t: &[f32; 4], k: f32| [t[0] * k, t[1] * k, t[2] * k];
+        let scaled = |t: &Texel, n: f64| [0, 1, 2].map(|k| (from_fixed(t[k]) / n) as f32);
+        let samples = self.samples as f64;
         channel
             .data
             .iter()
             .map(|t| match channel.accumulation {
-                Accumulation::AllSamples => (self.samples > 0).then(|| scaled(t, inv)),
-                Accumulation::HitSamples => (t[3] > 0.0).then(|| scaled(t, 1.0 / t[3])),
-                Accumulation::PixelCentre => (t[3] > 0.0).then(|| scaled(t, 1.0)),
+                Accumulation::AllSamples => (self.samples > 0).then(|| scaled(t, samples)),
+                Accumulation::HitSamples => (t[3] > 0).then(|| scaled(t, from_fixed(t[3]))),
+                Accumulation::PixelCentre => (t[3] > 0).then(|| scaled(t, 1.0)),
             })
             .collect()
     }
 
     /// Adds another film of the same size and channels rendered over a disjoint sample
-    /// range. Pixel-centre values come from whichever film traced them.
+    /// range: exactly, so the result does not depend on the order or the split. The first
+    /// sample becomes the lower of the two. Pixel-centre values come from whichever film
+    /// traced them.
     pub fn merge(&mut self, other: &Film) {
         assert_eq!((self.width, self.height), (other.width, other.height));
         for (a, b) in self.sum.iter_mut().zip(&other.sum) {
-            *a += *b;
+            *a = fixed::fixed_add3(*a, *b);
         }
         assert_eq!(self.channels.len(), other.channels.len(), "channel lists");
         for (a, b) in self.channels.iter_mut().zip(&other.channels) {
@@ -370,14 +393,19 @@ impl Film {
             for (x, y) in a.data.iter_mut().zip(&b.data) {
                 match a.accumulation {
                     Accumulation::AllSamples | Accumulation::HitSamples => {
-                        for k in 0..4 {
-                            x[k] += y[k];
-                        }
+                        *x = [0, 1, 2, 3].map(|k| fixed_add(x[k], y[k]));
                     }
-                    Accumulation::PixelCentre if y[3] > 0.0 => *x = *y,
+                    Accumulation::PixelCentre if y[3] > 0 => *x = *y,
                     Accumulation::PixelCentre => {}
                 }
             }
+        }
+        if other.samples > 0 {
+            self.first_sample = if self.samples == 0 {
+                other.first_sample
+            } else {
+                self.first_sample.min(other.first_sample)
+            };
         }
         self.samples += other.samples;
         self.transparent |= other.transparent;
@@ -427,13 +455,21 @@ impl Film {
         if format == Format::Exr || self.saved_aovs == 0 {
             return write_atomically(path, |tmp| self.encode(tmp, format));
         }
-        write_atomically(&Self::aov_path(path), |tmp| self.encode_exr(tmp, false))?;
+        write_atomically(&Self::aov_path(path), |tmp| {
+            self.encode_exr(tmp, false, None)
+        })?;
         write_atomically(path, |tmp| self.encode(tmp, format))
     }
 
     /// One single-part EXR: the mean radiance as `R`, `G`, `B` if `radiance`, then every
-    /// AOV's channels (ids as 32-bit unsigned), losslessly compressed.
-    fn encode_exr(&self, tmp: &Path, radiance: bool) -> Result<(), String> {
+    /// AOV's channels (ids as 32-bit unsigned), losslessly compressed (ZIP); for a `part`, also
+    /// the exact sums and the part's header ([`Film::save_part`]).
+    fn encode_exr(
+        &self,
+        tmp: &Path,
+        radiance: bool,
+        part: Option<&PartHeader>,
+    ) -> Result<(), String> {
         use exr::prelude::{
             AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes,
             WritableImage,
@@ -467,14 +503,21 @@ impl Film {
         // The samples per pixel the image holds: all of them, or those an interruption
         // (Ctrl-C, SIGTERM) left.
         let mut attributes = LayerAttributes::default();
+        if let Some(header) = part {
+            let (sums, header) = part::part_channels(self, header);
+            channels.extend(sums);
+            attributes.other.extend(header);
+        }
         attributes.other.insert(
             exr::meta::attribute::Text::from(SAMPLES_ATTRIBUTE),
             exr::meta::attribute::AttributeValue::I32(self.samples.min(i32::MAX as u32) as i32),
         );
+        // ZIP over blocks of 16 rows, written in increasing order: lossless, compact, and
+        // the same bytes for the same film (a merge of parts is `cmp`-equal to one render).
         let layer = Layer::new(
             size,
             attributes,
-            Encoding::FAST_LOSSLESS,
+            Encoding::SMALL_LOSSLESS,
             AnyChannels::sort(channels.into()),
         );
         let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
@@ -491,7 +534,7 @@ impl Film {
     fn encode(&self, tmp: &Path, format: Format) -> Result<(), String> {
         let (w, h) = (self.width, self.height);
         let image_format = match format {
-            Format::Exr => return self.encode_exr(tmp, true),
+            Format::Exr => return self.encode_exr(tmp, true, None),
             Format::Hdr => image::ImageFormat::Hdr,
             Format::Png => image::ImageFormat::Png,
             Format::Jpeg => image::ImageFormat::Jpeg,

@@ -12,6 +12,7 @@ pub mod bvh;
 #[cfg(feature = "denoise")]
 pub mod denoise;
 pub mod film;
+pub mod fixed;
 pub mod geometry;
 pub mod math;
 pub mod render;

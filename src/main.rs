@@ -18,6 +18,7 @@ fn main() -> ExitCode {
     let result = match &args.command {
         cli::Command::Render(r) => cli::render(r),
         cli::Command::Info { scene } => cli::info(scene),
+        cli::Command::Merge(m) => cli::merge(m),
         cli::Command::Adapters => cli::adapters(),
         cli::Command::Bench(b) => cli::bench(b),
     };

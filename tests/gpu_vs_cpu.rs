@@ -5,17 +5,14 @@ mod common;
 use common::scenes::{cornell, square};
 use common::stats::{fraction_close, mean_and_sd, pixel_channels as channels, same_rays};
 use common::{cpu_render, gpu_render};
-use meshtrace::film::Film;
+use meshtrace::film::{Aov, Film};
 use meshtrace::render::RenderJob;
 use meshtrace::render::gpu::GpuRenderer;
 use meshtrace::scene::RenderSettings;
 
-/// The film's sums as bits, for exact comparisons.
-fn bits(film: &Film) -> Vec<u32> {
-    film.sum
-        .iter()
-        .flat_map(|p| p.to_array().map(f32::to_bits))
-        .collect()
+/// The film's exact sums, for comparisons bit for bit.
+fn bits(film: &Film) -> Vec<i64> {
+    film.sum.iter().flatten().copied().collect()
 }
 
 /// Different seeds: the GPU and CPU images are independent draws of the same estimator.
@@ -190,17 +187,31 @@ fn long_dispatches_replay_the_cpu_paths() {
     );
 }
 
-/// Renders of disjoint sample ranges merge into the full render, bit for bit on the CPU.
+/// Renders of disjoint sample ranges merge into the full render, bit for bit, on the CPU
+/// and on the GPU, AOVs included.
 #[test]
 fn sample_ranges_merge_into_the_full_render() {
     let (rs, _) = cornell();
     let s = square(32, 8, 8, 4);
-    let full = cpu_render(&rs, &RenderJob::new(s));
-    let mut first = cpu_render(&rs, &RenderJob::new(s).with_samples(0..3));
-    let second = cpu_render(&rs, &RenderJob::new(s).with_samples(3..8));
-    first.merge(&second);
-    assert_eq!(first.samples, full.samples);
-    for (a, b) in first.sum.iter().zip(&full.sum) {
-        assert!((*a - *b).abs().max_element() <= 1e-5 * b.abs().max_element().max(1.0));
+    let aovs = Aov::mask(&Aov::ALL);
+    let job =
+        |range: std::ops::Range<u32>| RenderJob::new(s).with_aovs(aovs, false).with_samples(range);
+    let gpu = common::gpu("sample_ranges_merge_into_the_full_render (GPU half)");
+    type Render<'a> = Box<dyn Fn(&RenderJob) -> Film + 'a>;
+    let mut renderers: Vec<(&str, Render)> = vec![("CPU", Box::new(|j| cpu_render(&rs, j)))];
+    if let Some(ctx) = &gpu {
+        renderers.push(("GPU", Box::new(|j| gpu_render(ctx, &rs, j))));
+    }
+    for (name, render) in renderers {
+        let full = render(&job(0..8));
+        let mut merged = render(&job(5..8));
+        merged.merge(&render(&job(0..2)));
+        merged.merge(&render(&job(2..5)));
+        assert_eq!(merged.samples, full.samples, "{name}");
+        assert_eq!(merged.first_sample, 0, "{name}");
+        assert!(
+            merged == full,
+            "{name}: the merged parts differ from the full render"
+        );
     }
 }

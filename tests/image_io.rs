@@ -8,6 +8,7 @@ use glam::Vec3;
 use meshtrace::film::{
     Accumulation, Film, FilmError, Format, linear_to_srgb8, read_linear, srgb8_to_linear,
 };
+use meshtrace::fixed::{fixed_add3, texel_add, to_fixed, to_fixed3};
 use std::path::Path;
 
 const VALUES: [f32; 11] = [0.0, 0.5, 1.0, 3.7, 1e-3, 0.18, 0.02, 2.0, 0.75, 10.0, 0.04];
@@ -18,7 +19,7 @@ fn test_film() -> Film {
     let mut film = Film::new(w, h);
     for (i, px) in film.sum.iter_mut().enumerate() {
         let v = |c: usize| VALUES[(3 * i + c) % VALUES.len()];
-        *px = Vec3::new(v(0), v(1), v(2));
+        *px = to_fixed3(Vec3::new(v(0), v(1), v(2)));
     }
     film.samples = 1;
     film
@@ -46,7 +47,7 @@ fn exr_keeps_the_mean_of_many_samples() {
     let dir = TempDir::new("exr-mean");
     let mut film = test_film();
     for s in &mut film.sum {
-        *s *= 4.0;
+        *s = s.map(|c| c * 4);
     }
     film.samples = 4;
     let pixels = save_and_read(&film, &dir, "mean.exr");
@@ -99,7 +100,7 @@ fn jpeg_is_close() {
         for x in 0..w {
             let fx = x as f32 / (w - 1) as f32;
             let fy = y as f32 / (h - 1) as f32;
-            film.sum[(y * w + x) as usize] = Vec3::new(fx, fy, 0.5 * (fx + fy)) * 2.0;
+            film.sum[(y * w + x) as usize] = to_fixed3(Vec3::new(fx, fy, 0.5 * (fx + fy)) * 2.0);
         }
     }
     film.samples = 2;
@@ -209,36 +210,60 @@ fn no_temporary_file_remains_after_save() {
     assert_eq!(entries, expected);
 }
 
+/// Films of disjoint sample ranges merge into the bits of the film of all of them, for
+/// every split and order, though the samples are values whose f32 sums depend on the order
+/// (a spread of magnitudes from 1e-4 to 1e4).
 #[test]
-fn merge_of_sample_halves_equals_all_samples() {
-    let (w, h, n) = (6u32, 4u32, 8u32);
-    // Sample k of pixel i: dyadic values, so every order of addition is exact.
+fn merges_of_sample_ranges_equal_all_samples_bit_for_bit() {
+    let (w, h, n) = (6u32, 4u32, 12u32);
     let sample = |i: usize, k: u32| {
+        let x = ((i as u32 * 7919 + k * 104729) % 1000) as f32 / 1000.0;
         Vec3::new(
-            (i % 5) as f32 * 0.25 + k as f32 * 0.5,
-            (k % 3) as f32 * 0.125,
-            (i as f32) * 0.0625 + (k * k) as f32,
+            10f32.powf(8.0 * x - 4.0),
+            x * 0.1 + 0.3,
+            (k as f32 * 0.7).sin().abs(),
         )
     };
     let render = |range: std::ops::Range<u32>| {
         let mut film = Film::new(w, h);
         for k in range.clone() {
             for (i, px) in film.sum.iter_mut().enumerate() {
-                *px += sample(i, k);
+                *px = fixed_add3(*px, to_fixed3(sample(i, k)));
             }
         }
+        film.first_sample = range.start;
         film.samples = range.len() as u32;
         film
     };
     let all = render(0..n);
-    let mut merged = render(0..3);
-    merged.merge(&render(3..n));
-    assert_eq!(merged.samples, n);
-    assert_eq!(merged, all);
-    assert_eq!(merged.mean(), all.mean());
-    // and the mean is the mean of the samples
-    let mean0: Vec3 = (0..n).map(|k| sample(0, k)).sum::<Vec3>() / n as f32;
-    assert_eq!(all.mean()[0], mean0);
+    // In f32 the order matters for these samples: the test would pass vacuously otherwise.
+    let f32_sum = |order: &[u32]| {
+        order
+            .iter()
+            .map(|&k| sample(3, k))
+            .fold(Vec3::ZERO, |a, b| a + b)
+    };
+    let forward: Vec<u32> = (0..n).collect();
+    let split: Vec<u32> = (5..n).chain(0..5).collect();
+    assert_ne!(f32_sum(&forward), f32_sum(&split));
+    for parts in 1..=n {
+        let bounds: Vec<u32> = (0..=parts).map(|p| p * n / parts).collect();
+        let films: Vec<Film> = bounds.windows(2).map(|b| render(b[0]..b[1])).collect();
+        for reversed in [false, true] {
+            let mut order: Vec<&Film> = films.iter().collect();
+            if reversed {
+                order.reverse();
+            }
+            let mut merged = order[0].clone();
+            for f in &order[1..] {
+                merged.merge(f);
+            }
+            assert_eq!(merged, all, "{parts} parts, reversed {reversed}");
+        }
+    }
+    // And the mean is the mean of the samples.
+    let mean0 = (0..n).map(|k| sample(0, k).as_dvec3()).sum::<glam::DVec3>() / n as f64;
+    assert!((all.mean()[0].as_dvec3() - mean0).abs().max_element() < 1e-6 * mean0.max_element());
 }
 
 /// A two-pixel film holding one sample range of three channels, as a renderer would fill
@@ -251,16 +276,19 @@ fn channel_film(range: std::ops::Range<u32>) -> Film {
     film.add_channel("hits", 3, Accumulation::HitSamples);
     film.add_channel("centre", 1, Accumulation::PixelCentre);
     for k in range.clone() {
-        film.channels[1].data[0][0] += k as f32;
-        film.channels[1].data[1][0] += 1.0;
+        let t = &mut film.channels[1].data;
+        t[0] = texel_add(t[0], [k as f32, 0.0, 0.0, 0.0]);
+        t[1] = texel_add(t[1], [1.0, 0.0, 0.0, 0.0]);
         if k % 2 == 0 {
             let t = &mut film.channels[2].data[0];
-            *t = [t[0] + k as f32, t[1] + 1.0, t[2] + 2.0, t[3] + 1.0];
+            *t = texel_add(*t, [k as f32, 1.0, 2.0, 1.0]);
         }
     }
     if range.start == 0 {
-        film.channels[3].data = vec![[7.0, 0.0, 0.0, 1.0], [9.0, 0.0, 0.0, 1.0]];
+        let centre = |v: f32| texel_add([0; 4], [v, 0.0, 0.0, 1.0]);
+        film.channels[3].data = vec![centre(7.0), centre(9.0)];
     }
+    film.first_sample = range.start;
     film.samples = range.len() as u32;
     film
 }
@@ -303,8 +331,8 @@ fn channels_follow_their_accumulation_rules_and_merge() {
 fn rays_are_counted_per_pixel() {
     let mut film = Film::new(2, 2);
     assert_eq!(film.channels[0].name, Film::RAYS);
-    film.channels[0].data[1][0] = 5.0;
-    film.channels[0].data[3][0] = 7.0;
+    film.channels[0].data[1][0] = to_fixed(5.0);
+    film.channels[0].data[3][0] = to_fixed(7.0);
     assert_eq!(film.rays(), 12);
     assert_eq!(film.texels_per_pixel(), 2);
 }

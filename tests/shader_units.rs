@@ -16,6 +16,9 @@ use common::stats::{Failures, Tally, Worst, rel, rel3};
 use common::traversal::{Bounds, check_traversal, near_edge, plane_hit_f64, traversal_rays};
 use glam::{Vec2, Vec3};
 use meshtrace::bvh::{BuildParams, solid};
+use meshtrace::fixed::{
+    FIXED_LIMIT, FIXED_ONE, fixed_add, from_words, texel_add, to_fixed, to_words,
+};
 use meshtrace::geometry::{ShearedRay, T_INF, intersect_aabb, intersect_triangle, safe_inverse};
 use meshtrace::math::Ray;
 use meshtrace::render::bsdf::{bsdf_eval, bsdf_pdf, bsdf_sample, fresnel_dielectric};
@@ -192,6 +195,97 @@ fn rng_matches_bit_for_bit() {
     }
     eprintln!(
         "test_rng: {} cases, {} differ (bit-exact required)",
+        cases.len(),
+        fail.count
+    );
+    fail.check(cases.len());
+}
+
+/// Exact film sums: every f32 class (zeros, subnormals, ties at half a unit, the clamp,
+/// infinities, NaN) to fixed point, and additions across the word boundary and to
+/// saturation, bit for bit.
+#[test]
+fn fixed_point_sums_match_bit_for_bit() {
+    let Some(ctx) = common::gpu("fixed_point_sums_match_bit_for_bit") else {
+        return;
+    };
+    let (rs, settings) = cornell();
+    let mut r = SplitMix::new(17);
+    let special = [
+        0.0,
+        -0.0,
+        f32::from_bits(1),
+        f32::MIN_POSITIVE,
+        0.5 / FIXED_ONE,
+        1.5 / FIXED_ONE,
+        2.5 / FIXED_ONE,
+        -2.5 / FIXED_ONE,
+        1.0,
+        -1.0,
+        4294967296.0 / FIXED_ONE,
+        4294967295.0 / FIXED_ONE,
+        FIXED_LIMIT,
+        -FIXED_LIMIT,
+        FIXED_LIMIT * 2.0,
+        f32::MAX,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::NAN,
+        -f32::NAN,
+    ];
+    let wide = [
+        0i64,
+        1,
+        -1,
+        u32::MAX as i64,
+        1 << 32,
+        i64::MAX,
+        i64::MIN,
+        i64::MAX - 3,
+        i64::MIN + 3,
+    ];
+    let value = |r: &mut SplitMix| -> f32 {
+        match r.below(4) {
+            0 => special[r.below(special.len())],
+            // Random bits: every exponent and sign.
+            1 => f32::from_bits(r.u32()),
+            // Near a half unit, where the rounding mode shows.
+            2 => {
+                (r.below(1 << 20) as f32 + 0.5) / FIXED_ONE * if r.chance(0.5) { -1.0 } else { 1.0 }
+            }
+            _ => r.range(-1.0, 1.0) * 10f32.powf(r.range(-8.0, 12.0)),
+        }
+    };
+    let sum = |r: &mut SplitMix| -> i64 {
+        match r.below(3) {
+            0 => wide[r.below(wide.len())],
+            1 => r.next_u64() as i64,
+            _ => to_fixed(r.range(-1e6, 1e6)),
+        }
+    };
+    let mut cases: Vec<Case> = Vec::new();
+    while cases.len() < 20_000 {
+        let (v0, v1) = (value(&mut r), value(&mut r));
+        let (a, b) = (to_words(sum(&mut r)), to_words(sum(&mut r)));
+        cases.push([[v0.to_bits(), v1.to_bits(), a[0], a[1]], [b[0], b[1], 0, 0]]);
+    }
+    let out = run(&ctx, &rs, &settings, "test_fixed", &cases);
+    let mut fail = Failures::new("test_fixed");
+    for (c, o) in cases.iter().zip(&out) {
+        let [v0, v1] = [c[0][0], c[0][1]].map(f32::from_bits);
+        let (a, b) = (
+            from_words([c[0][2], c[0][3]]),
+            from_words([c[1][0], c[1][1]]),
+        );
+        let t = texel_add([a, b, a, b], [v0, v1, 0.0, 1.0]);
+        let [f0, f1, s, t1] = [to_fixed(v0), to_fixed(v1), fixed_add(a, b), t[1]].map(to_words);
+        let want = [[f0[0], f0[1], f1[0], f1[1]], [s[0], s[1], t1[0], t1[1]]];
+        if *o != want {
+            fail.add(|| format!("{v0:e}, {v1:e}, {a}, {b}: GPU {o:x?}, CPU {want:x?}"));
+        }
+    }
+    eprintln!(
+        "test_fixed: {} cases, {} differ (bit-exact required)",
         cases.len(),
         fail.count
     );

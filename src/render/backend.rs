@@ -69,6 +69,22 @@ impl Backend {
         }
     }
 
+    /// The device's identity for part files ([`crate::film::PartHeader::device`]): what
+    /// the bits of a render depend on beyond the scene. The CPU's is its architecture and
+    /// system (its libm decides the last bits of a few functions); a GPU's is the
+    /// adapter, its driver and how it finds hits.
+    pub fn device_id(&self) -> String {
+        match self {
+            Self::Cpu => format!("cpu ({}-{})", std::env::consts::ARCH, std::env::consts::OS),
+            Self::Gpu(ctx) => format!(
+                "{} ({}; {})",
+                ctx.adapter.name,
+                ctx.adapter.driver,
+                ctx.accel_name()
+            ),
+        }
+    }
+
     /// Renders the job on this backend. `progress` is told the samples finished as they
     /// finish.
     pub fn render(

@@ -7,7 +7,7 @@ use super::integrator::{FirstHit, first_hit, trace_path};
 use super::rng::Rng;
 use super::{Checkpoints, RenderJob, RenderScene};
 use crate::film::{Aov, Film};
-use glam::Vec3;
+use crate::fixed::{Texel, fixed_add, fixed_add3, texel_add, to_fixed, to_fixed3};
 use rayon::prelude::*;
 
 /// Tiles are square, this many pixels on a side.
@@ -16,19 +16,19 @@ pub const TILE: u32 = 16;
 /// Paths traced per pass over the image: a pass is the unit of cancellation and checkpoints.
 pub const PATHS_PER_PASS: u64 = 1 << 20;
 
-/// One pixel's accumulators, as a texel of the GPU's accumulation buffer holds them:
-/// the radiance sum and the `rays` channel's count.
+/// One pixel's accumulators, exact fixed-point sums ([`crate::fixed`]) as the GPU's
+/// accumulation buffer holds them: the radiance sum and the `rays` channel's count.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PixelSums {
-    pub radiance: Vec3,
-    pub rays: f32,
+    pub radiance: [i64; 3],
+    pub rays: i64,
 }
 
 /// One pixel's AOV accumulators: a texel per [`Aov`] (indexed by it), as the AOV's film
 /// channel holds it. Kept only by a render with AOVs.
 /// mirror: shaders/render.wgsl `AovSums`
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct AovSums(pub [[f32; 4]; Aov::ALL.len()]);
+pub struct AovSums(pub [Texel; Aov::ALL.len()]);
 
 /// Renders the job's sample range with rayon over tiles, in passes of a few samples per
 /// pixel over the whole image. `progress` is told of every finished tile's sample count; it
@@ -43,6 +43,7 @@ pub fn render(scene: &RenderScene, job: &RenderJob, progress: &(dyn Fn(u64) + Sy
     let step = (PATHS_PER_PASS / (w as u64 * h as u64)).max(1) as u32;
     let cam = CameraRays::new(&scene.camera, w, h);
     let mut film = job.film();
+    film.first_sample = job.samples.start;
     let mut pixels = vec![PixelSums::default(); film.sum.len()];
     let aov_pixels = if film.aovs().is_empty() {
         0
@@ -114,7 +115,7 @@ fn fill(film: &mut Film, pixels: &[PixelSums], aovs: &[AovSums]) {
     let rays = &mut film.channels[0];
     debug_assert_eq!(rays.name, Film::RAYS);
     for (dst, p) in rays.data.iter_mut().zip(pixels) {
-        dst[0] = p.rays;
+        *dst = [p.rays, 0, 0, 0];
     }
     for aov in Aov::ALL {
         if let Some(channel) = film.channels.iter_mut().find(|c| c.name == aov.name()) {
@@ -130,34 +131,34 @@ fn fill(film: &mut Film, pixels: &[PixelSums], aovs: &[AovSums]) {
 /// mirror: shaders/render.wgsl `add_aov_sample`
 pub fn add_aov_sample(sums: &mut AovSums, cam: &CameraRays, fh: &FirstHit) {
     let t = &mut sums.0;
-    t[Aov::BvhCost as usize][0] += fh.cost as f32;
+    let cost = &mut t[Aov::BvhCost as usize];
+    *cost = texel_add(*cost, [fh.cost as f32, 0.0, 0.0, 0.0]);
     if !fh.hit {
         return;
     }
     let depth = (fh.p - cam.position).dot(cam.forward);
-    let add = |texel: &mut [f32; 4], v: Vec3| {
-        texel[0] += v.x;
-        texel[1] += v.y;
-        texel[2] += v.z;
-        texel[3] += 1.0;
+    let mut add = |aov: Aov, [x, y, z]: [f32; 3]| {
+        let texel = &mut t[aov as usize];
+        *texel = texel_add(*texel, [x, y, z, 1.0]);
     };
-    add(&mut t[Aov::Depth as usize], Vec3::new(depth, 0.0, 0.0));
-    add(&mut t[Aov::Normal as usize], fh.normal);
-    add(&mut t[Aov::Albedo as usize], fh.albedo);
-    add(&mut t[Aov::Alpha as usize], Vec3::X);
+    add(Aov::Depth, [depth, 0.0, 0.0]);
+    add(Aov::Normal, fh.normal.to_array());
+    add(Aov::Albedo, fh.albedo.to_array());
+    add(Aov::Alpha, [1.0, 0.0, 0.0]);
 }
 
 /// Sets a pixel's ids from its centre ray's first hit: each id as its low and high 16
-/// bits (exact in f32), `w` = 1 to say the centre ray was traced.
+/// bits (exact in f32 and in fixed point), `w` = 1 to say the centre ray was traced.
 /// mirror: shaders/render.wgsl `set_aov_ids`
 pub fn set_aov_ids(sums: &mut AovSums, fh: &FirstHit) {
-    let split = |id: u32| [(id & 0xffff) as f32, (id >> 16) as f32, 0.0, 1.0];
+    let split = |id: u32| texel_add([0; 4], [(id & 0xffff) as f32, (id >> 16) as f32, 0.0, 1.0]);
     sums.0[Aov::ObjectId as usize] = split(fh.object);
     sums.0[Aov::MaterialId as usize] = split(fh.material);
 }
 
-/// `acc` plus one pixel's samples over `samples`, added in sample order in f32 as the GPU
-/// adds them; non-finite radiance samples are dropped (their rays still count). With AOVs,
+/// `acc` plus one pixel's samples over `samples`, each rounded to fixed point and added
+/// exactly, as the GPU adds them; non-finite radiance samples are dropped (their rays
+/// still count). With AOVs,
 /// `aov` gets each sample's first hit, and with sample 0 the pixel-centre ray's ids; in a
 /// transparent render, a sample whose camera ray misses adds no radiance.
 /// mirror: shaders/render.wgsl `render`
@@ -187,9 +188,9 @@ pub fn render_pixel(
             }
         }
         let (l, rays) = trace_path(scene, ray, &rng, s.max_depth);
-        acc.rays += rays as f32;
+        acc.rays = fixed_add(acc.rays, to_fixed(rays as f32));
         if l.is_finite() && seen {
-            acc.radiance += l;
+            acc.radiance = fixed_add3(acc.radiance, to_fixed3(l));
         }
     }
     acc

@@ -8,6 +8,7 @@ pub mod backend;
 pub mod bsdf;
 pub mod camera;
 pub mod cpu;
+pub mod digest;
 pub mod environment;
 pub mod gpu;
 pub mod integrator;

@@ -1,6 +1,7 @@
 //! Helpers shared by the integration tests. Here: the GPU (or its absence) and rendering a
 //! job on either device; and by subject:
 //!
+//! - [`cli`]: running the binary; the checks every failed run must pass.
 //! - [`fs`]: the checkout's paths, fixtures, shared meshes, temporary directories.
 //! - [`gltf`]: glTF files built in tests (JSON, embedded or external buffers, GLB).
 //! - [`rand`]: deterministic random inputs (SplitMix64, and hashed random access).
@@ -15,6 +16,7 @@
 #![allow(dead_code)]
 
 pub mod chi2;
+pub mod cli;
 pub mod fs;
 pub mod gltf;
 pub mod kernels;

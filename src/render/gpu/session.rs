@@ -6,9 +6,9 @@ use super::pipelines::Pipeline;
 use super::tables::{SceneTables, params_buffer};
 use super::{GpuContext, GpuError, shader};
 use crate::film::{Aov, Film};
+use crate::fixed::from_words;
 use crate::render::{Checkpoints, RenderJob, RenderScene};
 use crate::scene::{Camera, RenderSettings};
-use glam::Vec3;
 use std::ops::Range;
 
 /// Paths traced per dispatch: about one sample per pixel of a 1080p image, so that no
@@ -23,6 +23,10 @@ const WORKGROUP: u32 = 8;
 /// which a few dozen paths of a large scene can reach. (The kernel detects a cut and the
 /// renderer then halves the step, so this only saves the first failed tries.)
 const SOFTWARE_SAMPLES_PER_DISPATCH: u32 = 16;
+
+/// Bytes of a film texel on the device: four fixed-point sums of two 32-bit words each.
+/// mirror: shaders/fixed.wgsl `Texel`
+const TEXEL_BYTES: u64 = 32;
 
 /// The render kernel's status words (`status` in shaders/render.wgsl).
 #[repr(C)]
@@ -134,7 +138,7 @@ impl GpuRenderer {
         first_sample: u32,
     ) -> Result<(), GpuError> {
         let texels = template.texels_per_pixel() as u32;
-        let bytes = template.sum.len() as u64 * texels as u64 * 16;
+        let bytes = template.sum.len() as u64 * texels as u64 * TEXEL_BYTES;
         let limit = self.ctx.limits.max_storage_buffer_binding_size;
         if bytes > limit {
             return Err(GpuError::TooLarge {
@@ -273,14 +277,17 @@ impl GpuRenderer {
             return Err(GpuError::Fault("read_film before begin".into()));
         };
         let data = self.ctx.read_buffer(&film.buffer)?;
-        let texels: &[[f32; 4]] = bytemuck::cast_slice(&data);
+        let words: &[[u32; 8]] = bytemuck::cast_slice(&data);
+        let texel = |w: &[u32; 8]| [0, 1, 2, 3].map(|k| from_words([w[2 * k], w[2 * k + 1]]));
         let mut out = film.template.clone();
+        out.first_sample = film.first_sample;
         out.samples = film.samples;
         let stride = out.texels_per_pixel();
-        for (i, pixel) in texels.chunks_exact(stride).enumerate() {
-            out.sum[i] = Vec3::new(pixel[0][0], pixel[0][1], pixel[0][2]);
-            for (channel, &texel) in out.channels.iter_mut().zip(&pixel[1..]) {
-                channel.data[i] = texel;
+        for (i, pixel) in words.chunks_exact(stride).enumerate() {
+            let [r, g, b, _next] = texel(&pixel[0]);
+            out.sum[i] = [r, g, b];
+            for (channel, w) in out.channels.iter_mut().zip(&pixel[1..]) {
+                channel.data[i] = texel(w);
             }
         }
         Ok(out)

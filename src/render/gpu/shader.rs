@@ -11,6 +11,7 @@ use super::params::{Params, SKY_CONSTANT, SKY_ENVIRONMENT, SKY_GRADIENT};
 use super::tables::{Element, TABLE_WIDTH, TABLES, wgsl_tables, wgsl_tlas};
 use crate::bvh::STACK_SIZE;
 use crate::film::{Aov, NO_ID};
+use crate::fixed::{FIXED_LIMIT, FIXED_ONE};
 use crate::geometry::{GAMMA_2, GAMMA_3, SLAB_SLACK, T_INF};
 use crate::render::integrator::RR_DEPTH;
 use crate::render::rng;
@@ -74,6 +75,8 @@ pub fn shared_constants() -> Vec<(String, Value)> {
         ("FRAC_PI_2", F32(FRAC_PI_2)),
         ("FRAC_PI_4", F32(FRAC_PI_4)),
         ("UNIFORM_SPHERE_PDF", F32(UNIFORM_SPHERE_PDF)),
+        ("FIXED_ONE", F32(FIXED_ONE)),
+        ("FIXED_LIMIT", F32(FIXED_LIMIT)),
     ]
     .map(|(n, v)| (n.to_string(), v))
     .into();
@@ -132,6 +135,7 @@ macro_rules! shader {
 const LIBRARY: &[Source] = &[
     shader!("types.wgsl"),
     shader!("math.wgsl"),
+    shader!("fixed.wgsl"),
     shader!("material.wgsl"),
     shader!("bindings.wgsl"),
     shader!("rng.wgsl"),
