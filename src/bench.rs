@@ -477,6 +477,7 @@ pub fn terrain(n: u32) -> Scene {
         lights: Vec::new(),
         mesh,
         warnings: Vec::new(),
+        framed: None,
     }
 }
 

@@ -20,8 +20,10 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+mod batch;
 mod merge;
 mod progress;
+pub use batch::{BatchArgs, batch};
 pub use merge::{MergeArgs, merge};
 use progress::Progress;
 
@@ -58,6 +60,9 @@ pub enum Command {
     /// Add the part files of one render (`render --part K/N`) into its image: bit for bit
     /// one render of all the samples on the same device.
     Merge(MergeArgs),
+    /// Render the jobs of a manifest (docs/batch.md): many meshes, turntable views, a
+    /// transforms.json per folder; split across a job array with --shard.
+    Batch(BatchArgs),
     /// List the Vulkan adapters; pick one with --adapter INDEX or a name substring.
     Adapters,
     /// Measure BVH build, ray and path-tracing throughput of both renderers.
@@ -226,21 +231,16 @@ pub struct RenderArgs {
     pub denoise: bool,
     /// Render only part K of N (K from 0) of the samples, into an .exr part file that
     /// `meshtrace merge` combines with the others: the merged image has the bits of one
-    /// render of all the samples on the same device.
-    #[arg(long, value_name = "K/N")]
+    /// render of all the samples on the same device. `auto` and `auto/N` take K (and N)
+    /// from a Slurm job array or a Kubernetes Indexed Job, as `batch --shard` does.
+    #[arg(long, value_name = "K/N|auto|auto/N")]
     pub part: Option<String>,
 }
 
-/// `--part K/N`: K from 0, below N.
+/// `--part K/N` (K from 0, below N), or `auto`/`auto/N` from a job array's environment
+/// (as `batch --shard`).
 fn parse_part(text: &str) -> Result<(u32, u32)> {
-    let pair = text
-        .split_once('/')
-        .and_then(|(k, n)| Some((k.trim().parse::<u32>().ok()?, n.trim().parse::<u32>().ok()?)));
-    match pair {
-        Some((k, n)) if k < n => Ok((k, n)),
-        Some((k, n)) => bail!("--part {k}/{n}: K counts from 0 and must be below N"),
-        None => bail!("--part `{text}`: not K/N (such as 0/4)"),
-    }
+    batch::resolve_shard(text, "--part", &|name| std::env::var(name).ok())
 }
 
 /// What `--denoise` says in a build without the `denoise` feature.
@@ -400,10 +400,10 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         Some(Device::Gpu) => DeviceChoice::Gpu,
     };
     let (backend, notice) = choose_backend(choice, args.adapter.as_deref(), args.accel)?;
-    if let Some(notice) = notice {
-        if !args.quiet {
-            eprintln!("notice: {notice}");
-        }
+    if let Some(notice) = notice
+        && !args.quiet
+    {
+        eprintln!("notice: {notice}");
     }
     // A part file records which render it belongs to; any other output is an image.
     let header = part.map(|(index, count)| PartHeader {
@@ -457,10 +457,11 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     let seconds = start.elapsed().as_secs_f64();
     progress.finish();
     // The denoised image replaces the radiance, in the complete and the interrupted film.
-    if let Some(d) = &denoiser {
-        if film.samples > 0 && !(film.samples < wanted && args.no_partial) {
-            d.denoise_film(&mut film)?;
-        }
+    if let Some(d) = &denoiser
+        && film.samples > 0
+        && !(film.samples < wanted && args.no_partial)
+    {
+        d.denoise_film(&mut film)?;
     }
     if film.samples < wanted {
         let what = if args.no_partial {

@@ -7,6 +7,7 @@
 //! image file. With the `denoise` feature, the `denoise` module runs Intel Open Image Denoise over
 //! the film before it is written.
 
+pub mod batch;
 pub mod bench;
 pub mod bvh;
 #[cfg(feature = "denoise")]

@@ -19,6 +19,7 @@ fn main() -> ExitCode {
         cli::Command::Render(r) => cli::render(r),
         cli::Command::Info { scene } => cli::info(scene),
         cli::Command::Merge(m) => cli::merge(m),
+        cli::Command::Batch(b) => cli::batch(b),
         cli::Command::Adapters => cli::adapters(),
         cli::Command::Bench(b) => cli::bench(b),
     };

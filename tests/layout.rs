@@ -591,19 +591,19 @@ fn twin_problems(twins: &[(&str, &str)]) -> (usize, Vec<String>) {
                     problems.push(format!("{this}:{line}: names {p}, not its twin {twin}"));
                 }
                 // A tag on a declaration (a file's heading tag stands on none).
-                if let [name] = names.as_slice() {
-                    if let Some(declared) = declared_after(&lines, line - 1) {
-                        checked += 1;
-                        // A Rust constructor is `Type::new` where WGSL has `type`.
-                        let declared = match impl_before(&lines, line - 1) {
-                            Some(ty) if declared == "new" => format!("{ty}::new"),
-                            _ => declared,
-                        };
-                        if !same_name(name, &declared) && !same_name(&declared, name) {
-                            problems.push(format!(
-                                "{this}:{line}: tag `{name}` stands on `{declared}`"
-                            ));
-                        }
+                if let [name] = names.as_slice()
+                    && let Some(declared) = declared_after(&lines, line - 1)
+                {
+                    checked += 1;
+                    // A Rust constructor is `Type::new` where WGSL has `type`.
+                    let declared = match impl_before(&lines, line - 1) {
+                        Some(ty) if declared == "new" => format!("{ty}::new"),
+                        _ => declared,
+                    };
+                    if !same_name(name, &declared) && !same_name(&declared, name) {
+                        problems.push(format!(
+                            "{this}:{line}: tag `{name}` stands on `{declared}`"
+                        ));
                     }
                 }
             }

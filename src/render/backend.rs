@@ -8,6 +8,7 @@
 use super::gpu::{self, Accel, GpuContext, GpuError, GpuRenderer};
 use super::{RenderJob, RenderScene, cpu};
 use crate::film::Film;
+use crate::scene::camera::Camera;
 
 /// What the user asked for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -96,6 +97,51 @@ impl Backend {
         match self {
             Self::Cpu => Ok(cpu::render(scene, job, progress)),
             Self::Gpu(ctx) => GpuRenderer::new(ctx, scene)?.render(job, progress),
+        }
+    }
+}
+
+/// A scene made ready once on a backend (on a GPU: its tables uploaded), for several
+/// renders that differ in camera and settings: the views of a batch.
+pub struct Prepared {
+    scene: RenderScene,
+    gpu: Option<GpuRenderer>,
+}
+
+impl Backend {
+    /// Makes `scene` ready to render on this backend.
+    pub fn prepare(&self, scene: RenderScene) -> Result<Prepared, GpuError> {
+        let gpu = match self {
+            Self::Cpu => None,
+            Self::Gpu(ctx) => Some(GpuRenderer::new(ctx, &scene)?),
+        };
+        Ok(Prepared { scene, gpu })
+    }
+}
+
+impl Prepared {
+    /// The scene as prepared.
+    pub fn scene(&self) -> &RenderScene {
+        &self.scene
+    }
+
+    /// Renders from `camera` from now on.
+    pub fn set_camera(&mut self, camera: &Camera) {
+        self.scene.camera = camera.clone();
+        if let Some(g) = &mut self.gpu {
+            g.set_camera(camera);
+        }
+    }
+
+    /// Renders the job, as [`Backend::render`] does.
+    pub fn render(
+        &mut self,
+        job: &RenderJob,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<Film, GpuError> {
+        match &mut self.gpu {
+            None => Ok(cpu::render(&self.scene, job, progress)),
+            Some(g) => g.render(job, progress),
         }
     }
 }

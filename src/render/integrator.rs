@@ -184,31 +184,32 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
     let wo = to_local(wo_world);
 
     // Next event estimation.
-    if !bsdf_is_delta(mat) && !scene.emitters.is_empty() {
-        if let Some(ls) = sample_light(scene, si.p, ng, rng, st.depth) {
-            // A surface that light crosses sees lights on both sides; bsdf_eval says which
-            // of them it passes. Others only see those on the side of ng.
-            let cos_i = ls.wi.dot(ng);
-            let usable = if bsdf_transmits(mat) {
-                cos_i != 0.0
-            } else {
-                cos_i > 0.0
-            };
-            if usable {
-                let wi = to_local(ls.wi);
-                let f = bsdf_eval(mat, wo, wi);
-                if f != Vec3::ZERO {
-                    st.rays += 1;
-                    if !wide.traverse_any(tris, &Ray::new(ls.origin, ls.wi), ls.t_max, |t, u, v| {
-                        alpha_test(scene, t, u, v)
-                    }) {
-                        let w = if ls.delta {
-                            1.0
-                        } else {
-                            power_heuristic(ls.pdf, bsdf_pdf(mat, wo, wi))
-                        };
-                        st.radiance += st.beta * f * ls.le * (w / ls.pdf);
-                    }
+    if !bsdf_is_delta(mat)
+        && !scene.emitters.is_empty()
+        && let Some(ls) = sample_light(scene, si.p, ng, rng, st.depth)
+    {
+        // A surface that light crosses sees lights on both sides; bsdf_eval says which
+        // of them it passes. Others only see those on the side of ng.
+        let cos_i = ls.wi.dot(ng);
+        let usable = if bsdf_transmits(mat) {
+            cos_i != 0.0
+        } else {
+            cos_i > 0.0
+        };
+        if usable {
+            let wi = to_local(ls.wi);
+            let f = bsdf_eval(mat, wo, wi);
+            if f != Vec3::ZERO {
+                st.rays += 1;
+                if !wide.traverse_any(tris, &Ray::new(ls.origin, ls.wi), ls.t_max, |t, u, v| {
+                    alpha_test(scene, t, u, v)
+                }) {
+                    let w = if ls.delta {
+                        1.0
+                    } else {
+                        power_heuristic(ls.pdf, bsdf_pdf(mat, wo, wi))
+                    };
+                    st.radiance += st.beta * f * ls.le * (w / ls.pdf);
                 }
             }
         }

@@ -194,12 +194,14 @@ fn load_bare_obj(
         ))
     })?;
     let sky = builder.light_the_studio(&bounds, files)?;
-    Ok(builder.finish(
+    let mut scene = builder.finish(
         Some(path.to_path_buf()),
         camera,
         sky,
         RenderSettings::default(),
-    ))
+    );
+    scene.framed = Some(bounds);
+    Ok(scene)
 }
 
 /// A bare glTF file in the studio: its materials and lights, turned so that its up axis
@@ -252,12 +254,14 @@ fn load_bare_gltf(
         )
     })?;
     let sky = builder.light_the_studio(&bounds, files)?;
-    Ok(builder.finish(
+    let mut scene = builder.finish(
         Some(path.to_path_buf()),
         camera,
         sky,
         RenderSettings::default(),
-    ))
+    );
+    scene.framed = Some(bounds);
+    Ok(scene)
 }
 
 /// Accumulates the world-space mesh and the material table while objects are read.
@@ -631,6 +635,7 @@ impl Builder {
             lights: self.lights,
             mesh: self.mesh,
             warnings: self.warnings,
+            framed: None,
         }
     }
 }

@@ -163,6 +163,10 @@ pub struct Scene {
     pub mesh: Mesh,
     /// Problems that did not stop loading (a missing MTL file, dropped degenerate triangles).
     pub warnings: Vec<String>,
+    /// For a bare mesh shown in the studio: the bounds of the mesh the studio camera frames
+    /// (the ground left out), for other views framed alike (`meshtrace batch`'s turntables).
+    /// `None` for a scene file.
+    pub framed: Option<crate::math::Aabb>,
 }
 
 /// A path as error messages show it: on one line whatever characters it holds.

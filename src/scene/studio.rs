@@ -56,16 +56,29 @@ const VFOV: f32 = 40.0;
 /// How much of the vertical field of view the bounding sphere fills.
 const FILL: f32 = 0.8;
 
-/// The studio camera for a Y-up mesh of `bounds`: from the front-right (35 degrees from +Z
-/// towards +X) and 22 degrees above, at the distance where the bounding sphere fills 80% of
-/// the vertical field of view. `None` when the bounds are too large for f32.
+/// Where the studio camera stands, in degrees: 35 from +Z towards +X (front-right), 22 above
+/// the horizontal.
+pub const AZIMUTH: f32 = 35.0;
+pub const ELEVATION: f32 = 22.0;
+
+/// The studio camera for a Y-up mesh of `bounds`: [`orbit_camera`] at [`AZIMUTH`] and
+/// [`ELEVATION`].
 pub fn camera(bounds: &Aabb) -> Option<Camera> {
+    orbit_camera(bounds, AZIMUTH, ELEVATION)
+}
+
+/// A camera looking at the centre of a Y-up mesh of `bounds` from `azimuth` degrees (from
+/// +Z towards +X) and `elevation` degrees above the horizontal, at the distance where the
+/// bounding sphere fills 80% of the vertical field of view: how a bare mesh is framed, and
+/// each view of a turntable (`meshtrace batch`). `None` when the bounds are too large for
+/// f32 or the view is straight down or up.
+pub fn orbit_camera(bounds: &Aabb, azimuth: f32, elevation: f32) -> Option<Camera> {
     let center = bounds.center();
     // Far from the origin, a tiny mesh still needs a camera distance that f32 resolves.
     let resolvable = 1e-5 * (1.0 + center.abs().max_element());
     let radius = (0.5 * bounds.extent().length()).max(resolvable);
     let distance = radius / (0.5 * FILL * VFOV.to_radians()).sin();
-    let (azimuth, elevation) = (35f32.to_radians(), 22f32.to_radians());
+    let (azimuth, elevation) = (azimuth.to_radians(), elevation.to_radians());
     let towards = Vec3::new(
         azimuth.sin() * elevation.cos(),
         elevation.sin(),

@@ -460,14 +460,14 @@ fn decode(format: Option<ImageFormat>, bytes: &[u8]) -> Result<(Kind, Decoded), 
     let need = decoder
         .total_bytes()
         .saturating_add(texels.saturating_mul(packed));
-    if let Some(free) = available_memory() {
-        if need > free {
-            return Err(format!(
-                "the image is {width}×{height} texels: decoding and packing it needs {}, more than the {} of memory free",
-                gibibytes(need),
-                gibibytes(free)
-            ));
-        }
+    if let Some(free) = available_memory()
+        && need > free
+    {
+        return Err(format!(
+            "the image is {width}×{height} texels: decoding and packing it needs {}, more than the {} of memory free",
+            gibibytes(need),
+            gibibytes(free)
+        ));
     }
     let image = image::DynamicImage::from_decoder(decoder).map_err(cannot)?;
     use image::DynamicImage as D;

@@ -52,7 +52,7 @@ impl Asset {
     /// Appends bytes to the buffer (at a 4-byte boundary) as a new buffer view; returns
     /// the view's index.
     pub fn view(&mut self, bytes: &[u8], stride: Option<usize>) -> usize {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let offset = self.bin.len();
@@ -172,7 +172,7 @@ impl Asset {
 pub fn glb(json: &[u8], bin: Option<&[u8]>) -> Vec<u8> {
     let pad = |data: &[u8], with: u8| {
         let mut d = data.to_vec();
-        while d.len() % 4 != 0 {
+        while !d.len().is_multiple_of(4) {
             d.push(with);
         }
         d

@@ -81,6 +81,7 @@ pub fn scene(
         lights: Vec::new(),
         mesh,
         warnings: Vec::new(),
+        framed: None,
     }
 }
 

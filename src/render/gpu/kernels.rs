@@ -96,7 +96,7 @@ pub fn run_test_kernel(
     entry: &str,
     input: &[[u32; 4]],
 ) -> Result<Vec<[u32; 4]>, GpuError> {
-    assert!(input.len() % 2 == 0, "two input words per case");
+    assert!(input.len().is_multiple_of(2), "two input words per case");
     let renderer = GpuRenderer::new(ctx, scene)?;
     let kernel = Kernel::new(
         &renderer,

@@ -107,6 +107,12 @@ impl GpuRenderer {
         self.max_step = samples.max(1);
     }
 
+    /// Renders from `camera` from the next [`GpuRenderer::begin`] on (the scene's tables
+    /// do not hold the camera, so views of one scene share its upload).
+    pub fn set_camera(&mut self, camera: &Camera) {
+        self.camera = camera.clone();
+    }
+
     /// The device this renderer runs on.
     pub fn context(&self) -> &GpuContext {
         &self.ctx
@@ -205,10 +211,10 @@ impl GpuRenderer {
             self.dispatch_part(start..end, rows.clone())?;
             start = end;
         }
-        if rows.end == self.base.height {
-            if let Some(film) = &mut self.film {
-                film.samples = samples.end - film.first_sample;
-            }
+        if rows.end == self.base.height
+            && let Some(film) = &mut self.film
+        {
+            film.samples = samples.end - film.first_sample;
         }
         Ok(())
     }

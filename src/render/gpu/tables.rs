@@ -245,7 +245,11 @@ pub fn wgsl_tables() -> String {
 /// The loader of a table of structs: the texels it needs, then the struct built from them
 /// in member order.
 fn struct_loader(t: &Table, layout: &StructLayout) -> String {
-    assert!(layout.size % 16 == 0, "{}: not whole texels", layout.name);
+    assert!(
+        layout.size.is_multiple_of(16),
+        "{}: not whole texels",
+        layout.name
+    );
     let texels = layout.size / 16;
     let mut members: Vec<&Member> = layout.members.iter().collect();
     members.sort_by_key(|m| m.offset);

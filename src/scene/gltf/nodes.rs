@@ -101,10 +101,9 @@ pub(super) fn load_scene(doc: &Doc, buffers: &Buffers) -> Result<GltfAsset, Scen
             .extensions
             .as_ref()
             .and_then(|e| e.khr_lights_punctual.as_ref())
+            && let Some(light) = punctual_light(doc, light.light.value(), world, &at)?
         {
-            if let Some(light) = punctual_light(doc, light.light.value(), world, &at)? {
-                asset.lights.push(light);
-            }
+            asset.lights.push(light);
         }
         let children = node.children.as_deref().unwrap_or_default();
         for (k, child) in children.iter().enumerate().rev() {

@@ -1,0 +1,349 @@
+//! `meshtrace batch`: the tasks of a manifest (or one shard of them), each input loaded and
+//! prepared on the device once for all its views, outputs that are already complete
+//! skipped, and every output folder's `transforms.json` kept up to date.
+
+use super::{AccelArg, Device, Interrupted, choose_backend, load, set_threads};
+use anyhow::{Context, Result, bail};
+use meshtrace::batch::transforms::{self, Frame, Intrinsics};
+use meshtrace::batch::{self, Manifest, Task};
+use meshtrace::bvh::BuildParams;
+use meshtrace::film::{Film, Format};
+use meshtrace::render::backend::DeviceChoice;
+use meshtrace::render::{RenderJob, RenderScene};
+use meshtrace::scene::load::validate_settings;
+use meshtrace::scene::studio::BareOptions;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+#[derive(clap::Args)]
+pub struct BatchArgs {
+    /// The manifest (.toml; see docs/batch.md).
+    pub manifest: PathBuf,
+    /// Render only shard K of N (K from 0): every N-th task from the K-th. `auto` takes K
+    /// and N from a Slurm job array (SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT, or
+    /// _MIN and _MAX); `auto/N` takes K from SLURM_ARRAY_TASK_ID or Kubernetes'
+    /// JOB_COMPLETION_INDEX, with N given.
+    #[arg(long, value_name = "K/N|auto|auto/N")]
+    pub shard: Option<String>,
+    /// Renderer; by default the GPU on a hardware adapter, else the CPU.
+    #[arg(long, value_enum)]
+    pub device: Option<Device>,
+    /// GPU adapter: an index or a name substring from `meshtrace adapters`.
+    #[arg(long)]
+    pub adapter: Option<String>,
+    /// How the GPU finds ray hits (as for `render`).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub accel: AccelArg,
+    /// Worker threads for the CPU path (default: one per core).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Print nothing but warnings, errors and the closing summary.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// The shard `spec` names: `K/N`, `auto` or `auto/N` (see [`BatchArgs::shard`]), read
+/// from `env`.
+pub fn resolve_shard(
+    spec: &str,
+    flag: &str,
+    env: &dyn Fn(&str) -> Option<String>,
+) -> Result<(u32, u32)> {
+    let number = |name: &str| -> Result<Option<u32>> {
+        match env(name) {
+            None => Ok(None),
+            Some(v) => v
+                .trim()
+                .parse()
+                .map(Some)
+                .with_context(|| format!("{flag} auto: {name} is `{v}`, not a number")),
+        }
+    };
+    let (k, n) = match spec.split_once('/') {
+        None if spec == "auto" => {
+            let id = number("SLURM_ARRAY_TASK_ID")?;
+            let count = number("SLURM_ARRAY_TASK_COUNT")?;
+            let (min, max) = (
+                number("SLURM_ARRAY_TASK_MIN")?,
+                number("SLURM_ARRAY_TASK_MAX")?,
+            );
+            match (id, count, min, max) {
+                (Some(id), _, Some(min), Some(max)) if min <= id && id <= max => {
+                    (id - min, max - min + 1)
+                }
+                (Some(id), Some(count), _, _) => (id, count),
+                _ => bail!(
+                    "{flag} auto: not in a Slurm job array (no SLURM_ARRAY_TASK_ID with SLURM_ARRAY_TASK_COUNT or _MIN and _MAX); in a Kubernetes Indexed Job use {flag} auto/N"
+                ),
+            }
+        }
+        Some(("auto", n)) => {
+            let n: u32 = n
+                .trim()
+                .parse()
+                .with_context(|| format!("{flag} auto/{n}: `{n}` is not a count"))?;
+            let id = match (
+                number("JOB_COMPLETION_INDEX")?,
+                number("SLURM_ARRAY_TASK_ID")?,
+            ) {
+                (Some(k), _) => k,
+                (None, Some(id)) => id - number("SLURM_ARRAY_TASK_MIN")?.unwrap_or(0),
+                (None, None) => bail!(
+                    "{flag} auto/{n}: neither JOB_COMPLETION_INDEX (Kubernetes) nor SLURM_ARRAY_TASK_ID (Slurm) is set"
+                ),
+            };
+            (id, n)
+        }
+        Some((k, n)) => match (k.trim().parse::<u32>(), n.trim().parse::<u32>()) {
+            (Ok(k), Ok(n)) => (k, n),
+            _ => bail!("{flag} `{spec}`: not K/N (such as 0/4), auto or auto/N"),
+        },
+        None => bail!("{flag} `{spec}`: not K/N (such as 0/4), auto or auto/N"),
+    };
+    if k >= n {
+        bail!("{flag} {k}/{n}: K counts from 0 and must be below N");
+    }
+    Ok((k, n))
+}
+
+/// The process's peak resident memory so far, in KiB (Linux).
+fn peak_kib() -> Option<u64> {
+    super::peak_memory_kib()
+}
+
+/// Whether `task`'s output is complete: the image (written last, by rename) and, beside a
+/// non-EXR image with AOVs, their `.aovs.exr`.
+fn complete(task: &Task, aovs: bool) -> bool {
+    let image = task.output.is_file();
+    let beside = !aovs
+        || Format::from_path(&task.output).is_ok_and(|f| f == Format::Exr)
+        || Film::aov_path(&task.output).is_file();
+    image && beside
+}
+
+/// The `transforms.json` entry of `task` seen through `camera`.
+fn frame(task: &Task, camera: &meshtrace::scene::camera::Camera, w: u32, h: u32) -> Frame {
+    Frame {
+        file_path: task
+            .output
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        transform_matrix: transforms::camera_to_world(camera),
+        intrinsics: Intrinsics::of(camera, w, h),
+    }
+}
+
+/// Adds `frames` (by output) to their folders' `transforms.json`.
+fn record(frames: &[(PathBuf, Frame)]) -> Result<()> {
+    let mut by_dir: BTreeMap<PathBuf, Vec<Frame>> = BTreeMap::new();
+    for (output, f) in frames {
+        let dir = output.parent().map(Path::to_path_buf).unwrap_or_default();
+        by_dir.entry(dir).or_default().push(f.clone());
+    }
+    for (dir, frames) in by_dir {
+        transforms::record(&dir, &frames)?;
+    }
+    Ok(())
+}
+
+/// How often waiting frames go into their `transforms.json`.
+const FLUSH_SECONDS: f64 = 2.0;
+
+/// What the shard's tasks came to so far.
+#[derive(Default)]
+struct Tally {
+    rendered: usize,
+    skipped: usize,
+    failed: Vec<String>,
+    /// The peak memory once `warm_up` images are rendered (a tenth of the shard, after
+    /// the allocator's warm-up), against which the closing summary measures growth.
+    first_peak: Option<u64>,
+    warm_up: usize,
+    /// Frames waiting to go into their transforms.json: every few seconds and at the end,
+    /// so a run killed in between leaves complete images without frames, which a resumed
+    /// run records without rendering them again.
+    frames: Vec<(PathBuf, Frame)>,
+}
+
+pub fn batch(args: &BatchArgs) -> Result<()> {
+    set_threads(args.threads)?;
+    let manifest = Manifest::load(&args.manifest)?;
+    let all = manifest.tasks()?;
+    let (k, n) = match &args.shard {
+        Some(spec) => resolve_shard(spec, "--shard", &|name| std::env::var(name).ok())?,
+        None => (0, 1),
+    };
+    let tasks = batch::shard(&all, k, n);
+    let choice = match args.device {
+        None => DeviceChoice::Auto,
+        Some(Device::Cpu) => DeviceChoice::Cpu,
+        Some(Device::Gpu) => DeviceChoice::Gpu,
+    };
+    let (backend, notice) = choose_backend(choice, args.adapter.as_deref(), args.accel)?;
+    if let (Some(notice), false) = (notice, args.quiet) {
+        eprintln!("notice: {notice}");
+    }
+    if !args.quiet {
+        eprintln!(
+            "shard {k}/{n}: {} of {} images, on {}",
+            tasks.len(),
+            all.len(),
+            backend.name()
+        );
+    }
+    let cancel = Arc::new(AtomicBool::new(false));
+    let flag = cancel.clone();
+    ctrlc::set_handler(move || {
+        if flag.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+    })
+    .context("cannot install the Ctrl-C and SIGTERM handler")?;
+    let start = Instant::now();
+    let mut tally = Tally {
+        warm_up: (tasks.len() / 10).max(1),
+        ..Tally::default()
+    };
+    let mut flushed = Instant::now();
+    // The tasks of one input are consecutive: load and prepare it once for all its views.
+    let mut rest = &tasks[..];
+    while let Some(first) = rest.first() {
+        let len = rest
+            .iter()
+            .take_while(|t| t.job == first.job && t.input == first.input)
+            .count();
+        let (group, next) = rest.split_at(len);
+        rest = next;
+        if cancel.load(Ordering::SeqCst) {
+            break;
+        }
+        let result = run_input(&manifest, group, &backend, &cancel, args.quiet, &mut tally);
+        if flushed.elapsed().as_secs_f64() > FLUSH_SECONDS {
+            record(&std::mem::take(&mut tally.frames))?;
+            flushed = Instant::now();
+        }
+        if let Err(e) = result {
+            if e.is::<Interrupted>() {
+                break;
+            }
+            let line = format!("{}: {}", first.input.display(), crate::one_line(&e));
+            eprintln!("error: {line}");
+            tally.failed.push(line);
+        }
+    }
+    record(&tally.frames)?;
+    let seconds = start.elapsed().as_secs_f64();
+    let per_hour = tally.rendered as f64 / seconds.max(1e-9) * 3600.0;
+    let memory = match (tally.first_peak, peak_kib()) {
+        (Some(a), Some(b)) => format!(
+            "; peak memory {:.1} MiB after {} images, {:.1} MiB at the end ({:+.1}%)",
+            a as f64 / 1024.0,
+            tally.warm_up,
+            b as f64 / 1024.0,
+            100.0 * (b as f64 / a as f64 - 1.0)
+        ),
+        _ => String::new(),
+    };
+    eprintln!(
+        "shard {k}/{n}: {} rendered, {} already complete, {} failed in {seconds:.1} s: {per_hour:.0} images/hour{memory}",
+        tally.rendered,
+        tally.skipped,
+        tally.failed.len()
+    );
+    if cancel.load(Ordering::SeqCst) {
+        return Err(Interrupted(format!(
+            "stopped after {} of {} images; run again to resume",
+            tally.rendered + tally.skipped,
+            tasks.len()
+        ))
+        .into());
+    }
+    if !tally.failed.is_empty() {
+        bail!(
+            "{} of {} inputs failed (each said above)",
+            tally.failed.len(),
+            tasks.len()
+        );
+    }
+    Ok(())
+}
+
+/// Renders the views of one input that are not complete yet and records every view's
+/// camera. The input is loaded only if some view needs rendering or recording.
+fn run_input(
+    manifest: &Manifest,
+    group: &[Task],
+    backend: &meshtrace::render::backend::Backend,
+    cancel: &Arc<AtomicBool>,
+    quiet: bool,
+    tally: &mut Tally,
+) -> Result<()> {
+    let job = &manifest.jobs[group[0].job];
+    let aovs = manifest.aovs != 0;
+    let done: Vec<bool> = group.iter().map(|t| complete(t, aovs)).collect();
+    if done.iter().all(|&d| d) && group.iter().all(recorded) {
+        tally.skipped += group.len();
+        return Ok(());
+    }
+    let mut scene = load(&group[0].input, &BareOptions { up: job.up })?;
+    scene.settings = manifest.settings.apply(scene.settings);
+    if let Err((field, message)) = validate_settings(&scene.settings) {
+        bail!("{}: render.{field}: {message}", manifest.path.display());
+    }
+    let settings = scene.settings;
+    let own = scene.camera.clone();
+    let framed = scene.framed;
+    let mut prepared = backend.prepare(RenderScene::new(&scene, &BuildParams::default())?)?;
+    drop(scene);
+    for (task, done) in group.iter().zip(done) {
+        let camera = batch::view_camera(job, task.view, &own, framed.as_ref())
+            .with_context(|| format!("view {} cannot be framed", task.view))?;
+        let f = frame(task, &camera, settings.width, settings.height);
+        tally.frames.push((task.output.clone(), f));
+        if done {
+            tally.skipped += 1;
+            continue;
+        }
+        prepared.set_camera(&camera);
+        let mut render_job =
+            RenderJob::new(settings).with_aovs(manifest.aovs, manifest.transparent);
+        render_job.cancel = Some(cancel.clone());
+        let t0 = Instant::now();
+        let mut film = prepared.render(&render_job, &|_| {})?;
+        if film.samples < settings.spp {
+            // An image cut short is not written (nor its frame): a resumed run renders it.
+            tally.frames.pop();
+            return Err(Interrupted("interrupted".into()).into());
+        }
+        film.saved_aovs = manifest.aovs;
+        if let Some(dir) = task.output.parent() {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create {}", dir.display()))?;
+        }
+        film.save(&task.output)?;
+        tally.rendered += 1;
+        if tally.first_peak.is_none() && tally.rendered >= tally.warm_up {
+            tally.first_peak = peak_kib();
+        }
+        if !quiet {
+            eprintln!(
+                "{} ({:.2} s)",
+                task.output.display(),
+                t0.elapsed().as_secs_f64()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Whether `task`'s output is in its folder's `transforms.json`.
+fn recorded(task: &Task) -> bool {
+    match (task.output.parent(), task.output.file_name()) {
+        (Some(dir), Some(name)) => transforms::recorded(dir, &name.to_string_lossy()),
+        _ => false,
+    }
+}

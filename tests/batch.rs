@@ -1,0 +1,323 @@
+//! `meshtrace batch`: a manifest of meshes × turntable views split into shards that run at
+//! once, one transforms.json per folder with every view's pose, resuming without
+//! re-rendering, flat memory over 1,000 jobs, and one-line errors for bad manifests.
+
+mod common;
+
+use common::cli::{assert_fails, run};
+use common::fs::{TempDir, data};
+use std::path::Path;
+use std::process::Command;
+
+/// Copies three small meshes of the fixtures into `dir/models`.
+fn models(dir: &TempDir) {
+    let models = dir.path().join("models");
+    std::fs::create_dir_all(&models).unwrap();
+    for name in ["box.obj", "polys.obj", "normals.obj"] {
+        std::fs::copy(data(name), models.join(name)).unwrap();
+    }
+}
+
+const MANIFEST: &str = r#"
+[render]
+spp = 2
+width = 24
+height = 16
+aov = ["depth"]
+
+[[jobs]]
+meshes = "models/*.obj"
+views = 4
+elevation = 20
+output = "out/{stem}_{view}.png"
+"#;
+
+/// A camera-to-world matrix, by rows.
+type Pose = [[f64; 4]; 4];
+
+/// The frames of a transforms.json: (file_path, camera-to-world rows).
+fn frames(path: &Path) -> (serde_json::Value, Vec<(String, Pose)>) {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let list = doc["frames"]
+        .as_array()
+        .expect("a frames array")
+        .iter()
+        .map(|f| {
+            let m: Pose = serde_json::from_value(f["transform_matrix"].clone()).unwrap();
+            (f["file_path"].as_str().unwrap().to_string(), m)
+        })
+        .collect();
+    (doc, list)
+}
+
+/// The modification times of the images in `dir/out`.
+fn mtimes(dir: &TempDir) -> Vec<(String, std::time::SystemTime)> {
+    let mut out: Vec<_> = std::fs::read_dir(dir.path().join("out"))
+        .unwrap()
+        .map(|e| e.unwrap())
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".png"))
+        .map(|e| {
+            (
+                e.file_name().to_string_lossy().into_owned(),
+                e.metadata().unwrap().modified().unwrap(),
+            )
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+#[test]
+fn two_shards_render_every_view_once_and_resume_without_rendering() {
+    let dir = TempDir::new("batch-shards");
+    models(&dir);
+    std::fs::write(dir.path().join("m.toml"), MANIFEST).unwrap();
+    // The two shards run at the same time, as a job array's tasks do.
+    let shard = |k: u32| {
+        Command::new(env!("CARGO_BIN_EXE_meshtrace"))
+            .args([
+                "batch",
+                "m.toml",
+                "--device",
+                "cpu",
+                "--shard",
+                &format!("{k}/2"),
+            ])
+            .current_dir(dir.path())
+            .env("NODEVICE_SELECT", "1")
+            .output()
+            .unwrap()
+    };
+    let (a, b) = std::thread::scope(|s| {
+        let a = s.spawn(|| shard(0));
+        let b = s.spawn(|| shard(1));
+        (a.join().unwrap(), b.join().unwrap())
+    });
+    for (k, out) in [a, b].iter().enumerate() {
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "shard {k}: {err}");
+        assert!(
+            err.contains(&format!(
+                "shard {k}/2: 6 rendered, 0 already complete, 0 failed"
+            )),
+            "{err}"
+        );
+        assert!(err.contains("images/hour"), "{err}");
+    }
+    let images = mtimes(&dir);
+    assert_eq!(images.len(), 12, "{images:?}");
+    for stem in ["box", "polys", "normals"] {
+        for v in 0..4 {
+            let name = format!("{stem}_{v}");
+            assert!(
+                images.iter().any(|(n, _)| *n == format!("{name}.png")),
+                "{name}"
+            );
+            assert!(
+                dir.path().join(format!("out/{name}.aovs.exr")).exists(),
+                "{name}"
+            );
+        }
+    }
+    // One transforms.json with the 12 frames, 12 distinct poses, each looking at its mesh
+    // from 20 degrees above the horizontal.
+    let (doc, list) = frames(&dir.path().join("out/transforms.json"));
+    assert_eq!(list.len(), 12);
+    let angle = doc["camera_angle_x"].as_f64().unwrap();
+    let expect = 2.0 * ((20f64.to_radians()).tan() * 24.0 / 16.0).atan();
+    assert!(
+        (angle - expect).abs() < 1e-5,
+        "camera_angle_x {angle}, expected {expect}"
+    );
+    let mut poses: Vec<String> = list.iter().map(|(_, m)| format!("{m:?}")).collect();
+    poses.sort();
+    poses.dedup();
+    assert_eq!(poses.len(), 12);
+    for (name, m) in &list {
+        // The camera looks down its -z axis (the third column is backwards).
+        let back = [m[0][2], m[1][2], m[2][2]];
+        let elevation = back[1].asin().to_degrees();
+        assert!(
+            (elevation - 20.0).abs() < 1e-3,
+            "{name}: elevation {elevation}"
+        );
+        assert_eq!(m[3], [0.0, 0.0, 0.0, 1.0]);
+    }
+    // The views of one mesh go around: view k is 90 degrees of azimuth after view 0.
+    let azimuth = |name: &str| {
+        let m = list.iter().find(|(n, _)| n == name).unwrap().1;
+        m[0][2].atan2(m[2][2]).to_degrees()
+    };
+    let turn = (azimuth("box_1.png") - azimuth("box_0.png")).rem_euclid(360.0);
+    assert!((turn - 90.0).abs() < 1e-3, "turn {turn}");
+    // Resuming renders nothing and leaves every image as it was.
+    let (code, err) = run(
+        &dir,
+        &["batch", "m.toml", "--device", "cpu", "--shard", "1/2"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("0 rendered, 6 already complete"), "{err}");
+    assert_eq!(mtimes(&dir), images);
+    // A half-written output (a temporary file) and a missing frame are not complete.
+    std::fs::remove_file(dir.path().join("out/polys_2.png")).unwrap();
+    std::fs::write(dir.path().join("out/.polys_2.png.123.tmp"), b"half").unwrap();
+    let (code, err) = run(&dir, &["batch", "m.toml", "-q", "--device", "cpu"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("1 rendered, 11 already complete"), "{err}");
+    assert_eq!(frames(&dir.path().join("out/transforms.json")).1.len(), 12);
+}
+
+/// Peak memory over 1,000 small jobs grows by under 10% after the first tenth.
+#[test]
+fn memory_stays_flat_over_a_thousand_jobs() {
+    let dir = TempDir::new("batch-memory");
+    let models = dir.path().join("models");
+    std::fs::create_dir_all(&models).unwrap();
+    let mesh = std::fs::read(data("box.obj")).unwrap();
+    for i in 0..1000 {
+        std::fs::write(models.join(format!("m{i:04}.obj")), &mesh).unwrap();
+    }
+    let manifest = "[render]\nspp = 1\nwidth = 8\nheight = 8\n\n[[jobs]]\nmeshes = \"models/*.obj\"\noutput = \"out/{stem}.png\"\n";
+    std::fs::write(dir.path().join("m.toml"), manifest).unwrap();
+    let (code, err) = run(&dir, &["batch", "m.toml", "-q", "--device", "cpu"]);
+    assert_eq!(code, 0, "{err}");
+    eprintln!("{err}");
+    assert!(err.contains("1000 rendered"), "{err}");
+    let growth: f64 = err
+        .rsplit_once('(')
+        .and_then(|(_, g)| g.split_once('%'))
+        .and_then(|(g, _)| g.parse().ok())
+        .unwrap_or_else(|| panic!("no memory growth in: {err}"));
+    assert!(
+        growth < 10.0,
+        "peak memory grew {growth}% over 1,000 jobs: {err}"
+    );
+    assert_eq!(
+        frames(&dir.path().join("out/transforms.json")).1.len(),
+        1000
+    );
+}
+
+#[test]
+fn bad_manifests_fail_cleanly() {
+    let dir = TempDir::new("batch-bad");
+    models(&dir);
+    let cases: &[(&str, &[&str])] = &[
+        (
+            "[[jobs]]\nmeshes = \"models/*.obj\"\n",
+            &["bad.toml", "jobs[0].output", "missing"],
+        ),
+        (
+            "[render]\nspp = 0\n[[jobs]]\nmeshes = \"m/*.obj\"\noutput = \"a.png\"\n",
+            &["render.spp", "at least 1"],
+        ),
+        ("[render]\nspp = 1\ncolour = 3\n", &["bad.toml:3", "colour"]),
+        (
+            "[[jobs]]\nmeshes = \"nothing/*.obj\"\noutput = \"a.png\"\n",
+            &["jobs[0].meshes", "matches no file"],
+        ),
+        (
+            "[[jobs]]\nmeshes = \"models/*.obj\"\nviews = 3\noutput = \"{stem}.png\"\n",
+            &["jobs[0].output", "no {view}"],
+        ),
+        (
+            "[[jobs]]\nmeshes = \"models/*.obj\"\noutput = \"{name}.png\"\n",
+            &["jobs[0].output", "unknown placeholder {name}"],
+        ),
+        (
+            "[[jobs]]\nmeshes = \"models/*.obj\"\noutput = \"same.png\"\n",
+            &["jobs[0].output", "same.png would be written by"],
+        ),
+        (
+            "[[jobs]]\nmeshes = \"models/*.obj\"\noutput = \"{stem}.tga\"\n",
+            &["jobs[0].output", "unknown image format"],
+        ),
+        (
+            "[[jobs]]\nmeshes = \"models/*.obj\"\nelevation = 90\noutput = \"{stem}.png\"\n",
+            &["jobs[0].elevation", "between -90 and 90"],
+        ),
+        (
+            "[render]\naov = [\"colour\"]\n[[jobs]]\nscene = \"x.toml\"\noutput = \"a.png\"\n",
+            &["render.aov", "unknown AOV `colour`"],
+        ),
+        ("[render]\nspp = 1\n", &["jobs", "no [[jobs]]"]),
+    ];
+    for (text, needles) in cases {
+        std::fs::write(dir.path().join("bad.toml"), text).unwrap();
+        assert_fails(&dir, &["batch", "bad.toml", "--device", "cpu"], needles);
+        std::fs::remove_file(dir.path().join("bad.toml")).unwrap();
+    }
+    std::fs::write(dir.path().join("m.toml"), MANIFEST).unwrap();
+    assert_fails(
+        &dir,
+        &["batch", "m.toml", "--shard", "2/2"],
+        &["--shard 2/2", "below N"],
+    );
+    assert_fails(
+        &dir,
+        &["batch", "m.toml", "--shard", "auto"],
+        &["not in a Slurm job array"],
+    );
+}
+
+/// `--shard auto` reads a Slurm array's index and count, or Kubernetes' completion index.
+#[test]
+fn shard_auto_reads_the_job_array() {
+    let dir = TempDir::new("batch-auto");
+    models(&dir);
+    std::fs::write(
+        dir.path().join("m.toml"),
+        MANIFEST
+            .replace("views = 4", "views = 1")
+            .replace("_{view}", ""),
+    )
+    .unwrap();
+    let go = |args: &[&str], env: &[(&str, &str)]| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_meshtrace"));
+        c.args(args)
+            .current_dir(dir.path())
+            .env("NODEVICE_SELECT", "1");
+        for v in [
+            "SLURM_ARRAY_TASK_ID",
+            "SLURM_ARRAY_TASK_COUNT",
+            "SLURM_ARRAY_TASK_MIN",
+            "SLURM_ARRAY_TASK_MAX",
+            "JOB_COMPLETION_INDEX",
+        ] {
+            c.env_remove(v);
+        }
+        c.envs(env.iter().copied());
+        let out = c.output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let base = ["batch", "m.toml", "-q", "--device", "cpu", "--shard"];
+    let said = go(
+        &[&base[..], &["auto"]].concat(),
+        &[
+            ("SLURM_ARRAY_TASK_ID", "4"),
+            ("SLURM_ARRAY_TASK_MIN", "3"),
+            ("SLURM_ARRAY_TASK_MAX", "5"),
+        ],
+    );
+    assert!(said.contains("shard 1/3: 1 rendered"), "{said}");
+    let said = go(
+        &[&base[..], &["auto"]].concat(),
+        &[
+            ("SLURM_ARRAY_TASK_ID", "2"),
+            ("SLURM_ARRAY_TASK_COUNT", "3"),
+        ],
+    );
+    assert!(said.contains("shard 2/3: 1 rendered"), "{said}");
+    let said = go(
+        &[&base[..], &["auto/3"]].concat(),
+        &[("JOB_COMPLETION_INDEX", "0")],
+    );
+    assert!(said.contains("shard 0/3: 1 rendered"), "{said}");
+    assert_eq!(frames(&dir.path().join("out/transforms.json")).1.len(), 3);
+}
