@@ -323,6 +323,7 @@ fn set_threads(threads: Option<usize>) -> Result<()> {
 pub struct Interrupted(String);
 
 pub fn render(args: &RenderArgs) -> Result<()> {
+    let began = Instant::now();
     let part = args.part.as_deref().map(parse_part).transpose()?;
     if part.is_some() {
         if args.denoise {
@@ -450,6 +451,9 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     }
     let wanted = samples.end - samples.start;
     let progress = Progress::new(settings.width, settings.height, wanted, args.quiet);
+    // What a split render pays again in every part: loading the scene, building its BVH and
+    // opening the device.
+    let prepared = began.elapsed().as_secs_f64();
     let start = Instant::now();
     let mut film = backend.render(&rs, &job, &|n| progress.inc(n))?;
     film.saved_aovs = saved;
@@ -491,12 +495,13 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             None => format!("{} spp", settings.spp),
         };
         eprintln!(
-            "{}x{} at {what} on {} in {:.2} s ({:.2} Mrays/s) -> {}",
+            "{}x{} at {what} on {} in {:.2} s ({:.2} Mrays/s; {:.2} s to load, build and set up before) -> {}",
             settings.width,
             settings.height,
             backend.name(),
             seconds,
             rays as f64 / seconds / 1e6,
+            prepared,
             args.output.display()
         );
     }
