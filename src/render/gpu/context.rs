@@ -1,6 +1,7 @@
 //! Adapters and devices: listing what Vulkan offers, choosing one, and opening it with its
 //! real limits (never wgpu's conservative defaults, which would cap storage bindings).
 
+use super::pipelines::Pipeline;
 use super::{Accel, GpuError};
 use std::sync::{Arc, Mutex};
 
@@ -70,6 +71,11 @@ pub struct GpuContext {
     /// Whether this device traces with hardware ray queries (`shaders/ray_query.wgsl`)
     /// rather than the software BVH (`shaders/traverse.wgsl`).
     pub ray_query: bool,
+    /// The layout of every scene's bind group on this device ([`super::tables::scene_layout`]).
+    pub scene_layout: wgpu::BindGroupLayout,
+    /// The render kernel, compiled by the first render on this device and kept for every
+    /// later scene (a batch's meshes), since its source and layouts do not depend on them.
+    render: Arc<Mutex<Option<Arc<Pipeline>>>>,
     fault: Arc<Mutex<Option<String>>>,
 }
 
@@ -124,14 +130,36 @@ impl GpuContext {
                 slot.get_or_insert_with(|| format!("device lost: {message}"));
             }
         });
+        let scene_layout = super::tables::scene_layout(&device, ray_query);
         Ok(Self {
             adapter: summary,
             device,
             queue,
             limits,
             ray_query,
+            scene_layout,
+            render: Arc::new(Mutex::new(None)),
             fault,
         })
+    }
+
+    /// The render kernel (`shaders/render.wgsl`), compiled on first use.
+    pub fn render_pipeline(&self) -> Result<Arc<Pipeline>, GpuError> {
+        let mut slot = self.render.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(p) = slot.as_ref() {
+            return Ok(p.clone());
+        }
+        let source = super::shader::render_source(self.ray_query);
+        let p = Arc::new(Pipeline::new(
+            self,
+            &self.scene_layout,
+            &source,
+            "render",
+            0,
+            2,
+        )?);
+        *slot = Some(p.clone());
+        Ok(p)
     }
 
     /// How this device finds hits, for messages: "hardware ray queries" or "software BVH".

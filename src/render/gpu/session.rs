@@ -4,12 +4,13 @@
 use super::params::Params;
 use super::pipelines::Pipeline;
 use super::tables::{SceneTables, params_buffer};
-use super::{GpuContext, GpuError, shader};
+use super::{GpuContext, GpuError};
 use crate::film::{Aov, Film};
 use crate::fixed::from_words;
 use crate::render::{Checkpoints, RenderJob, RenderScene};
 use crate::scene::{Camera, RenderSettings};
 use std::ops::Range;
+use std::sync::Arc;
 
 /// Paths traced per dispatch: about one sample per pixel of a 1080p image, so that no
 /// dispatch runs long enough (~100 ms on a desktop GPU) for a driver watchdog to kill it.
@@ -58,9 +59,9 @@ struct DeviceFilm {
 pub struct GpuRenderer {
     ctx: GpuContext,
     tables: SceneTables,
-    /// The render kernel, compiled by the first [`GpuRenderer::begin`] (a renderer that
-    /// only serves [`Kernel`](super::kernels::Kernel)s never needs it).
-    render: Option<Pipeline>,
+    /// The device's render kernel, taken by the first [`GpuRenderer::begin`] (a renderer
+    /// that only serves [`Kernel`](super::kernels::Kernel)s never needs it).
+    render: Option<Arc<Pipeline>>,
     /// The parameters of the scene and of the film's settings; dispatches set the ranges.
     base: Params,
     params: wgpu::Buffer,
@@ -174,17 +175,7 @@ impl GpuRenderer {
                 | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let render = match self.render.take() {
-            Some(render) => render,
-            None => Pipeline::new(
-                &self.ctx,
-                &self.tables.layout,
-                &shader::render_source(self.ctx.ray_query),
-                "render",
-                0,
-                2,
-            )?,
-        };
+        let render = self.ctx.render_pipeline()?;
         let io_group = render.io_group(&self.ctx, &[&buffer, &status]);
         self.render = Some(render);
         self.film = Some(DeviceFilm {

@@ -296,9 +296,51 @@ fn struct_loader(t: &Table, layout: &StructLayout) -> String {
     )
 }
 
+/// The layout of the scene bind group (group 0): a parameter block, every table, and on a
+/// device that traces with ray queries the TLAS. The same for every scene on a device, so
+/// [`GpuContext`] makes it once and its pipelines serve every scene.
+pub fn scene_layout(device: &wgpu::Device, ray_query: bool) -> wgpu::BindGroupLayout {
+    let mut entries = vec![wgpu::BindGroupLayoutEntry {
+        binding: 0,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: wgpu::BufferSize::new(size_of::<Params>() as u64),
+        },
+        count: None,
+    }];
+    entries.extend(
+        (1..=TABLES.len() as u32).map(|binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Uint,
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        }),
+    );
+    if ray_query {
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: TLAS_BINDING,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::AccelerationStructure {
+                vertex_return: false,
+            },
+            count: None,
+        });
+    }
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("scene"),
+        entries: &entries,
+    })
+}
+
 /// A scene uploaded to one device: its table textures, on a device that traces with ray
 /// queries its acceleration structure, and the layout of the bind group (group 0) that
-/// holds them with a parameter block.
+/// holds them with a parameter block (the device's [`scene_layout`]).
 pub struct SceneTables {
     views: Vec<wgpu::TextureView>,
     accel: Option<SceneAccel>,
@@ -318,44 +360,7 @@ impl SceneTables {
         } else {
             None
         };
-        let mut entries = vec![wgpu::BindGroupLayoutEntry {
-            binding: 0,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: false,
-                min_binding_size: wgpu::BufferSize::new(size_of::<Params>() as u64),
-            },
-            count: None,
-        }];
-        entries.extend(
-            (1..=views.len() as u32).map(|binding| wgpu::BindGroupLayoutEntry {
-                binding,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Uint,
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-                count: None,
-            }),
-        );
-        if accel.is_some() {
-            entries.push(wgpu::BindGroupLayoutEntry {
-                binding: TLAS_BINDING,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::AccelerationStructure {
-                    vertex_return: false,
-                },
-                count: None,
-            });
-        }
-        let layout = ctx
-            .device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("scene"),
-                entries: &entries,
-            });
+        let layout = ctx.scene_layout.clone();
         ctx.check()?;
         Ok(Self {
             views,
