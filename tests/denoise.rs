@@ -145,7 +145,7 @@ fn guides_reach_the_filter_and_sizes_are_checked() {
     // Guides that disagree with the image: a checkerboard albedo and normal.
     let albedo: Vec<[f32; 3]> = (0..n)
         .map(|k| {
-            let v = if (k % w as usize / 8 + k / w as usize / 8) % 2 == 0 {
+            let v = if (k % w as usize / 8 + k / w as usize / 8).is_multiple_of(2) {
                 0.9
             } else {
                 0.1
