@@ -83,6 +83,8 @@ mod tests {
         // Half a unit rounds to the even neighbour.
         assert_eq!(to_fixed(0.5 / FIXED_ONE), 0);
         assert_eq!(to_fixed(1.5 / FIXED_ONE), 2);
+        assert_eq!(to_fixed(-2.5 / FIXED_ONE), -2);
+        assert_eq!(to_fixed(-3.5 / FIXED_ONE), -4);
         assert_eq!(to_fixed(f32::NAN), 0);
         assert_eq!(to_fixed(f32::INFINITY), 1 << 62);
         assert_eq!(to_fixed(f32::NEG_INFINITY), -(1 << 62));
