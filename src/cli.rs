@@ -53,10 +53,7 @@ pub enum Command {
     /// none, the built-in Cornell box.
     Render(RenderArgs),
     /// Print a scene's size and its BVH's statistics.
-    Info {
-        /// Scene file, .obj mesh, .gltf/.glb file, or builtin:NAME.
-        scene: PathBuf,
-    },
+    Info(InfoArgs),
     /// Add the part files of one render (`render --part K/N`) into its image: bit for bit
     /// one render of all the samples on the same device.
     Merge(MergeArgs),
@@ -67,6 +64,21 @@ pub enum Command {
     Adapters,
     /// Measure BVH build, ray and path-tracing throughput of both renderers.
     Bench(BenchArgs),
+}
+
+#[derive(clap::Args)]
+pub struct InfoArgs {
+    /// Scene file, .obj mesh, .gltf/.glb file, or builtin:NAME.
+    pub scene: PathBuf,
+    /// Also write a heat map of the BVH cost of each camera ray (nodes visited plus
+    /// triangles tested, the mean of 4 jittered rays a pixel) with a colour bar, as a PNG
+    /// at the scene's image size.
+    #[arg(long, value_name = "FILE")]
+    pub heatmap: Option<PathBuf>,
+    /// Also draw the BVH's boxes of level DEPTH (the root is 0; leaves above it too) over a
+    /// quick render of the scene, as a PNG.
+    #[arg(long, num_args = 2, value_names = ["DEPTH", "FILE"])]
+    pub bounds: Option<Vec<String>>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -508,7 +520,26 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
-pub fn info(path: &Path) -> Result<()> {
+pub fn info(args: &InfoArgs) -> Result<()> {
+    let path = args.scene.as_path();
+    let level = match args.bounds.as_deref() {
+        Some([depth, file]) => {
+            let depth: u32 = depth.parse().with_context(|| {
+                format!("--bounds: `{depth}` is not a tree level (0 is the root)")
+            })?;
+            Some((depth, PathBuf::from(file)))
+        }
+        _ => None,
+    };
+    for out in args.heatmap.iter().chain(level.as_ref().map(|b| &b.1)) {
+        if Format::from_path(out)? != Format::Png {
+            bail!(
+                "{}: figures are written as PNG; give a .png file",
+                out.display()
+            );
+        }
+        Film::check_writable(out, false)?;
+    }
     let scene = load(path, &BareOptions::default())?;
     let rs = RenderScene::new(&scene, &BuildParams::default())?;
     let st = &rs.bvh.stats;
@@ -560,6 +591,21 @@ pub fn info(path: &Path) -> Result<()> {
         .map(|(k, n)| format!("{k}:{n}"))
         .collect();
     out!("leaf sizes   {}", hist.join(" "));
+    if let Some(file) = &args.heatmap {
+        let s = &scene.settings;
+        let costs = meshtrace::figures::ray_costs(&rs, s);
+        meshtrace::figures::write_heatmap(file, s.width, s.height, &costs)?;
+        let mean = costs.iter().map(|&c| c as f64).sum::<f64>() / costs.len().max(1) as f64;
+        let max = costs.iter().copied().fold(0.0f32, f32::max);
+        out!(
+            "heat map     {} (nodes + triangles per camera ray: mean {mean:.1}, max {max:.0})",
+            file.display()
+        );
+    }
+    if let Some((depth, file)) = &level {
+        let n = meshtrace::figures::write_bounds(file, &rs, &scene.settings, *depth)?;
+        out!("bounds       {} (level {depth}: {n} boxes)", file.display());
+    }
     if let Some(kib) = peak_memory_kib() {
         out!("peak memory  {:.1} MiB", kib as f64 / 1024.0);
     }

@@ -12,6 +12,7 @@ pub mod bench;
 pub mod bvh;
 #[cfg(feature = "denoise")]
 pub mod denoise;
+pub mod figures;
 pub mod film;
 pub mod fixed;
 pub mod geometry;

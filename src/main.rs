@@ -17,7 +17,7 @@ fn main() -> ExitCode {
     let args = cli::Cli::parse();
     let result = match &args.command {
         cli::Command::Render(r) => cli::render(r),
-        cli::Command::Info { scene } => cli::info(scene),
+        cli::Command::Info(i) => cli::info(i),
         cli::Command::Merge(m) => cli::merge(m),
         cli::Command::Batch(b) => cli::batch(b),
         cli::Command::Adapters => cli::adapters(),
