@@ -321,3 +321,42 @@ fn shard_auto_reads_the_job_array() {
     assert!(said.contains("shard 0/3: 1 rendered"), "{said}");
     assert_eq!(frames(&dir.path().join("out/transforms.json")).1.len(), 3);
 }
+
+/// A scene job's views go around the point its camera looks at, at the camera's distance,
+/// view 0 from the camera itself.
+#[test]
+fn scene_views_orbit_the_point_the_camera_looks_at() {
+    let dir = TempDir::new("batch-scene");
+    let manifest = "[render]\nspp = 1\nwidth = 16\nheight = 16\n\n[[jobs]]\nscene = \"builtin:cornell\"\nviews = 3\noutput = \"out/{stem}_{view}.png\"\n";
+    std::fs::write(dir.path().join("m.toml"), manifest).unwrap();
+    let (code, err) = run(&dir, &["batch", "m.toml", "-q", "--device", "cpu"]);
+    assert_eq!(code, 0, "{err}");
+    let (_, list) = frames(&dir.path().join("out/transforms.json"));
+    let names: Vec<&str> = list.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, ["cornell_0.png", "cornell_1.png", "cornell_2.png"]);
+    let cam = meshtrace::scene::builtin::load_builtin("cornell")
+        .unwrap()
+        .camera;
+    let target = cam.position + cam.forward * cam.focus_distance;
+    for (name, m) in &list {
+        let p = glam::Vec3::new(m[0][3] as f32, m[1][3] as f32, m[2][3] as f32);
+        let d = (p - target).length();
+        assert!(
+            (d - cam.focus_distance).abs() < 1e-4 * d,
+            "{name}: distance {d}"
+        );
+        // It looks at the target: -z (the third column, negated) points there.
+        let look = -glam::Vec3::new(m[0][2] as f32, m[1][2] as f32, m[2][2] as f32);
+        assert!(look.dot((target - p).normalize()) > 0.9999, "{name}");
+    }
+    let p0 = glam::Vec3::new(
+        list[0].1[0][3] as f32,
+        list[0].1[1][3] as f32,
+        list[0].1[2][3] as f32,
+    );
+    assert!(
+        (p0 - cam.position).length() < 1e-4 * cam.focus_distance,
+        "view 0 at {p0}, camera at {}",
+        cam.position
+    );
+}

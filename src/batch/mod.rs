@@ -49,6 +49,8 @@ impl Manifest {
         for (j, job) in self.jobs.iter().enumerate() {
             let field = |key: &str| format!("jobs[{j}].{key}");
             let inputs = match &job.source {
+                // A built-in scene (`builtin:cornell`) is a name, not a path.
+                Source::Scene(p) if p.to_string_lossy().starts_with("builtin:") => vec![p.clone()],
                 Source::Scene(p) => vec![self.dir.join(p)],
                 Source::Meshes(glob) => {
                     self.expand(glob).map_err(|message| BatchError::Invalid {
@@ -63,6 +65,7 @@ impl Manifest {
                     .file_stem()
                     .map(|s| s.to_string_lossy().into_owned())
                     .unwrap_or_default();
+                let stem = stem.strip_prefix("builtin:").unwrap_or(&stem).to_string();
                 for view in 0..job.views {
                     let output = manifest::output_path(&job.output, &stem, view, j);
                     out.push(Task {
