@@ -162,6 +162,44 @@ fn choose_backend(
     Ok(Backend::choose(choice, adapter, accel.accel())?)
 }
 
+/// Where a render runs: the options `render` and `batch` share.
+#[derive(clap::Args)]
+pub struct DeviceArgs {
+    /// Renderer; by default the GPU on a hardware adapter, else the CPU (which is faster
+    /// than a software adapter such as lavapipe, and makes the same image).
+    #[arg(long, value_enum)]
+    pub device: Option<Device>,
+    /// GPU adapter: an index or a name substring from `meshtrace adapters` (or set WGPU_ADAPTER_NAME).
+    #[arg(long)]
+    pub adapter: Option<String>,
+    /// How the GPU finds ray hits: hardware ray queries where the adapter offers them
+    /// (auto), the software BVH, or hardware ray queries (an error without them).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub accel: AccelArg,
+    /// Worker threads for the CPU path (default: one per core).
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
+
+impl DeviceArgs {
+    /// The backend these options choose, and the notice to print when the CPU was chosen
+    /// for want of a usable GPU (unless `quiet`).
+    fn backend(&self, quiet: bool) -> Result<Backend> {
+        let choice = match self.device {
+            None => DeviceChoice::Auto,
+            Some(Device::Cpu) => DeviceChoice::Cpu,
+            Some(Device::Gpu) => DeviceChoice::Gpu,
+        };
+        let (backend, notice) = choose_backend(choice, self.adapter.as_deref(), self.accel)?;
+        if let Some(notice) = notice
+            && !quiet
+        {
+            eprintln!("notice: {notice}");
+        }
+        Ok(backend)
+    }
+}
+
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Device {
     /// The WGSL compute renderer on a Vulkan adapter.
@@ -196,20 +234,8 @@ pub struct RenderArgs {
     /// seed; else 0].
     #[arg(long)]
     pub seed: Option<u32>,
-    /// Renderer; by default the GPU on a hardware adapter, else the CPU (which is faster
-    /// than a software adapter such as lavapipe, and makes the same image).
-    #[arg(long, value_enum)]
-    pub device: Option<Device>,
-    /// GPU adapter: an index or a name substring from `meshtrace adapters` (or set WGPU_ADAPTER_NAME).
-    #[arg(long)]
-    pub adapter: Option<String>,
-    /// How the GPU finds ray hits: hardware ray queries where the adapter offers them
-    /// (auto), the software BVH, or hardware ray queries (an error without them).
-    #[arg(long, value_enum, default_value = "auto")]
-    pub accel: AccelArg,
-    /// Worker threads for the CPU path (default: one per core).
-    #[arg(long)]
-    pub threads: Option<usize>,
+    #[command(flatten)]
+    pub on: DeviceArgs,
     /// Print nothing but warnings and errors.
     #[arg(short, long)]
     pub quiet: bool,
@@ -350,7 +376,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             );
         }
     }
-    let denoiser = denoiser(args.denoise, args.threads)?;
+    let denoiser = denoiser(args.denoise, args.on.threads)?;
     let aovs = match &args.aov {
         Some(list) => Aov::parse_list(list).context("--aov")?,
         None => Vec::new(),
@@ -359,7 +385,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     if !aovs.is_empty() && part.is_none() && Format::from_path(&args.output)? != Format::Exr {
         Film::check_writable(&Film::aov_path(&args.output), false)?;
     }
-    set_threads(args.threads)?;
+    set_threads(args.on.threads)?;
     let options = BareOptions {
         up: args.up.map(|u| match u {
             UpAxis::X => Up::X,
@@ -407,17 +433,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         None => 0..settings.spp,
     };
     job = job.with_samples(samples.clone());
-    let choice = match args.device {
-        None => DeviceChoice::Auto,
-        Some(Device::Cpu) => DeviceChoice::Cpu,
-        Some(Device::Gpu) => DeviceChoice::Gpu,
-    };
-    let (backend, notice) = choose_backend(choice, args.adapter.as_deref(), args.accel)?;
-    if let Some(notice) = notice
-        && !args.quiet
-    {
-        eprintln!("notice: {notice}");
-    }
+    let backend = args.on.backend(args.quiet)?;
     // A part file records which render it belongs to; any other output is an image.
     let header = part.map(|(index, count)| PartHeader {
         index,

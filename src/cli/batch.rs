@@ -2,13 +2,12 @@
 //! prepared on the device once for all its views, outputs that are already complete
 //! skipped, and every output folder's `transforms.json` kept up to date.
 
-use super::{AccelArg, Device, Interrupted, choose_backend, load, set_threads};
+use super::{DeviceArgs, Interrupted, load, set_threads};
 use anyhow::{Context, Result, bail};
 use meshtrace::batch::transforms::{self, Frame, Intrinsics};
 use meshtrace::batch::{self, Manifest, Task};
 use meshtrace::bvh::BuildParams;
 use meshtrace::film::{Film, Format};
-use meshtrace::render::backend::DeviceChoice;
 use meshtrace::render::{RenderJob, RenderScene};
 use meshtrace::scene::load::validate_settings;
 use meshtrace::scene::studio::BareOptions;
@@ -22,24 +21,15 @@ use std::time::Instant;
 pub struct BatchArgs {
     /// The manifest (.toml; see docs/batch.md).
     pub manifest: PathBuf,
-    /// Render only shard K of N (K from 0): every N-th task from the K-th. `auto` takes K
+    /// Render only shard K of N (K from 0): the K-th of N consecutive blocks of the
+    /// manifest's tasks, so that a mesh's views mostly stay in one shard. `auto` takes K
     /// and N from a Slurm job array (SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT, or
     /// _MIN and _MAX); `auto/N` takes K from SLURM_ARRAY_TASK_ID or Kubernetes'
     /// JOB_COMPLETION_INDEX, with N given.
     #[arg(long, value_name = "K/N|auto|auto/N")]
     pub shard: Option<String>,
-    /// Renderer; by default the GPU on a hardware adapter, else the CPU.
-    #[arg(long, value_enum)]
-    pub device: Option<Device>,
-    /// GPU adapter: an index or a name substring from `meshtrace adapters`.
-    #[arg(long)]
-    pub adapter: Option<String>,
-    /// How the GPU finds ray hits (as for `render`).
-    #[arg(long, value_enum, default_value = "auto")]
-    pub accel: AccelArg,
-    /// Worker threads for the CPU path (default: one per core).
-    #[arg(long)]
-    pub threads: Option<usize>,
+    #[command(flatten)]
+    pub on: DeviceArgs,
     /// Print nothing but warnings, errors and the closing summary.
     #[arg(short, long)]
     pub quiet: bool,
@@ -170,7 +160,7 @@ struct Tally {
 }
 
 pub fn batch(args: &BatchArgs) -> Result<()> {
-    set_threads(args.threads)?;
+    set_threads(args.on.threads)?;
     let manifest = Manifest::load(&args.manifest)?;
     let all = manifest.tasks()?;
     let (k, n) = match &args.shard {
@@ -178,15 +168,7 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
         None => (0, 1),
     };
     let tasks = batch::shard(&all, k, n);
-    let choice = match args.device {
-        None => DeviceChoice::Auto,
-        Some(Device::Cpu) => DeviceChoice::Cpu,
-        Some(Device::Gpu) => DeviceChoice::Gpu,
-    };
-    let (backend, notice) = choose_backend(choice, args.adapter.as_deref(), args.accel)?;
-    if let (Some(notice), false) = (notice, args.quiet) {
-        eprintln!("notice: {notice}");
-    }
+    let backend = args.on.backend(args.quiet)?;
     if !args.quiet {
         eprintln!(
             "shard {k}/{n}: {} of {} images, on {}",
