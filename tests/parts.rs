@@ -55,7 +55,10 @@ fn parts_merge_into_the_bytes_of_one_render() {
         let dev = ["--device", device];
         render(&dir, &[&dev[..], &["-o", "full.exr"]].concat());
         render(&dir, &[&dev[..], &["-o", "full.png"]].concat());
-        for n in [1u32, 3, 5] {
+        // Every part on lavapipe compiles the kernel again (seconds each), so the GPU
+        // checks 1 and 3 parts, the CPU 1, 3 and 5.
+        let counts: &[u32] = if device == "gpu" { &[1, 3] } else { &[1, 3, 5] };
+        for &n in counts {
             let names: Vec<String> = (0..n).map(|k| format!("p{k}of{n}.exr")).collect();
             for (k, name) in names.iter().enumerate() {
                 let part = format!("{k}/{n}");
