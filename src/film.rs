@@ -159,9 +159,6 @@ pub struct Film {
     pub height: u32,
     /// `sum[y * width + x]` is the fixed-point sum of that pixel's radiance samples.
     pub sum: Vec<[i64; 3]>,
-    /// The first sample the film holds: its samples are `first_sample..first_sample +
-    /// samples`.
-    pub first_sample: u32,
     /// Samples per pixel in `sum` and in the channels.
     pub samples: u32,
     pub channels: Vec<Channel>,
@@ -238,7 +235,6 @@ impl Film {
             width,
             height,
             sum: vec![[0; 3]; width as usize * height as usize],
-            first_sample: 0,
             samples: 0,
             channels: Vec::new(),
             transparent: false,
@@ -376,9 +372,8 @@ impl Film {
     }
 
     /// Adds another film of the same size and channels rendered over a disjoint sample
-    /// range: exactly, so the result does not depend on the order or the split. The first
-    /// sample becomes the lower of the two. Pixel-centre values come from whichever film
-    /// traced them.
+    /// range: exactly, so the result does not depend on the order or the split.
+    /// Pixel-centre values come from whichever film traced them.
     pub fn merge(&mut self, other: &Film) {
         assert_eq!((self.width, self.height), (other.width, other.height));
         for (a, b) in self.sum.iter_mut().zip(&other.sum) {
@@ -399,13 +394,6 @@ impl Film {
                     Accumulation::PixelCentre => {}
                 }
             }
-        }
-        if other.samples > 0 {
-            self.first_sample = if self.samples == 0 {
-                other.first_sample
-            } else {
-                self.first_sample.min(other.first_sample)
-            };
         }
         self.samples += other.samples;
         self.transparent |= other.transparent;

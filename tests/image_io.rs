@@ -231,7 +231,6 @@ fn merges_of_sample_ranges_equal_all_samples_bit_for_bit() {
                 *px = fixed_add3(*px, to_fixed3(sample(i, k)));
             }
         }
-        film.first_sample = range.start;
         film.samples = range.len() as u32;
         film
     };
@@ -288,7 +287,6 @@ fn channel_film(range: std::ops::Range<u32>) -> Film {
         let centre = |v: f32| texel_add([0; 4], [v, 0.0, 0.0, 1.0]);
         film.channels[3].data = vec![centre(7.0), centre(9.0)];
     }
-    film.first_sample = range.start;
     film.samples = range.len() as u32;
     film
 }

@@ -231,7 +231,7 @@ fn an_interrupted_part_merges_with_a_warning() {
         &[&cpu[..], &["--part", "3/6", "-o", "six.exr"]].concat(),
     );
     let (six, _) = Film::read_part(&dir.path().join("six.exr")).unwrap();
-    assert_eq!((six.first_sample, six.samples), (6, 2));
+    assert_eq!(six.samples, 2);
     six.save_part(&b, &header).unwrap();
     let said = ok(&dir, &["merge", "-o", "out.exr", "a.exr", "b.exr"]);
     assert!(

@@ -212,7 +212,6 @@ impl Film {
                 film.samples, start, end
             )));
         }
-        film.first_sample = start;
         let words: HashMap<String, &[u32]> = layer
             .channel_data
             .list

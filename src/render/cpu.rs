@@ -43,7 +43,6 @@ pub fn render(scene: &RenderScene, job: &RenderJob, progress: &(dyn Fn(u64) + Sy
     let step = (PATHS_PER_PASS / (w as u64 * h as u64)).max(1) as u32;
     let cam = CameraRays::new(&scene.camera, w, h);
     let mut film = job.film();
-    film.first_sample = job.samples.start;
     let mut pixels = vec![PixelSums::default(); film.sum.len()];
     let aov_pixels = if film.aovs().is_empty() {
         0

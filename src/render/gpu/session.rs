@@ -277,7 +277,6 @@ impl GpuRenderer {
         let words: &[[u32; 8]] = bytemuck::cast_slice(&data);
         let texel = |w: &[u32; 8]| [0, 1, 2, 3].map(|k| from_words([w[2 * k], w[2 * k + 1]]));
         let mut out = film.template.clone();
-        out.first_sample = film.first_sample;
         out.samples = film.samples;
         let stride = out.texels_per_pixel();
         for (i, pixel) in words.chunks_exact(stride).enumerate() {
