@@ -140,12 +140,14 @@ pub fn record(dir: &Path, frames: &[Frame]) -> Result<(), BatchError> {
     Ok(())
 }
 
-/// Whether the `transforms.json` of folder `dir` has a frame for `file_path`.
-pub fn recorded(dir: &Path, file_path: &str) -> bool {
+/// The `file_path`s the `transforms.json` of folder `dir` has frames for (none where it is
+/// missing or unreadable).
+pub fn recorded(dir: &Path) -> std::collections::HashSet<String> {
     std::fs::read(dir.join(FILE_NAME))
         .ok()
         .and_then(|bytes| read(&bytes).ok())
-        .is_some_and(|frames| frames.iter().any(|f| f.file_path == file_path))
+        .map(|frames| frames.into_iter().map(|f| f.file_path).collect())
+        .unwrap_or_default()
 }
 
 /// The frames of a file written by [`record`], each with its intrinsics.

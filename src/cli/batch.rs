@@ -267,7 +267,7 @@ fn run_input(
     let job = &manifest.jobs[group[0].job];
     let aovs = manifest.aovs != 0;
     let done: Vec<bool> = group.iter().map(|t| complete(t, aovs)).collect();
-    if done.iter().all(|&d| d) && group.iter().all(recorded) {
+    if done.iter().all(|&d| d) && all_recorded(group) {
         tally.skipped += group.len();
         return Ok(());
     }
@@ -322,10 +322,17 @@ fn run_input(
     Ok(())
 }
 
-/// Whether `task`'s output is in its folder's `transforms.json`.
-fn recorded(task: &Task) -> bool {
-    match (task.output.parent(), task.output.file_name()) {
-        (Some(dir), Some(name)) => transforms::recorded(dir, &name.to_string_lossy()),
-        _ => false,
-    }
+/// Whether every task's output is in its folder's `transforms.json`, each folder's file
+/// read once.
+fn all_recorded(tasks: &[Task]) -> bool {
+    let mut folders: BTreeMap<&Path, std::collections::HashSet<String>> = BTreeMap::new();
+    tasks
+        .iter()
+        .all(|t| match (t.output.parent(), t.output.file_name()) {
+            (Some(dir), Some(name)) => folders
+                .entry(dir)
+                .or_insert_with(|| transforms::recorded(dir))
+                .contains(name.to_string_lossy().as_ref()),
+            _ => false,
+        })
 }
