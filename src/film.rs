@@ -314,6 +314,16 @@ impl Film {
         });
     }
 
+    /// Removes the channels of the AOVs in `mask`: a film then holds what a render without
+    /// them holds (`render --preview` gathers AOVs for its views that are not written).
+    pub fn remove_aovs(&mut self, mask: u32) {
+        self.channels.retain(|c| {
+            !Aov::ALL
+                .iter()
+                .any(|a| mask & a.bit() != 0 && c.name == a.name())
+        });
+    }
+
     /// The channel named `name`.
     pub fn channel(&self, name: &str) -> Option<&Channel> {
         self.channels.iter().find(|c| c.name == name)
@@ -508,12 +518,16 @@ impl Film {
             Encoding::SMALL_LOSSLESS,
             AnyChannels::sort(channels.into()),
         );
-        let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
-        let mut out = std::io::BufWriter::new(file);
+        let mut bytes = std::io::Cursor::new(Vec::new());
         Image::from_layer(layer)
             .write()
-            .to_buffered(&mut out)
+            .to_buffered(&mut bytes)
             .map_err(|e| e.to_string())?;
+        let mut bytes = bytes.into_inner();
+        sort_exr_attributes(&mut bytes)?;
+        let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+        let mut out = std::io::BufWriter::new(file);
+        std::io::Write::write_all(&mut out, &bytes).map_err(|e| e.to_string())?;
         finish_file(out)
     }
 
@@ -604,6 +618,52 @@ fn write_atomically(
 }
 
 /// Flushes a written file to the disk.
+/// Puts the header attributes of a single-part EXR file in name order. The `exr` crate
+/// writes its custom attributes from a `HashMap`, whose order changes from one map to the
+/// next, so a part file (ten attributes) came out in a different byte order on every write.
+/// Reordering keeps the header's length, so the offset table after it stays valid.
+fn sort_exr_attributes(bytes: &mut [u8]) -> Result<(), String> {
+    const MULTIPART: u32 = 1 << 12;
+    let flags = bytes
+        .get(4..8)
+        .map(|v| u32::from_le_bytes([v[0], v[1], v[2], v[3]]))
+        .ok_or("EXR shorter than its version field")?;
+    if flags & MULTIPART != 0 {
+        return Err("meshtrace writes single-part EXR files only".into());
+    }
+    let end_of_string = |at: usize| -> Result<usize, String> {
+        bytes[at..]
+            .iter()
+            .position(|&b| b == 0)
+            .map(|i| at + i)
+            .ok_or_else(|| "EXR header attribute without its terminating NUL".to_string())
+    };
+    let mut at = 8;
+    let mut attributes: Vec<(usize, usize, usize)> = Vec::new();
+    while bytes.get(at).is_some_and(|&b| b != 0) {
+        let name_end = end_of_string(at)?;
+        let kind_end = end_of_string(name_end + 1)?;
+        let size = bytes
+            .get(kind_end + 1..kind_end + 5)
+            .map(|v| u32::from_le_bytes([v[0], v[1], v[2], v[3]]) as usize)
+            .ok_or("EXR header attribute cut short")?;
+        let end = kind_end + 5 + size;
+        if end > bytes.len() {
+            return Err("EXR header attribute cut short".into());
+        }
+        attributes.push((at, name_end, end));
+        at = end;
+    }
+    let mut sorted: Vec<&(usize, usize, usize)> = attributes.iter().collect();
+    sorted.sort_by_key(|&&(start, name_end, _)| &bytes[start..name_end]);
+    let header: Vec<u8> = sorted
+        .iter()
+        .flat_map(|&&(start, _, end)| bytes[start..end].iter().copied())
+        .collect();
+    bytes[8..8 + header.len()].copy_from_slice(&header);
+    Ok(())
+}
+
 fn finish_file(mut out: std::io::BufWriter<std::fs::File>) -> Result<(), String> {
     use std::io::Write;
     out.flush().map_err(|e| e.to_string())?;
