@@ -22,6 +22,7 @@ use std::time::{Duration, Instant};
 
 mod batch;
 mod merge;
+mod preview;
 mod progress;
 pub use batch::{BatchArgs, batch};
 pub use merge::{MergeArgs, merge};
@@ -273,6 +274,14 @@ pub struct RenderArgs {
     /// from a Slurm job array or a Kubernetes Indexed Job, as `batch --shard` does.
     #[arg(long, value_name = "K/N|auto|auto/N")]
     pub part: Option<String>,
+    /// Show the render converging in a window: the tiles being traced, samples and rays per
+    /// second, elapsed time and ETA; keys 1-5 (or Tab) switch between the image and its
+    /// albedo, normal, depth and BVH-cost views, b and -/+ draw a level of BVH boxes, [ and ]
+    /// set the exposure, s saves the view as <stem>.<view>.png, Esc closes. Closing the
+    /// window ends the render as Ctrl-C does; after a finished render the window stays open
+    /// until closed. The output is the same as without the window.
+    #[arg(long)]
+    pub preview: bool,
 }
 
 /// `--part K/N` (K from 0, below N), or `auto`/`auto/N` from a job array's environment
@@ -313,6 +322,16 @@ fn denoiser(wanted: bool, threads: Option<usize>) -> Result<Option<Denoiser>> {
     {
         let _ = threads;
         bail!("{NO_DENOISE}");
+    }
+}
+
+/// The AOVs the denoiser is guided by (when there is one): they are in the film whether
+/// or not they are written.
+fn denoise_guides(denoising: bool) -> u32 {
+    if denoising {
+        Aov::Albedo.bit() | Aov::Normal.bit()
+    } else {
+        0
     }
 }
 
@@ -377,6 +396,12 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         }
     }
     let denoiser = denoiser(args.denoise, args.on.threads)?;
+    // The display first: without one, --preview fails before any work.
+    let window = if args.preview {
+        Some(preview::Preview::open()?)
+    } else {
+        None
+    };
     let aovs = match &args.aov {
         Some(list) => Aov::parse_list(list).context("--aov")?,
         None => Vec::new(),
@@ -422,11 +447,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     // The denoiser is guided by the first surface's albedo and normal, which the film then
     // holds whether or not they are written.
     let saved = Aov::mask(&aovs);
-    let guides = if denoiser.is_some() {
-        Aov::Albedo.bit() | Aov::Normal.bit()
-    } else {
-        0
-    };
+    let guides = denoise_guides(denoiser.is_some());
     let mut job = RenderJob::new(settings).with_aovs(saved | guides, args.transparent);
     let samples = match part {
         Some((k, n)) => PartHeader::range(k, n, settings.spp),
@@ -445,6 +466,14 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         device: backend.device_id(),
         digest: render_digest(&rs, &job),
     });
+    // The preview's views need AOVs that are not written: the film drops them before any
+    // write, so the output is what a render without the window gives.
+    let viewed = if window.is_some() {
+        Aov::mask(&preview::VIEW_AOVS) & !job.aovs
+    } else {
+        0
+    };
+    job.aovs |= viewed;
     let output = args.output.clone();
     let write = Arc::new(move |film: &Film| match &header {
         Some(h) => film.save_part(&output, h),
@@ -454,7 +483,9 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     job.cancel = Some(cancel.clone());
     // Ctrl-C, SIGTERM and SIGHUP (ctrlc's `termination` feature) end the render after the
     // current pass, which is then written with its sample count.
+    let signalled = cancel.clone();
     ctrlc::set_handler(move || {
+        let cancel = &signalled;
         if cancel.swap(true, Ordering::SeqCst) {
             // A second signal: stop now, without waiting for the pass.
             std::process::exit(130);
@@ -470,6 +501,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             Duration::from_secs_f64(every),
             Arc::new(move |film: &Film| {
                 let mut film = film.clone();
+                film.remove_aovs(viewed);
                 film.saved_aovs = saved;
                 if let Err(e) = write(&film) {
                     eprintln!("warning: checkpoint not written: {e}");
@@ -478,62 +510,145 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         ));
     }
     let wanted = samples.end - samples.start;
-    let progress = Progress::new(settings.width, settings.height, wanted, args.quiet);
-    // What a split render pays again in every part: loading the scene, building its BVH and
-    // opening the device.
-    let prepared = began.elapsed().as_secs_f64();
-    let start = Instant::now();
-    let mut film = backend.render(&rs, &job, &|n| progress.inc(n))?;
-    film.saved_aovs = saved;
-    let rays = film.rays();
-    let seconds = start.elapsed().as_secs_f64();
-    progress.finish();
-    // The denoised image replaces the radiance, in the complete and the interrupted film.
-    if let Some(d) = &denoiser
-        && film.samples > 0
-        && !(film.samples < wanted && args.no_partial)
-    {
-        d.denoise_film(&mut film)?;
+    let Some(window) = window else {
+        return Prepared {
+            args,
+            rs: &rs,
+            job: &job,
+            backend: &backend,
+            denoiser,
+            write,
+            began,
+            saved,
+        }
+        .finish();
+    };
+    let setup = preview::Setup {
+        scene: &rs,
+        width: settings.width,
+        height: settings.height,
+        spp: wanted,
+        title: format!(
+            "{} on {}",
+            args.scene.as_ref().unwrap_or(&default).display(),
+            backend.name()
+        ),
+        output: args.output.clone(),
+        cancel,
+        pixels_every: match backend {
+            Backend::Cpu => Duration::ZERO,
+            Backend::Gpu(_) => Duration::from_millis(200),
+        },
+    };
+    let (watch, picture) = window.watch(&setup);
+    job.watch = Some(watch);
+    let (rs, job, backend) = (&rs, &job, &backend);
+    let prepared = Prepared {
+        args,
+        rs,
+        job,
+        backend,
+        denoiser,
+        write,
+        began,
+        saved,
+    };
+    window.run(setup, picture, move || prepared.finish())
+}
+
+/// What writes a render's film: as an image or as a part file.
+type WriteFn = Arc<dyn Fn(&Film) -> Result<(), meshtrace::film::FilmError> + Send + Sync>;
+
+/// A render set up and ready to run: what [`Prepared::finish`] needs.
+struct Prepared<'a> {
+    args: &'a RenderArgs,
+    rs: &'a RenderScene,
+    job: &'a RenderJob,
+    backend: &'a Backend,
+    denoiser: Option<Denoiser>,
+    write: WriteFn,
+    /// When the command began (for the set-up time it reports).
+    began: Instant,
+    /// The AOVs asked for, which the output holds.
+    saved: u32,
+}
+
+impl Prepared<'_> {
+    /// The rest of `render`: the render itself with its progress line, the denoiser, the
+    /// output (or, when stopped, the samples so far) and the summary.
+    fn finish(self) -> Result<()> {
+        let Prepared {
+            args,
+            rs,
+            job,
+            backend,
+            denoiser,
+            write,
+            began,
+            saved,
+        } = self;
+        let settings = job.settings;
+        let samples = job.samples.clone();
+        let part = args.part.as_deref().map(parse_part).transpose()?;
+        let wanted = samples.end - samples.start;
+        let progress = Progress::new(settings.width, settings.height, wanted, args.quiet);
+        // What a split render pays again in every part: loading the scene, building its BVH and
+        // opening the device.
+        let prepared = began.elapsed().as_secs_f64();
+        let start = Instant::now();
+        let mut film = backend.render(rs, job, &|n| progress.inc(n))?;
+        film.remove_aovs(job.aovs & !(saved | denoise_guides(denoiser.is_some())));
+        film.saved_aovs = saved;
+        let rays = film.rays();
+        let seconds = start.elapsed().as_secs_f64();
+        progress.finish();
+        // The denoised image replaces the radiance, in the complete and the interrupted film.
+        if let Some(d) = &denoiser
+            && film.samples > 0
+            && !(film.samples < wanted && args.no_partial)
+        {
+            d.denoise_film(&mut film)?;
+        }
+        if film.samples < wanted {
+            let what = if args.no_partial {
+                format!(
+                    "at {} of {wanted} spp; nothing written (--no-partial)",
+                    film.samples
+                )
+            } else if film.samples == 0 {
+                "before the first pass finished; nothing written".to_string()
+            } else {
+                write(&film)?;
+                format!(
+                    "wrote {} with {} of {wanted} spp",
+                    args.output.display(),
+                    film.samples,
+                )
+            };
+            return Err(Interrupted(what).into());
+        }
+        write(&film)?;
+        if !args.quiet {
+            let what = match part {
+                Some((k, n)) => format!(
+                    "part {k}/{n} (samples {}..{} of {})",
+                    samples.start, samples.end, settings.spp
+                ),
+                None => format!("{} spp", settings.spp),
+            };
+            eprintln!(
+                "{}x{} at {what} on {} in {:.2} s ({:.2} Mrays/s; {:.2} s to load, build and set up before) -> {}",
+                settings.width,
+                settings.height,
+                backend.name(),
+                seconds,
+                rays as f64 / seconds / 1e6,
+                prepared,
+                args.output.display()
+            );
+        }
+        Ok(())
     }
-    if film.samples < wanted {
-        let what = if args.no_partial {
-            format!(
-                "at {} of {wanted} spp; nothing written (--no-partial)",
-                film.samples
-            )
-        } else if film.samples == 0 {
-            "before the first pass finished; nothing written".to_string()
-        } else {
-            write(&film)?;
-            format!(
-                "wrote {} with {} of {wanted} spp",
-                args.output.display(),
-                film.samples,
-            )
-        };
-        return Err(Interrupted(what).into());
-    }
-    write(&film)?;
-    if !args.quiet {
-        let what = match part {
-            Some((k, n)) => format!(
-                "part {k}/{n} (samples {}..{} of {})",
-                samples.start, samples.end, settings.spp
-            ),
-            None => format!("{} spp", settings.spp),
-        };
-        eprintln!(
-            "{}x{} at {what} on {} in {:.2} s ({:.2} Mrays/s; {:.2} s to load, build and set up before) -> {}",
-            settings.width,
-            settings.height,
-            backend.name(),
-            seconds,
-            rays as f64 / seconds / 1e6,
-            prepared,
-            args.output.display()
-        );
-    }
-    Ok(())
 }
 
 pub fn info(args: &InfoArgs) -> Result<()> {

@@ -18,8 +18,8 @@ use plotters::style::{FontStyle, register_font};
 use rayon::prelude::*;
 use std::path::Path;
 
-/// The font of every figure's text, built into the binary.
-const FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans-subset.ttf");
+/// The font of every figure's text (and of the preview window's), built into the binary.
+pub const FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans-subset.ttf");
 
 /// Camera rays per pixel of a heat map, jittered as the renderer jitters them.
 pub const HEATMAP_SAMPLES: u32 = 4;
@@ -249,7 +249,7 @@ fn clip(a: (f32, f32), b: (f32, f32), w: f32, h: f32) -> Option<((f32, f32), (f3
 
 /// The twelve edges of box `node` as seen by `camera`, clipped to the near plane and the
 /// image, in pixels.
-fn box_edges(camera: &Camera, node: &BvhNode, width: u32, height: u32) -> Vec<[(f32, f32); 2]> {
+pub fn box_edges(camera: &Camera, node: &BvhNode, width: u32, height: u32) -> Vec<[(f32, f32); 2]> {
     let b = node.bounds();
     let corner = |k: usize| {
         Vec3::new(

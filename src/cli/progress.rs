@@ -26,9 +26,35 @@ pub struct Progress {
 
 struct State {
     done: u64,
-    /// (time, samples done then), oldest first, spanning about [`WINDOW`].
-    recent: VecDeque<(Instant, u64)>,
+    recent: Throughput,
     drawn: Option<Instant>,
+}
+
+/// A running count's rate over about the last [`WINDOW`]: what an ETA that converges needs,
+/// whatever the first pass cost. The progress line and the preview window's statistics
+/// read it.
+pub struct Throughput {
+    /// (time, count then), oldest first, spanning about [`WINDOW`].
+    recent: VecDeque<(Instant, u64)>,
+}
+
+impl Throughput {
+    /// A count of 0 at `start`.
+    pub fn new(start: Instant) -> Self {
+        Self {
+            recent: VecDeque::from([(start, 0)]),
+        }
+    }
+
+    /// Records that the count is `total` at `now` and returns its recent rate per second.
+    pub fn record(&mut self, now: Instant, total: u64) -> f64 {
+        self.recent.push_back((now, total));
+        while self.recent.len() > 2 && now - self.recent[1].0 >= WINDOW {
+            self.recent.pop_front();
+        }
+        let (t0, c0) = self.recent[0];
+        total.saturating_sub(c0) as f64 / (now - t0).as_secs_f64().max(1e-9)
+    }
 }
 
 impl Progress {
@@ -57,7 +83,7 @@ impl Progress {
             start,
             state: Mutex::new(State {
                 done: 0,
-                recent: VecDeque::from([(start, 0)]),
+                recent: Throughput::new(start),
                 drawn: None,
             }),
         }
@@ -71,42 +97,44 @@ impl Progress {
         };
         st.done += samples;
         let done = st.done;
-        st.recent.push_back((now, done));
-        while st.recent.len() > 2 && now - st.recent[1].0 >= WINDOW {
-            st.recent.pop_front();
-        }
+        let recent_rate = st.recent.record(now, done);
         self.bar.set_position(done);
         if st.drawn.is_some_and(|t| now - t < REDRAW) {
             return;
         }
         st.drawn = Some(now);
-        let (t0, d0) = st.recent[0];
-        let recent_rate = (done - d0) as f64 / (now - t0).as_secs_f64().max(1e-9);
         self.bar
             .set_message(self.line(done, now - self.start, recent_rate));
     }
 
     /// The message: e.g. `37.5/64 spp  0.72 Msamples/s  12s  ETA 9s`.
     fn line(&self, done: u64, elapsed: Duration, rate: f64) -> String {
-        let total = self.pixels * self.spp as u64;
-        let eta = if rate > 0.0 {
-            duration((total.saturating_sub(done)) as f64 / rate)
-        } else {
-            "?".into()
-        };
         format!(
-            "{:.1}/{} spp  {}  {}  ETA {}",
-            done as f64 / self.pixels.max(1) as f64,
-            self.spp,
+            "{}  {}  {}  ETA {}",
+            spp_done(done, self.pixels, self.spp),
             human_rate(rate, "samples"),
             duration(elapsed.as_secs_f64()),
-            eta
+            eta(done, self.pixels * self.spp as u64, rate)
         )
     }
 
     /// Removes the line.
     pub fn finish(&self) {
         self.bar.finish_and_clear();
+    }
+}
+
+/// Samples per pixel done of the total, from `done` samples over `pixels`: `37.5/64 spp`.
+pub fn spp_done(done: u64, pixels: u64, spp: u32) -> String {
+    format!("{:.1}/{spp} spp", done as f64 / pixels.max(1) as f64)
+}
+
+/// The time left to reach `total` from `done` at `rate` per second: `9s`, or `?` at rate 0.
+pub fn eta(done: u64, total: u64, rate: f64) -> String {
+    if rate > 0.0 {
+        duration(total.saturating_sub(done) as f64 / rate)
+    } else {
+        "?".into()
     }
 }
 

@@ -1,10 +1,12 @@
 //! The CPU renderer's driver: passes of a few samples per pixel over the whole image,
 //! each pass parallel over 16×16 tiles with rayon. Each sample is [`trace_path`] on a
-//! camera ray, the same stages the GPU kernel (`shaders/render.wgsl`) runs. No I/O.
+//! camera ray, the same stages the GPU kernel (`shaders/render.wgsl`) runs. A job's
+//! [`Watch`](super::watch::Watch) is told of each tile as a thread starts and ends it. No I/O.
 
 use super::camera::{CameraRays, generate_camera_ray, pixel_centre_ray};
 use super::integrator::{FirstHit, first_hit, trace_path};
 use super::rng::Rng;
+use super::watch::Region;
 use super::{Checkpoints, RenderJob, RenderScene};
 use crate::film::{Aov, Film};
 use crate::fixed::{Texel, fixed_add, fixed_add3, texel_add, to_fixed, to_fixed3};
@@ -60,6 +62,11 @@ pub fn render(scene: &RenderScene, job: &RenderJob, progress: &(dyn Fn(u64) + Sy
             .par_iter()
             .map(|&(x0, y0)| {
                 let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+                let region = Region { x0, y0, x1, y1 };
+                let worker = rayon::current_thread_index().unwrap_or(0);
+                if let Some(watch) = &job.watch {
+                    watch.started(worker, region, start..end);
+                }
                 let mut sums = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
                 let mut aov_sums = Vec::new();
                 for y in y0..y1 {
@@ -81,6 +88,20 @@ pub fn render(scene: &RenderScene, job: &RenderJob, progress: &(dyn Fn(u64) + Sy
                     }
                 }
                 progress(sums.len() as u64 * (end - start) as u64);
+                if let Some(watch) = &job.watch {
+                    let tile = watch.wants_pixels().then(|| {
+                        let mut tile = Film::with_aovs(
+                            region.width(),
+                            region.height(),
+                            job.aovs,
+                            job.transparent,
+                        );
+                        tile.samples = end - job.samples.start;
+                        fill(&mut tile, &sums, &aov_sums);
+                        tile
+                    });
+                    watch.finished(worker, region, tile.as_ref());
+                }
                 ((x0, y0), sums, aov_sums)
             })
             .collect();

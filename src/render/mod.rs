@@ -16,6 +16,7 @@ pub mod lights;
 pub mod rng;
 pub mod sampling;
 pub mod texture;
+pub mod watch;
 
 use crate::bvh::{BuildParams, Bvh, BvhError, WideBvh};
 use crate::film::Film;
@@ -460,6 +461,9 @@ pub struct RenderJob {
     /// Whether camera rays that miss add no radiance ([`Film::transparent`]); the film
     /// then holds the alpha AOV, for the coverage.
     pub transparent: bool,
+    /// Told which region each worker traces and of each region's pixels once done
+    /// (`render --preview`).
+    pub watch: Option<Arc<dyn watch::Watch>>,
 }
 
 /// What a checkpoint does with the film so far (the CLI writes the output image).
@@ -474,6 +478,7 @@ impl RenderJob {
             checkpoint: None,
             aovs: 0,
             transparent: false,
+            watch: None,
         }
     }
 

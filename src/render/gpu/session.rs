@@ -7,6 +7,7 @@ use super::tables::{SceneTables, params_buffer};
 use super::{GpuContext, GpuError};
 use crate::film::{Aov, Film};
 use crate::fixed::from_words;
+use crate::render::watch::Region;
 use crate::render::{Checkpoints, RenderJob, RenderScene};
 use crate::scene::{Camera, RenderSettings};
 use std::ops::Range;
@@ -273,12 +274,25 @@ impl GpuRenderer {
         let Some(film) = &self.film else {
             return Err(GpuError::Fault("read_film before begin".into()));
         };
-        let data = self.ctx.read_buffer(&film.buffer)?;
+        self.read_rows(0..film.template.height, film.template.clone(), film.samples)
+    }
+
+    /// Rows `rows` of the film so far, as a film of their size (shaped as `template`, which
+    /// has that size) holding `samples` samples a pixel.
+    fn read_rows(&self, rows: Range<u32>, template: Film, samples: u32) -> Result<Film, GpuError> {
+        let Some(film) = &self.film else {
+            return Err(GpuError::Fault("read_film before begin".into()));
+        };
+        let stride = template.texels_per_pixel();
+        let row_bytes = (template.width as usize * stride * 32) as u64;
+        let data = self.ctx.read_buffer_range(
+            &film.buffer,
+            rows.start as u64 * row_bytes..rows.end as u64 * row_bytes,
+        )?;
         let words: &[[u32; 8]] = bytemuck::cast_slice(&data);
         let texel = |w: &[u32; 8]| [0, 1, 2, 3].map(|k| from_words([w[2 * k], w[2 * k + 1]]));
-        let mut out = film.template.clone();
-        out.samples = film.samples;
-        let stride = out.texels_per_pixel();
+        let mut out = template;
+        out.samples = samples;
         for (i, pixel) in words.chunks_exact(stride).enumerate() {
             let [r, g, b, _next] = texel(&pixel[0]);
             out.sum[i] = [r, g, b];
@@ -298,10 +312,28 @@ impl GpuRenderer {
         self.begin_film(&job.settings, job.film(), job.samples.start)?;
         let mut checkpoints = Checkpoints::new(job);
         for (samples, rows) in plan_dispatches(job) {
+            let region = Region {
+                x0: 0,
+                y0: rows.start,
+                x1: w,
+                y1: rows.end,
+            };
+            if let Some(watch) = &job.watch {
+                watch.started(0, region, samples.clone());
+            }
             self.dispatch(samples.clone(), rows.clone())?;
             progress(
                 (samples.end - samples.start) as u64 * w as u64 * (rows.end - rows.start) as u64,
             );
+            if let Some(watch) = &job.watch {
+                let band = if watch.wants_pixels() {
+                    let template = Film::with_aovs(w, region.height(), job.aovs, job.transparent);
+                    Some(self.read_rows(rows.clone(), template, samples.end - job.samples.start)?)
+                } else {
+                    None
+                };
+                watch.finished(0, region, band.as_ref());
+            }
             if rows.end == h {
                 let more = samples.end < job.samples.end;
                 if more && job.cancelled() {
