@@ -206,13 +206,13 @@ fn box_benches(c: &mut Criterion, data: &SpeedData) {
     group.finish();
 }
 
-/// Times `DRAWS` directions of `draw`, summed so that none is optimised away.
-fn bench_sampler(
+/// Times `DRAWS` directions of `draw` from `rng`, summed so that none is optimised away.
+fn bench_sampler<R>(
     group: &mut BenchmarkGroup<WallTime>,
     name: &str,
-    mut draw: impl FnMut(&mut Rng) -> DVec3,
+    mut rng: R,
+    mut draw: impl FnMut(&mut R) -> DVec3,
 ) {
-    let mut rng = Rng::new(7);
     group.bench_function(name, |b| {
         b.iter(|| {
             let mut sum = DVec3::ZERO;
@@ -228,17 +228,28 @@ fn sampler_benches(c: &mut Criterion) {
     use sampling::*;
     let mut g = c.benchmark_group("samplers");
     g.throughput(Throughput::Elements(DRAWS as u64));
+    let rng = || Rng::new(7);
     // The names of `sampling::samplers()`; each closure is that sampler's draw, written
     // out so that it inlines.
-    bench_sampler(&mut g, "meshtrace_sphere", meshtrace_sphere);
-    bench_sampler(&mut g, "seed_cube", seed_cube);
+    bench_sampler(&mut g, "meshtrace_sphere", rng(), meshtrace_sphere);
+    bench_sampler(&mut g, "seed_cube", rng(), seed_cube);
     // As the seed returns it: the caller normalises.
-    bench_sampler(&mut g, "seed_rejection", seed_rejection);
-    bench_sampler(&mut g, "meshtrace_cosine", meshtrace_cosine);
-    bench_sampler(&mut g, "seed_diffuse_cube", |r| {
+    bench_sampler(&mut g, "seed_rejection", rng(), seed_rejection);
+    bench_sampler(&mut g, "meshtrace_cosine", rng(), meshtrace_cosine);
+    bench_sampler(&mut g, "seed_diffuse_cube", rng(), |r| {
         seed_diffuse(DVec3::Z, seed_cube(r)).normalize()
     });
-    bench_sampler(&mut g, "seed_diffuse_rejection", |r| {
+    bench_sampler(&mut g, "seed_diffuse_rejection", rng(), |r| {
+        seed_diffuse(DVec3::Z, seed_rejection(r)).normalize()
+    });
+    // The seed's two unit vectors and bounces again, drawing from the seed's generator.
+    let mt = || common::Mt19937::new(5489);
+    bench_sampler(&mut g, "seed_cube_mt", mt(), seed_cube);
+    bench_sampler(&mut g, "seed_rejection_mt", mt(), seed_rejection);
+    bench_sampler(&mut g, "seed_diffuse_cube_mt", mt(), |r| {
+        seed_diffuse(DVec3::Z, seed_cube(r)).normalize()
+    });
+    bench_sampler(&mut g, "seed_diffuse_rejection_mt", mt(), |r| {
         seed_diffuse(DVec3::Z, seed_rejection(r)).normalize()
     });
     g.finish();
@@ -381,7 +392,7 @@ fn escapes() -> Value {
         .map(|mesh| {
             let mut rng = Rng::new(3);
             let origins = mesh.interior_points(8, &mut rng);
-            let rays = triangle::CrackRays::new(mesh, &origins, 4, 4);
+            let rays = triangle::CrackRays::new(mesh, &origins, 4, 1 << 16, 4);
             let bvh = Bvh::build(&mesh.bounds(), &BuildParams::fast()).expect("the tree fits");
             // Boxes a millionth of the mesh's size larger: every triangle any test could
             // hit is tested.

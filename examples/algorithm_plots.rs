@@ -402,30 +402,31 @@ fn escapes(inputs: &Inputs, out: &Path) -> Result<()> {
     let meshes = list(inputs.measure("escapes")?, "escapes")?;
     let mut names = Vec::new();
     // [kind][test][mesh] percentages.
-    let mut pct = vec![vec![Vec::new(); TRI_TESTS.len()]; 3];
+    let mut pct = vec![vec![Vec::new(); TRI_TESTS.len()]; 4];
     println!(
-        "| mesh | triangles | rays at vertices / edges / interiors | test | escapes at vertices | at edges | at interiors |"
+        "| mesh | triangles | rays at vertices / edges / interiors / random | test | escapes at vertices | at edges | at interiors | random |"
     );
-    println!("|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|");
     for m in meshes {
         let name = text(&m["mesh"], "escapes.mesh")?;
         names.push(name.to_string());
-        let rays: Vec<f64> = (0..3)
+        let rays: Vec<f64> = (0..4)
             .map(|k| num(&m["rays"][k], "escapes.rays"))
             .collect::<Result<_>>()?;
         for (t, test) in TRI_TESTS.iter().enumerate() {
             let mut cells = Vec::new();
-            for k in 0..3 {
+            for k in 0..4 {
                 let e = num(&m["escapes"][*test][k], "escapes.escapes")?;
                 pct[k][t].push(100.0 * e / rays[k]);
                 cells.push(format!("{e} ({:.3}%)", 100.0 * e / rays[k]));
             }
             println!(
-                "| {name} | {} | {} / {} / {} | {} | {} |",
+                "| {name} | {} | {} / {} / {} / {} | {} | {} |",
                 m["triangles"],
                 rays[0],
                 rays[1],
                 rays[2],
+                rays[3],
                 label(test),
                 cells.join(" | ")
             );
@@ -581,7 +582,12 @@ fn samplers(inputs: &Inputs, out: &Path) -> Result<()> {
             num(&r["log10_p"], "log10_p")?,
         );
         if let Some(ns) = ns {
-            points.push((name, ns, chi2 / dof));
+            points.push((name.to_string(), ns, chi2 / dof));
+        }
+        // The same method drawing from the seed's mt19937, where it was timed so.
+        if let Ok(ns) = inputs.ns_per("samplers", &format!("{name}_mt")) {
+            println!("| {}, mt19937 | {ns:.2} | | | | | |", label(name));
+            points.push((format!("{name}_mt"), ns, chi2 / dof));
         }
         if let Some(c) = r.get("against_cube_pdf") {
             println!(
@@ -605,13 +611,24 @@ fn samplers(inputs: &Inputs, out: &Path) -> Result<()> {
         Ok(inputs.ns_per("samplers", a)? / inputs.ns_per("samplers", b)?)
     };
     println!(
-        "Rejection / cube time: unit vector {:.2}, diffuse bounce {:.2}.\n",
+        "Rejection / cube time, SplitMix64: unit vector {:.2}, diffuse bounce {:.2}; mt19937: unit vector {:.2}, diffuse bounce {:.2}.\n",
         ratio("seed_rejection", "seed_cube")?,
-        ratio("seed_diffuse_rejection", "seed_diffuse_cube")?
+        ratio("seed_diffuse_rejection", "seed_diffuse_cube")?,
+        ratio("seed_rejection_mt", "seed_cube_mt")?,
+        ratio("seed_diffuse_rejection_mt", "seed_diffuse_cube_mt")?
     );
+    /// The samplers in colour order.
+    const BASES: [&str; 6] = [
+        "meshtrace_sphere",
+        "seed_cube",
+        "seed_rejection",
+        "meshtrace_cosine",
+        "seed_diffuse_cube",
+        "seed_diffuse_rejection",
+    ];
     let x_max = points.iter().map(|p| p.1).fold(0.0, f64::max) * 1.15;
     let y_max = points.iter().map(|p| p.2).fold(1.0, f64::max) * 8.0;
-    plot(&out.join("samplers.png"), (1000, 560), |root| {
+    plot(&out.join("samplers.png"), (1200, 600), |root| {
         let mut chart = drawn(
             ChartBuilder::on(root)
                 .caption(
@@ -639,30 +656,44 @@ fn samplers(inputs: &Inputs, out: &Path) -> Result<()> {
             vec![(0.0, 1.0), (x_max, 1.0)],
             BLACK.mix(0.3).stroke_width(1),
         )]))?;
-        for (k, &(name, ns, bias)) in points.iter().enumerate() {
-            let c = colour(k, points.len());
-            let hemisphere = name.contains("cosine") || name.contains("diffuse");
-            if hemisphere {
-                drawn(chart.draw_series([TriangleMarker::new((ns, bias), 9, c.filled())]))?;
+        for (name, ns, bias) in &points {
+            let (ns, bias) = (*ns, *bias);
+            let base = name.strip_suffix("_mt");
+            let k = BASES
+                .iter()
+                .position(|b| *b == base.unwrap_or(name))
+                .unwrap_or(0);
+            let c = colour(k, BASES.len());
+            let style = if base.is_some() {
+                c.stroke_width(2)
             } else {
-                drawn(chart.draw_series([Circle::new((ns, bias), 7, c.filled())]))?;
+                c.filled()
+            };
+            if name.contains("cosine") || name.contains("diffuse") {
+                drawn(chart.draw_series([TriangleMarker::new((ns, bias), 9, style)]))?;
+            } else {
+                drawn(chart.draw_series([Circle::new((ns, bias), 7, style)]))?;
             }
-            // Labels above, or below every other one of the unbiased row, where they crowd.
-            let below =
-                bias < 10.0 && points.iter().filter(|p| p.2 < 10.0 && p.1 < ns).count() % 2 == 1;
-            let (at, v) = if below {
-                (bias / 1.3, VPos::Top)
+            // Labels alternately above and below, in order of time within each row.
+            let row = |p: &(String, f64, f64)| (p.2 < 10.0) == (bias < 10.0);
+            let before = points.iter().filter(|p| row(p) && p.1 < ns).count();
+            let (at, v) = if before % 2 == 1 {
+                (bias / 1.25, VPos::Top)
             } else {
-                (bias * 1.3, VPos::Bottom)
+                (bias * 1.25, VPos::Bottom)
+            };
+            let shown = match base {
+                Some(base) => format!("{}, mt19937", label(base)),
+                None => label(name).to_string(),
             };
             drawn(chart.draw_series([Text::new(
-                format!("{} ({:.1} ns)", label(name), ns),
+                format!("{shown} ({ns:.1} ns)"),
                 (ns, at),
                 font(12).pos(Pos::new(HPos::Center, v)),
             )]))?;
         }
         drawn(root.draw(&Text::new(
-            "circles: uniform sphere; triangles: cosine hemisphere",
+            "circles: uniform sphere; triangles: cosine hemisphere; hollow: the seed's mt19937 generator (else SplitMix64)",
             (90, 60),
             font(12),
         )))?;

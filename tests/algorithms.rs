@@ -103,8 +103,8 @@ fn alternative_triangle_tests_agree_with_the_watertight_one_away_from_edges() {
     }
 }
 
-/// Escapes of each kind (vertex, edge, interior rays) from an icosphere with test `T`.
-fn icosphere_escapes<T: TriTest>(mesh: &Mesh, rays: &triangle::CrackRays) -> [u64; 3] {
+/// Escapes of each kind (vertex, edge, interior, random rays) from an icosphere with test `T`.
+fn icosphere_escapes<T: TriTest>(mesh: &Mesh, rays: &triangle::CrackRays) -> [u64; 4] {
     let bvh = Bvh::build(&mesh.bounds(), &BuildParams::fast()).expect("the tree fits");
     let nodes = triangle::padded(&bvh.nodes, 1e-6);
     let order = &bvh.order;
@@ -120,11 +120,11 @@ fn crack_count_finds_moller_trumbore_leaks_and_none_through_the_watertight_test(
     let mesh = common::icosphere(3);
     assert!(mesh.is_closed());
     let origins = mesh.interior_points(2, &mut Rng::new(1));
-    let rays = triangle::CrackRays::new(&mesh, &origins, 4, 2);
-    assert_eq!(icosphere_escapes::<Watertight>(&mesh, &rays), [0, 0, 0]);
-    let [vertex, edge, interior] = icosphere_escapes::<MollerTrumbore>(&mesh, &rays);
+    let rays = triangle::CrackRays::new(&mesh, &origins, 4, 1000, 2);
+    assert_eq!(icosphere_escapes::<Watertight>(&mesh, &rays), [0; 4]);
+    let [vertex, edge, interior, random] = icosphere_escapes::<MollerTrumbore>(&mesh, &rays);
     assert!(vertex > 0 && edge > 0, "{vertex} {edge}");
-    assert_eq!(interior, 0);
+    assert_eq!((interior, random), (0, 0));
 }
 
 #[test]
@@ -268,6 +268,19 @@ fn chi_square_rejects_the_seed_cube_method_and_accepts_the_exact_samplers() {
             .map(|s| s.target),
         Some(Target::Uniform)
     );
+}
+
+#[test]
+fn the_seeds_generator_is_mt19937() {
+    // The C++ standard's check: the 10000th output of a default-seeded mt19937.
+    let mut mt = common::Mt19937::new(5489);
+    let last = (0..10_000).map(|_| mt.next_u32()).last();
+    assert_eq!(last, Some(4_123_659_995));
+    let mut mt = common::Mt19937::new(1);
+    for _ in 0..10_000 {
+        let x = common::SignedUniform::signed_f64(&mut mt);
+        assert!((-1.0..1.0).contains(&x), "{x}");
+    }
 }
 
 #[test]

@@ -75,6 +75,77 @@ impl Rng {
     }
 }
 
+/// A source of uniform doubles in [-1, 1), as the seed's samplers draw them.
+pub trait SignedUniform {
+    fn signed_f64(&mut self) -> f64;
+}
+
+impl SignedUniform for Rng {
+    #[inline(always)]
+    fn signed_f64(&mut self) -> f64 {
+        Rng::signed_f64(self)
+    }
+}
+
+/// The seed's own generator (`Random` in `Step 2/include/util/std.h`): `std::mt19937`
+/// (Matsumoto and Nishimura 1998) behind libstdc++'s
+/// `std::uniform_real_distribution<double>{-1, 1}`, which makes each double of two 32-bit
+/// outputs (`generate_canonical`: `(a + b 2^32) / 2^64`). A draw costs several times one of
+/// [`Rng`], which changes how much the rejection method's extra draws weigh.
+#[derive(Clone)]
+pub struct Mt19937 {
+    state: [u32; 624],
+    index: usize,
+}
+
+impl Mt19937 {
+    pub fn new(seed: u32) -> Self {
+        let mut state = [0u32; 624];
+        state[0] = seed;
+        for i in 1..624 {
+            let prev = state[i - 1];
+            state[i] = 1_812_433_253u32
+                .wrapping_mul(prev ^ (prev >> 30))
+                .wrapping_add(i as u32);
+        }
+        Self { state, index: 624 }
+    }
+
+    /// The next 32-bit output.
+    #[inline(always)]
+    pub fn next_u32(&mut self) -> u32 {
+        if self.index >= 624 {
+            self.twist();
+        }
+        let mut y = self.state[self.index];
+        self.index += 1;
+        y ^= y >> 11;
+        y ^= (y << 7) & 0x9d2c_5680;
+        y ^= (y << 15) & 0xefc6_0000;
+        y ^ (y >> 18)
+    }
+
+    fn twist(&mut self) {
+        for i in 0..624 {
+            let y = (self.state[i] & 0x8000_0000) | (self.state[(i + 1) % 624] & 0x7fff_ffff);
+            let mag = if y & 1 == 0 { 0 } else { 0x9908_b0df };
+            self.state[i] = self.state[(i + 397) % 624] ^ (y >> 1) ^ mag;
+        }
+        self.index = 0;
+    }
+}
+
+impl SignedUniform for Mt19937 {
+    #[inline(always)]
+    fn signed_f64(&mut self) -> f64 {
+        let low = f64::from(self.next_u32());
+        let high = f64::from(self.next_u32());
+        let canonical = ((low + high * 4_294_967_296.0) / 18_446_744_073_709_551_616.0)
+            .min(1.0 - f64::EPSILON / 2.0);
+        2.0 * canonical - 1.0
+    }
+}
+
 /// An indexed triangle mesh, as the comparisons need it: positions and corner indices.
 #[derive(Clone, Debug)]
 pub struct Mesh {

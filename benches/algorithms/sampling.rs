@@ -3,7 +3,7 @@
 //! (`meshtrace::render::sampling`); and what their directions' distributions are.
 
 use super::chi2::{Cells, Chi2, chi2};
-use super::common::Rng;
+use super::common::{Rng, SignedUniform};
 use glam::{DVec3, Vec2};
 use meshtrace::render::sampling::{sample_cosine_hemisphere, sample_uniform_sphere};
 use std::f64::consts::PI;
@@ -13,7 +13,7 @@ use std::f64::consts::PI;
 /// a uniform point of the cube [-1, 1)^3, normalised. Its directions crowd towards the
 /// cube's corners, where the cube reaches farthest.
 #[inline(always)]
-pub fn seed_cube(rng: &mut Rng) -> DVec3 {
+pub fn seed_cube(rng: &mut impl SignedUniform) -> DVec3 {
     DVec3::new(rng.signed_f64(), rng.signed_f64(), rng.signed_f64()).normalize()
 }
 
@@ -21,7 +21,7 @@ pub fn seed_cube(rng: &mut Rng) -> DVec3 {
 /// better results but is 18% slower": cube points drawn until one lies inside the unit
 /// ball, returned as they are (the seed's callers normalise). pi/6 of the draws are kept.
 #[inline(always)]
-pub fn seed_rejection(rng: &mut Rng) -> DVec3 {
+pub fn seed_rejection(rng: &mut impl SignedUniform) -> DVec3 {
     loop {
         let v = DVec3::new(rng.signed_f64(), rng.signed_f64(), rng.signed_f64());
         if v.length_squared() < 1.0 {
@@ -107,7 +107,7 @@ pub fn samplers() -> Vec<Sampler> {
         Sampler {
             name: "seed_cube",
             target: Target::Uniform,
-            draw: seed_cube,
+            draw: |rng| seed_cube(rng),
         },
         Sampler {
             name: "seed_rejection",

@@ -295,24 +295,31 @@ pub fn walk(
 }
 
 /// The rays that stress a closed mesh's cracks, from points inside it: towards every
-/// vertex, towards points on every edge, and (the control) towards points inside every
-/// triangle, away from its edges.
+/// vertex, towards points on every edge, and (the controls) towards points inside every
+/// triangle, away from its edges, and in uniformly random directions, as a renderer's
+/// rays leave a point.
 pub struct CrackRays {
-    /// Rays aimed at vertices, at edge points, at triangle interiors.
-    pub kinds: [Vec<Ray>; 3],
+    /// Rays aimed at vertices, at edge points, at triangle interiors, and random ones.
+    pub kinds: [Vec<Ray>; 4],
 }
 
 /// The names of [`CrackRays::kinds`].
-pub const CRACK_KINDS: [&str; 3] = ["vertex", "edge", "interior"];
+pub const CRACK_KINDS: [&str; 4] = ["vertex", "edge", "interior", "random"];
 
 impl CrackRays {
     /// From each of `origins`: a ray to every vertex, to `per_edge` random points of every
-    /// edge, and to one random point of every triangle.
-    pub fn new(mesh: &super::common::Mesh, origins: &[Vec3], per_edge: usize, seed: u64) -> Self {
+    /// edge, to one random point of every triangle, and `random` in random directions.
+    pub fn new(
+        mesh: &super::common::Mesh,
+        origins: &[Vec3],
+        per_edge: usize,
+        random: usize,
+        seed: u64,
+    ) -> Self {
         let mut rng = super::common::Rng::new(seed);
         let edges = mesh.edges();
         let aim = |o: Vec3, p: Vec3| Ray::new(o, (p - o).normalize());
-        let mut kinds: [Vec<Ray>; 3] = Default::default();
+        let mut kinds: [Vec<Ray>; 4] = Default::default();
         for &o in origins {
             kinds[0].extend(mesh.positions.iter().map(|&v| aim(o, v)));
             for &[a, b] in &edges {
@@ -327,6 +334,7 @@ impl CrackRays {
                 let (u, v) = rng.barycentrics(0.05);
                 kinds[2].push(aim(o, a + u * (b - a) + v * (c - a)));
             }
+            kinds[3].extend((0..random).map(|_| Ray::new(o, rng.direction())));
         }
         Self { kinds }
     }
@@ -346,7 +354,7 @@ pub fn padded(nodes: &[BvhNode], pad: f32) -> Vec<BvhNode> {
 }
 
 /// How many rays of each kind of `rays` find no hit at all with test `T`.
-pub fn escapes<T: TriTest>(nodes: &[BvhNode], tris: &[T::Tri], rays: &CrackRays) -> [u64; 3] {
+pub fn escapes<T: TriTest>(nodes: &[BvhNode], tris: &[T::Tri], rays: &CrackRays) -> [u64; 4] {
     use rayon::prelude::*;
     rays.kinds.each_ref().map(|kind| {
         kind.par_iter()
