@@ -466,14 +466,6 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         device: backend.device_id(),
         digest: render_digest(&rs, &job),
     });
-    // The preview's views need AOVs that are not written: the film drops them before any
-    // write, so the output is what a render without the window gives.
-    let viewed = if window.is_some() {
-        Aov::mask(&preview::VIEW_AOVS) & !job.aovs
-    } else {
-        0
-    };
-    job.aovs |= viewed;
     let output = args.output.clone();
     let write = Arc::new(move |film: &Film| match &header {
         Some(h) => film.save_part(&output, h),
@@ -501,7 +493,6 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             Duration::from_secs_f64(every),
             Arc::new(move |film: &Film| {
                 let mut film = film.clone();
-                film.remove_aovs(viewed);
                 film.saved_aovs = saved;
                 if let Err(e) = write(&film) {
                     eprintln!("warning: checkpoint not written: {e}");
@@ -525,8 +516,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     };
     let setup = preview::Setup {
         scene: &rs,
-        width: settings.width,
-        height: settings.height,
+        settings,
         spp: wanted,
         title: format!(
             "{} on {}",
@@ -534,6 +524,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             backend.name()
         ),
         output: args.output.clone(),
+        gathered: job.aovs,
         cancel,
         pixels_every: match backend {
             Backend::Cpu => Duration::ZERO,
@@ -597,7 +588,6 @@ impl Prepared<'_> {
         let prepared = began.elapsed().as_secs_f64();
         let start = Instant::now();
         let mut film = backend.render(rs, job, &|n| progress.inc(n))?;
-        film.remove_aovs(job.aovs & !(saved | denoise_guides(denoiser.is_some())));
         film.saved_aovs = saved;
         let rays = film.rays();
         let seconds = start.elapsed().as_secs_f64();

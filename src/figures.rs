@@ -5,17 +5,13 @@
 //! not at all.
 
 use crate::bvh::BvhNode;
-use crate::film::{self, FilmError};
-use crate::render::camera::{CameraRays, generate_camera_ray};
-use crate::render::integrator::first_hit;
-use crate::render::rng::Rng;
+use crate::film::{self, Aov, AovValues, FilmError};
 use crate::render::{RenderJob, RenderScene, cpu};
 use crate::scene::RenderSettings;
 use crate::scene::camera::Camera;
 use glam::Vec3;
 use plotters::prelude::*;
 use plotters::style::{FontStyle, register_font};
-use rayon::prelude::*;
 use std::path::Path;
 
 /// The font of every figure's text (and of the preview window's), built into the binary.
@@ -123,21 +119,11 @@ pub fn viridis(t: f32) -> [u8; 3] {
 /// The BVH cost (nodes visited plus triangles tested) of each pixel's camera rays: the mean
 /// over [`HEATMAP_SAMPLES`] jittered rays, as the `bvh_cost` AOV counts them.
 pub fn ray_costs(scene: &RenderScene, settings: &RenderSettings) -> Vec<f32> {
-    let (w, h) = (settings.width, settings.height);
-    let cam = CameraRays::new(&scene.camera, w, h);
-    (0..w * h)
-        .into_par_iter()
-        .map(|i| {
-            let (x, y) = (i % w, i / w);
-            let total: u32 = (0..HEATMAP_SAMPLES)
-                .map(|s| {
-                    let rng = Rng::new(i, s, settings.seed);
-                    first_hit(scene, &generate_camera_ray(&cam, x, y, &rng)).cost
-                })
-                .sum();
-            total as f32 / HEATMAP_SAMPLES as f32
-        })
-        .collect()
+    let film = cpu::first_hits(scene, settings, HEATMAP_SAMPLES, Aov::BvhCost.bit());
+    match film.aov_values(Aov::BvhCost).as_deref() {
+        Some([AovValues::F32(costs)]) => costs.clone(),
+        _ => unreachable!("the film holds the bvh_cost AOV it was made with"),
+    }
 }
 
 /// Writes the heat map of `costs` (one per pixel of a `width`×`height` image) with a colour

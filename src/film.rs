@@ -314,16 +314,6 @@ impl Film {
         });
     }
 
-    /// Removes the channels of the AOVs in `mask`: a film then holds what a render without
-    /// them holds (`render --preview` gathers AOVs for its views that are not written).
-    pub fn remove_aovs(&mut self, mask: u32) {
-        self.channels.retain(|c| {
-            !Aov::ALL
-                .iter()
-                .any(|a| mask & a.bit() != 0 && c.name == a.name())
-        });
-    }
-
     /// The channel named `name`.
     pub fn channel(&self, name: &str) -> Option<&Channel> {
         self.channels.iter().find(|c| c.name == name)

@@ -10,6 +10,7 @@ use super::watch::Region;
 use super::{Checkpoints, RenderJob, RenderScene};
 use crate::film::{Aov, Film};
 use crate::fixed::{Texel, fixed_add, fixed_add3, texel_add, to_fixed, to_fixed3};
+use crate::scene::RenderSettings;
 use rayon::prelude::*;
 
 /// Tiles are square, this many pixels on a side.
@@ -124,6 +125,33 @@ pub fn render(scene: &RenderScene, job: &RenderJob, progress: &(dyn Fn(u64) + Sy
         }
     }
     fill(&mut film, &pixels, &aovs);
+    film
+}
+
+/// The AOVs `aovs` alone of the first `samples` camera samples of every pixel, no paths
+/// traced: what a render's AOV channels would hold after those samples (ids from the
+/// pixel-centre ray), at a fraction of its cost. `info --heatmap` and the preview window's
+/// views read it.
+pub fn first_hits(scene: &RenderScene, settings: &RenderSettings, samples: u32, aovs: u32) -> Film {
+    let (w, h) = (settings.width, settings.height);
+    let cam = CameraRays::new(&scene.camera, w, h);
+    let sums: Vec<AovSums> = (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let mut sums = AovSums::default();
+            for sample in 0..samples {
+                let rng = Rng::new(i, sample, settings.seed);
+                let fh = first_hit(scene, &generate_camera_ray(&cam, x, y, &rng));
+                add_aov_sample(&mut sums, &cam, &fh);
+            }
+            set_aov_ids(&mut sums, &first_hit(scene, &pixel_centre_ray(&cam, x, y)));
+            sums
+        })
+        .collect();
+    let mut film = Film::with_aovs(w, h, aovs, false);
+    film.samples = samples;
+    fill(&mut film, &vec![PixelSums::default(); sums.len()], &sums);
     film
 }
 

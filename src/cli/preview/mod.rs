@@ -10,9 +10,10 @@ mod picture;
 
 use anyhow::{Context, Result, anyhow};
 use frame::{Controls, MIN_WIDTH, PANEL};
-use meshtrace::film::{self, Film};
-use meshtrace::render::RenderScene;
+use meshtrace::film::{self, Aov, Film};
 use meshtrace::render::watch::{Region, Watch};
+use meshtrace::render::{self, RenderScene};
+use meshtrace::scene::RenderSettings;
 use picture::{Picture, View};
 use std::num::NonZeroU32;
 use std::ops::Range;
@@ -29,7 +30,11 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy}
 use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
-pub use picture::VIEW_AOVS;
+use picture::VIEW_AOVS;
+
+/// Camera rays a pixel behind the views the render does not gather (albedo, normal,
+/// depth, BVH cost): as many as `info --heatmap` traces.
+pub const VIEW_SAMPLES: u32 = meshtrace::figures::HEATMAP_SAMPLES;
 
 /// Frames per second at most while the render runs.
 pub const FPS: u32 = 30;
@@ -59,10 +64,13 @@ pub struct Preview {
 /// where `s` saves.
 pub struct Setup<'a> {
     pub scene: &'a RenderScene,
-    pub width: u32,
-    pub height: u32,
+    /// The render's size and seed (`spp` is the whole render's, not the job's).
+    pub settings: RenderSettings,
     /// Samples per pixel the job traces.
     pub spp: u32,
+    /// The AOVs the render gathers itself (`--aov`, the denoiser's guides): their views
+    /// show the render's; the other views come from [`VIEW_SAMPLES`] first hits a pixel.
+    pub gathered: u32,
     /// Scene and device, for the title and the panel.
     pub title: String,
     /// The render's output: `s` saves `<stem>.<view>.png` beside it.
@@ -92,8 +100,8 @@ impl Preview {
     /// The job's watcher, and the picture it keeps for the window.
     pub fn watch(&self, setup: &Setup) -> (Arc<dyn Watch>, Arc<Mutex<Picture>>) {
         let picture = Arc::new(Mutex::new(Picture::new(
-            setup.width,
-            setup.height,
+            setup.settings.width,
+            setup.settings.height,
             setup.spp,
         )));
         let watch = PreviewWatch {
@@ -119,7 +127,19 @@ impl Preview {
         let proxy = self.event_loop.create_proxy();
         let cancel = setup.cancel.clone();
         let output = setup.output.clone();
+        let views = Aov::mask(&VIEW_AOVS) & !setup.gathered;
+        let (scene, settings) = (setup.scene, setup.settings);
+        let (view_picture, view_proxy) = (picture.clone(), self.event_loop.create_proxy());
         std::thread::scope(|s| {
+            // The views the render does not gather: a few first hits a pixel, once, beside
+            // the render (they share its worker threads), not AOVs of every sample.
+            s.spawn(move || {
+                let film = render::cpu::first_hits(scene, &settings, VIEW_SAMPLES, views);
+                if let Ok(mut p) = view_picture.lock() {
+                    p.set_views(&film);
+                }
+                let _ = view_proxy.send_event(Wake::Changed);
+            });
             let worker = s.spawn(move || -> Result<()> {
                 if ready.recv() != Ok(true) {
                     return Ok(());
@@ -269,7 +289,10 @@ impl<'a> App<'a> {
             (screen.width as f64 * 0.9) as u32,
             ((screen.height as f64 * 0.9) as u32).saturating_sub(PANEL),
         );
-        let (w, h) = (self.setup.width as f64, self.setup.height as f64);
+        let (w, h) = (
+            self.setup.settings.width as f64,
+            self.setup.settings.height as f64,
+        );
         let fit = (room.0 as f64 / w).min(room.1 as f64 / h);
         let scale = if fit >= 1.0 {
             fit.floor().min(3.0)
@@ -362,8 +385,8 @@ impl<'a> App<'a> {
                     meshtrace::figures::box_edges(
                         &scene.camera,
                         b,
-                        self.setup.width,
-                        self.setup.height,
+                        self.setup.settings.width,
+                        self.setup.settings.height,
                     )
                 })
                 .collect();

@@ -11,7 +11,7 @@ use std::collections::BTreeMap;
 use std::ops::Range;
 use std::time::Instant;
 
-/// The AOVs a preview gathers for its views, whether or not they are written.
+/// The AOVs behind the views other than the beauty one.
 pub const VIEW_AOVS: [Aov; 4] = [Aov::Albedo, Aov::Normal, Aov::Depth, Aov::BvhCost];
 
 /// What the image area shows.
@@ -140,6 +140,45 @@ impl Picture {
             return;
         }
         let mean = film.mean();
+        self.copy_views(region, film);
+        let rays = film.channel(Film::RAYS);
+        for (k, y) in (region.y0..region.y1).enumerate() {
+            for (j, x) in (region.x0..region.x1).enumerate() {
+                let src = k * region.width() as usize + j;
+                let dst = (y * self.width + x) as usize;
+                self.radiance[dst] = mean[src];
+                self.samples_done += film.samples.saturating_sub(self.samples[dst]) as u64;
+                self.samples[dst] = film.samples;
+                if let Some(r) = rays {
+                    let r = (r.data[src][0] >> FIXED_FRACTION_BITS) as u64;
+                    self.rays_done += r.saturating_sub(self.rays[dst]);
+                    self.rays[dst] = r;
+                }
+            }
+        }
+        let now = Instant::now();
+        self.samples_per_second = self.sample_rate.record(now, self.samples_done);
+        self.rays_per_second = self.ray_rate.record(now, self.rays_done);
+    }
+
+    /// Takes the views of a whole-image film of first hits
+    /// ([`first_hits`](meshtrace::render::cpu::first_hits)): the AOVs it holds replace what
+    /// those views showed.
+    pub fn set_views(&mut self, film: &Film) {
+        if (film.width, film.height) == (self.width, self.height) {
+            let all = Region {
+                x0: 0,
+                y0: 0,
+                x1: self.width,
+                y1: self.height,
+            };
+            self.copy_views(all, film);
+            self.dirty = true;
+        }
+    }
+
+    /// Copies the view AOVs that `film` (of `region`'s size) holds into `region`.
+    fn copy_views(&mut self, region: Region, film: &Film) {
         let scalar = |aov: Aov| match film.aov_values(aov).as_deref() {
             Some([AovValues::F32(v)]) => Some(v.clone()),
             _ => None,
@@ -156,12 +195,10 @@ impl Picture {
         };
         let (albedo, normal) = (vector(Aov::Albedo), vector(Aov::Normal));
         let (depth, cost) = (scalar(Aov::Depth), scalar(Aov::BvhCost));
-        let rays = film.channel(Film::RAYS);
         for (k, y) in (region.y0..region.y1).enumerate() {
             for (j, x) in (region.x0..region.x1).enumerate() {
                 let src = k * region.width() as usize + j;
                 let dst = (y * self.width + x) as usize;
-                self.radiance[dst] = mean[src];
                 if let Some(a) = &albedo {
                     self.albedo[dst] = a[src];
                 }
@@ -174,18 +211,8 @@ impl Picture {
                 if let Some(c) = &cost {
                     self.cost[dst] = c[src];
                 }
-                self.samples_done += film.samples.saturating_sub(self.samples[dst]) as u64;
-                self.samples[dst] = film.samples;
-                if let Some(r) = rays {
-                    let r = (r.data[src][0] >> FIXED_FRACTION_BITS) as u64;
-                    self.rays_done += r.saturating_sub(self.rays[dst]);
-                    self.rays[dst] = r;
-                }
             }
         }
-        let now = Instant::now();
-        self.samples_per_second = self.sample_rate.record(now, self.samples_done);
-        self.rays_per_second = self.ray_rate.record(now, self.rays_done);
     }
 
     /// The image of `view` at the render's size, 8-bit RGB; `exposure` in stops scales the
@@ -202,9 +229,8 @@ impl Picture {
             View::Normal => (
                 self.normal
                     .iter()
-                    .zip(&self.samples)
-                    .map(|(&n, &s)| {
-                        if s == 0 || n == Vec3::ZERO {
+                    .map(|&n| {
+                        if n == Vec3::ZERO {
                             [0; 3]
                         } else {
                             (n * 0.5 + Vec3::splat(0.5))
@@ -313,6 +339,21 @@ mod tests {
         assert_eq!(img[0], meshtrace::figures::viridis(1.0));
         let (img, _) = p.image(View::Normal, 0.0);
         assert_eq!(img[0], [255, 128, 128], "normal +x");
+    }
+
+    #[test]
+    fn views_from_first_hits_leave_the_radiance_and_counts_alone() {
+        let mut p = Picture::new(16, 16, 4);
+        let r = Region {
+            x0: 0,
+            y0: 0,
+            x1: 16,
+            y1: 16,
+        };
+        p.set_views(&tile(r, 4, 0.25, Aov::mask(&VIEW_AOVS)));
+        assert_eq!((p.samples_done, p.rays_done), (0, 0));
+        assert_eq!(p.image(View::Beauty, 0.0).0[0], [0; 3]);
+        assert_eq!(p.image(View::Depth, 0.0).1, Some((2.0, 2.0)));
     }
 
     #[test]
