@@ -327,7 +327,8 @@ fn bvh_benches(c: &mut Criterion, data: &SpeedData) {
     g.finish();
 }
 
-/// The measures that are not times, into `target/algorithms/results.json`.
+/// The measures that are not times, and the paired time ratios of [`paired`], into
+/// `target/algorithms/results.json`.
 fn measure(data: &SpeedData) {
     let start = std::time::Instant::now();
     let results = json!({
@@ -344,6 +345,7 @@ fn measure(data: &SpeedData) {
         "box_misses": box_misses(),
         "samplers": samplers(),
         "bvh": trees(data),
+        "paired": paired(data),
     });
     let dir = common::results_dir();
     std::fs::create_dir_all(&dir).expect("the results folder can be made");
@@ -530,4 +532,200 @@ fn trees(data: &SpeedData) -> Value {
         })
         .collect();
     json!(rows)
+}
+
+/// A timed workload: run once, it returns a checksum (so that nothing is optimised away).
+type Work<'a> = Box<dyn FnMut() -> u64 + 'a>;
+
+/// Rounds of [`ratios`].
+const ROUNDS: usize = 41;
+
+/// Each of `variants`' times over the first one's in the same round, for `ROUNDS` rounds
+/// (after one to warm up) in which each runs once, the order turning each round: the
+/// median and quartiles of the ratio. On a shared machine whose speed drifts between
+/// criterion's benches, ratios of runs a few milliseconds apart are the steadier measure.
+fn ratios(reference: &str, variants: &mut [(&str, Work)]) -> Value {
+    let k = variants.len();
+    let mut times = vec![Vec::with_capacity(ROUNDS); k];
+    for round in 0..=ROUNDS {
+        for j in 0..k {
+            let i = (j + round) % k;
+            let start = std::time::Instant::now();
+            black_box((variants[i].1)());
+            if round > 0 {
+                times[i].push(start.elapsed().as_secs_f64());
+            }
+        }
+    }
+    let mut out = serde_json::Map::new();
+    for (i, (name, _)) in variants.iter().enumerate() {
+        let mut r: Vec<f64> = (0..ROUNDS).map(|n| times[i][n] / times[0][n]).collect();
+        r.sort_by(f64::total_cmp);
+        out.insert(
+            name.to_string(),
+            json!({ "median": r[ROUNDS / 2], "q1": r[ROUNDS / 4], "q3": r[3 * ROUNDS / 4] }),
+        );
+    }
+    json!({ "reference": reference, "ratios": out })
+}
+
+/// Paired time ratios of the comparisons whose differences the machine's drift could
+/// hide: the samplers (the seed's rejection method against its cube method, for unit
+/// vectors and diffuse bounces, with either generator; meshtrace's warps beside them),
+/// the triangle and box tests on the recorded candidates (against meshtrace's), the builds
+/// (against the fast SAH build), the triangle tests in traversals
+/// (against the watertight test) and the trees' traversals (against the fast SAH tree).
+fn paired(data: &SpeedData) -> Value {
+    use sampling::*;
+    const N: usize = 16_384;
+    fn draws<'a, R: 'a>(mut rng: R, mut draw: impl FnMut(&mut R) -> DVec3 + 'a) -> Work<'a> {
+        Box::new(move || {
+            let mut sum = DVec3::ZERO;
+            for _ in 0..N {
+                sum += draw(&mut rng);
+            }
+            black_box(sum).x.to_bits()
+        })
+    }
+    let (split, mt) = (|| Rng::new(7), || common::Mt19937::new(5489));
+    // (Closures written out, not made by a helper from function pointers: an indirect
+    // call would not inline, and timings this short measure the inlining.)
+    let samplers = json!({
+        "unit": ratios(
+            "seed_cube",
+            &mut [
+                ("seed_cube", draws(split(), seed_cube)),
+                ("seed_rejection", draws(split(), seed_rejection)),
+                ("meshtrace_sphere", draws(split(), meshtrace_sphere)),
+            ],
+        ),
+        "bounce": ratios(
+            "seed_diffuse_cube",
+            &mut [
+                ("seed_diffuse_cube", draws(split(), |r| seed_diffuse(DVec3::Z, seed_cube(r)).normalize())),
+                ("seed_diffuse_rejection", draws(split(), |r| seed_diffuse(DVec3::Z, seed_rejection(r)).normalize())),
+                ("meshtrace_cosine", draws(split(), meshtrace_cosine)),
+            ],
+        ),
+        "unit_mt": ratios(
+            "seed_cube_mt",
+            &mut [
+                ("seed_cube_mt", draws(mt(), seed_cube)),
+                ("seed_rejection_mt", draws(mt(), seed_rejection)),
+            ],
+        ),
+        "bounce_mt": ratios(
+            "seed_diffuse_cube_mt",
+            &mut [
+                ("seed_diffuse_cube_mt", draws(mt(), |r| seed_diffuse(DVec3::Z, seed_cube(r)).normalize())),
+                ("seed_diffuse_rejection_mt", draws(mt(), |r| seed_diffuse(DVec3::Z, seed_rejection(r)).normalize())),
+            ],
+        ),
+    });
+    fn traversal<'a, T: TriTest>(data: &'a SpeedData) -> Work<'a>
+    where
+        T::Tri: 'a,
+    {
+        let tris = leaf_tris::<T>(data);
+        Box::new(move || {
+            let hit = |r: &&Ray| triangle::closest::<T>(&data.bvh.nodes, &tris, r, T_INF).is_some();
+            data.rays.iter().filter(hit).count() as u64
+        })
+    }
+    let triangles = ratios(
+        Watertight::NAME,
+        &mut [
+            (Watertight::NAME, traversal::<Watertight>(data)),
+            (MollerTrumbore::NAME, traversal::<MollerTrumbore>(data)),
+            (MollerTrumbore64::NAME, traversal::<MollerTrumbore64>(data)),
+            (BaldwinWeber::NAME, traversal::<BaldwinWeber>(data)),
+        ],
+    );
+    let bounds = data.mesh.bounds();
+    let pool = one_thread();
+    let mut trees: Vec<(&str, Work)> = builds(&pool)
+        .iter()
+        .map(|(name, build)| {
+            let bvh = build(&bounds);
+            let tris = data.mesh.tri_verts(&bvh.order);
+            let work: Work = Box::new(move || {
+                let hit = |r: &&Ray| traverse_closest(&bvh.nodes, &tris, r, T_INF, solid).is_some();
+                data.rays.iter().filter(hit).count() as u64
+            });
+            (*name, work)
+        })
+        .collect();
+    // The fast SAH tree first: the reference.
+    trees.rotate_left(2);
+    let trees = ratios("sah_fast", &mut trees);
+    fn pairs<'a, T: TriTest>(data: &'a SpeedData) -> Work<'a>
+    where
+        T::Tri: 'a,
+    {
+        let tris = leaf_tris::<T>(data);
+        Box::new(move || {
+            let mut hits = 0u64;
+            // Eight passes: one is too short (0.2 ms) to time steadily.
+            for _ in 0..8 {
+                for (ray, tests) in &data.tri_tests {
+                    let r = T::ray(black_box(ray));
+                    for &(i, t_max) in tests {
+                        hits += u64::from(T::hit(&r, &tris[i as usize], t_max).is_some());
+                    }
+                }
+            }
+            hits
+        })
+    }
+    let triangle_pairs = ratios(
+        Watertight::NAME,
+        &mut [
+            (Watertight::NAME, pairs::<Watertight>(data)),
+            (MollerTrumbore::NAME, pairs::<MollerTrumbore>(data)),
+            (MollerTrumbore64::NAME, pairs::<MollerTrumbore64>(data)),
+            (BaldwinWeber::NAME, pairs::<BaldwinWeber>(data)),
+        ],
+    );
+    fn box_pairs<'a, B: BoxTest + 'a>(data: &'a SpeedData) -> Work<'a> {
+        Box::new(move || {
+            let mut hits = 0u64;
+            for _ in 0..4 {
+                for (ray, tests) in &data.box_tests {
+                    let r = B::ray(black_box(ray));
+                    for &(i, t_max) in tests {
+                        let n = &data.bvh.nodes[i as usize];
+                        hits += u64::from(B::hit(&r, n.min.into(), n.max.into(), t_max));
+                    }
+                }
+            }
+            hits
+        })
+    }
+    let boxes = ratios(
+        Conservative::NAME,
+        &mut [
+            (Conservative::NAME, box_pairs::<Conservative>(data)),
+            (SeedSlab::NAME, box_pairs::<SeedSlab>(data)),
+            (Williams::NAME, box_pairs::<Williams>(data)),
+        ],
+    );
+    let builds = builds(&pool);
+    let mut build_work: Vec<(&str, Work)> = builds
+        .iter()
+        .map(|(name, build)| {
+            let bounds = &bounds;
+            let work: Work = Box::new(move || build(bounds).nodes.len() as u64);
+            (*name, work)
+        })
+        .collect();
+    build_work.rotate_left(2);
+    let builds = ratios("sah_fast", &mut build_work);
+    json!({
+        "samplers": samplers,
+        "triangle_pairs": triangle_pairs,
+        "triangle_traversal": triangles,
+        "box_pairs": boxes,
+        "bvh_build": builds,
+        "bvh_traversal": trees,
+    })
 }

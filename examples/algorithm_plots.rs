@@ -94,6 +94,26 @@ impl Inputs {
     }
 }
 
+/// The paired ratios of `names` in group `path` of the bench's `paired` measure: median
+/// and quartiles of each one's time over the reference's.
+fn paired_ratios(inputs: &Inputs, path: &[&str], names: &[&str]) -> Result<Vec<(f64, f64, f64)>> {
+    let mut g = inputs.measure("paired")?;
+    for p in path {
+        g = &g[*p];
+    }
+    names
+        .iter()
+        .map(|n| {
+            let r = &g["ratios"][*n];
+            Ok((
+                num(&r["median"], "paired median")?,
+                num(&r["q1"], "paired q1")?,
+                num(&r["q3"], "paired q3")?,
+            ))
+        })
+        .collect()
+}
+
 /// A number of a JSON value, or an error naming it.
 fn num(v: &Value, what: &str) -> Result<f64> {
     v.as_f64()
@@ -129,6 +149,10 @@ fn label(name: &str) -> &str {
         "seed_diffuse_cube" => "seed diffuse, cube",
         "seed_diffuse_rejection" => "seed diffuse, rejection",
         "seed_diffuse_rejection_down" => "seed diffuse, rejection, normal -z",
+        "seed_cube_mt" => "seed: cube, normalised, mt19937",
+        "seed_rejection_mt" => "seed: rejection, mt19937",
+        "seed_diffuse_cube_mt" => "seed diffuse, cube, mt19937",
+        "seed_diffuse_rejection_mt" => "seed diffuse, rejection, mt19937",
         "seed_midpoint" => "seed midpoint",
         "object_median" => "object median",
         "sah_fast" => "binned SAH (fast)",
@@ -184,6 +208,8 @@ struct Bars {
     name: String,
     values: Vec<f64>,
     colours: Vec<RGBColor>,
+    /// A range per bar (quartiles), drawn as a whisker; empty for none.
+    spread: Vec<(f64, f64)>,
 }
 
 /// A panel of grouped bars, each labelled with its value by `fmt`, the groups named under
@@ -200,7 +226,12 @@ fn bar_panel(
 ) -> Result<()> {
     let top = sets
         .iter()
-        .flat_map(|s| s.values.iter().copied())
+        .flat_map(|s| {
+            s.values
+                .iter()
+                .chain(s.spread.iter().map(|r| &r.1))
+                .copied()
+        })
         .fold(0.0f64, f64::max)
         .max(1e-9);
     let legend = sets.len() > 1;
@@ -245,7 +276,16 @@ fn bar_panel(
                 .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 12, y + 5)], c.filled()));
         }
         for (g, &v) in set.values.iter().enumerate() {
-            let (px, py) = chart.backend_coord(&(x0(g) + width / 2.0, v));
+            let centre = x0(g) + width / 2.0;
+            let mut label_at = v;
+            if let Some(&(lo, hi)) = set.spread.get(g) {
+                drawn(chart.draw_series([PathElement::new(
+                    vec![(centre, lo), (centre, hi)],
+                    BLACK.stroke_width(2),
+                )]))?;
+                label_at = label_at.max(hi);
+            }
+            let (px, py) = chart.backend_coord(&(centre, label_at));
             let style = font(11).pos(Pos::new(HPos::Center, VPos::Bottom));
             drawn(root.draw(&Text::new(fmt(v), (px, py - 2), style)))?;
         }
@@ -327,6 +367,47 @@ fn main() -> Result<()> {
     samplers(&inputs, &out)?;
     densities(&inputs, &out)?;
     bvh(&inputs, &out)?;
+    paired(&inputs)
+}
+
+/// The paired ratios of the bench's `paired` measure, as a table.
+fn paired(inputs: &Inputs) -> Result<()> {
+    let p = inputs.measure("paired")?;
+    println!("| comparison | variant | time / reference's: median | quartiles |");
+    println!("|---|---|---|---|");
+    let row = |what: &str, g: &Value| -> Result<()> {
+        let reference = text(&g["reference"], "paired.reference")?;
+        let ratios = g["ratios"]
+            .as_object()
+            .ok_or_else(|| anyhow!("results.json: paired ratios are not a map"))?;
+        for (name, r) in ratios {
+            if name != reference {
+                println!(
+                    "| {what}, against {} | {} | {:.3} | {:.3} to {:.3} |",
+                    label(reference),
+                    label(name),
+                    num(&r["median"], "median")?,
+                    num(&r["q1"], "q1")?,
+                    num(&r["q3"], "q3")?
+                );
+            }
+        }
+        Ok(())
+    };
+    for (key, what) in [
+        ("unit", "unit vector, SplitMix64"),
+        ("bounce", "diffuse bounce, SplitMix64"),
+        ("unit_mt", "unit vector, mt19937"),
+        ("bounce_mt", "diffuse bounce, mt19937"),
+    ] {
+        row(what, &p["samplers"][key])?;
+    }
+    row("candidate triangle tests", &p["triangle_pairs"])?;
+    row("closest-hit traversal", &p["triangle_traversal"])?;
+    row("candidate box tests", &p["box_pairs"])?;
+    row("BVH build", &p["bvh_build"])?;
+    row("BVH traversal", &p["bvh_traversal"])?;
+    println!();
     Ok(())
 }
 
@@ -364,6 +445,7 @@ fn triangles(inputs: &Inputs, out: &Path) -> Result<()> {
         );
     }
     println!();
+    let traversal = paired_ratios(inputs, &["triangle_traversal"], &TRI_TESTS)?;
     let groups: Vec<String> = TRI_TESTS.iter().map(|t| wrap(label(t))).collect();
     let colours: Vec<RGBColor> = (0..4).map(|k| colour(k, 4)).collect();
     plot(&out.join("triangle_speed.png"), (1100, 460), |root| {
@@ -378,19 +460,21 @@ fn triangles(inputs: &Inputs, out: &Path) -> Result<()> {
                 name: String::new(),
                 values: ns.clone(),
                 colours: colours.clone(),
+                spread: Vec::new(),
             }],
             &|v| format!("{v:.2}"),
         )?;
         bar_panel(
             root,
             &panels[1],
-            &format!("Closest-hit traversal, {mesh_name}, 1 thread"),
-            "million rays per second",
+            &format!("Closest-hit traversal time, {mesh_name}, paired"),
+            "time / watertight's (median, quartiles)",
             &groups,
             &[Bars {
                 name: String::new(),
-                values: rays.clone(),
+                values: traversal.iter().map(|r| r.0).collect(),
                 colours: colours.clone(),
+                spread: traversal.iter().map(|r| (r.1, r.2)).collect(),
             }],
             &|v| format!("{v:.3}"),
         )
@@ -441,6 +525,7 @@ fn escapes(inputs: &Inputs, out: &Path) -> Result<()> {
                 name: label(test).to_string(),
                 values: pct[kind][t].clone(),
                 colours: vec![colour(t, TRI_TESTS.len())],
+                spread: Vec::new(),
             })
             .collect()
     };
@@ -519,6 +604,7 @@ fn boxes(inputs: &Inputs, out: &Path) -> Result<()> {
             name: label(test).to_string(),
             values: tally[t].iter().map(|(m, c)| 100.0 * m / c).collect(),
             colours: vec![colour(t, 3)],
+            spread: Vec::new(),
         })
         .collect();
     let names: Vec<String> = BOX_TESTS.iter().map(|t| wrap(label(t))).collect();
@@ -534,6 +620,7 @@ fn boxes(inputs: &Inputs, out: &Path) -> Result<()> {
                 name: String::new(),
                 values: ns.clone(),
                 colours: (0..3).map(|k| colour(k, 3)).collect(),
+                spread: Vec::new(),
             }],
             &|v| format!("{v:.2}"),
         )?;
@@ -617,7 +704,7 @@ fn samplers(inputs: &Inputs, out: &Path) -> Result<()> {
         ratio("seed_rejection_mt", "seed_cube_mt")?,
         ratio("seed_diffuse_rejection_mt", "seed_diffuse_cube_mt")?
     );
-    /// The samplers in colour order.
+    // The samplers in colour order.
     const BASES: [&str; 6] = [
         "meshtrace_sphere",
         "seed_cube",
@@ -674,13 +761,14 @@ fn samplers(inputs: &Inputs, out: &Path) -> Result<()> {
             } else {
                 drawn(chart.draw_series([Circle::new((ns, bias), 7, style)]))?;
             }
-            // Labels alternately above and below, in order of time within each row.
+            // Labels above and below, near and far in turn, in order of time in each row.
             let row = |p: &(String, f64, f64)| (p.2 < 10.0) == (bias < 10.0);
             let before = points.iter().filter(|p| row(p) && p.1 < ns).count();
-            let (at, v) = if before % 2 == 1 {
-                (bias / 1.25, VPos::Top)
-            } else {
-                (bias * 1.25, VPos::Bottom)
+            let (at, v) = match before % 4 {
+                0 => (bias * 1.25, VPos::Bottom),
+                1 => (bias / 1.25, VPos::Top),
+                2 => (bias * 1.7, VPos::Bottom),
+                _ => (bias / 1.7, VPos::Top),
             };
             let shown = match base {
                 Some(base) => format!("{}, mt19937", label(base)),
@@ -832,6 +920,7 @@ fn bvh(inputs: &Inputs, out: &Path) -> Result<()> {
         );
     }
     println!();
+    let traversal = paired_ratios(inputs, &["bvh_traversal"], &BUILDERS)?;
     let groups: Vec<String> = BUILDERS.iter().map(|b| wrap(label(b))).collect();
     let colours: Vec<RGBColor> = (0..4).map(|k| colour(k, 4)).collect();
     let one = |values: &Vec<f64>| {
@@ -839,6 +928,7 @@ fn bvh(inputs: &Inputs, out: &Path) -> Result<()> {
             name: String::new(),
             values: values.clone(),
             colours: colours.clone(),
+            spread: Vec::new(),
         }]
     };
     plot(&out.join("bvh_builds.png"), (1350, 460), |root| {
@@ -864,10 +954,15 @@ fn bvh(inputs: &Inputs, out: &Path) -> Result<()> {
         bar_panel(
             root,
             &panels[2],
-            &format!("Closest-hit traversal, {mesh_name}"),
-            "million rays per second",
+            &format!("Closest-hit traversal time, {mesh_name}, paired"),
+            "time / fast SAH tree's (median, quartiles)",
             &groups,
-            &one(&trace),
+            &[Bars {
+                name: String::new(),
+                values: traversal.iter().map(|r| r.0).collect(),
+                colours: colours.clone(),
+                spread: traversal.iter().map(|r| (r.1, r.2)).collect(),
+            }],
             &|v| format!("{v:.3}"),
         )
     })
