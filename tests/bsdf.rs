@@ -30,7 +30,8 @@
 
 mod common;
 
-use common::chi2::{Binning, chi2_of, chi2_survival, ln_gamma, show_chi2, sidak_level};
+use common::chi2::{Binning, chi2_of, chi2_survival, show_chi2, sidak_level};
+use common::gamma::ln_gamma;
 use common::kernels::{gpu_bsdf_evals, gpu_bsdf_samples};
 use common::materials::{ggx_tolerance, material_name, mirror, shape_wo, spherical};
 use common::rand::{hashed_u3, stream};

@@ -6,6 +6,11 @@
 use glam::DVec3;
 use std::f64::consts::PI;
 
+// The gamma functions the suite's own chi-square tests use.
+#[path = "../../tests/common/gamma.rs"]
+mod gamma;
+pub use gamma::ln_gamma_q;
+
 /// Cells over (cos theta, phi) about +Z: `cos_bins` equal steps of cos theta in
 /// `cos_min..1` (-1 for the sphere, 0 for the upper hemisphere) by `phi_bins` of phi.
 #[derive(Clone, Copy, Debug)]
@@ -117,76 +122,5 @@ pub fn chi2(cells: &Cells, samples: &[DVec3], probabilities: &[f64]) -> Chi2 {
         chi2: stat,
         dof,
         log10_p: ln_gamma_q(0.5 * dof as f64, 0.5 * stat) / std::f64::consts::LN_10,
-    }
-}
-
-/// ln Gamma(x) for x > 0 (Lanczos, g = 7, 9 terms).
-fn ln_gamma(x: f64) -> f64 {
-    const C: [f64; 9] = [
-        0.999_999_999_999_809_9,
-        676.520_368_121_885_1,
-        -1_259.139_216_722_402_8,
-        771.323_428_777_653_1,
-        -176.615_029_162_140_6,
-        12.507_343_278_686_905,
-        -0.138_571_095_265_720_12,
-        9.984_369_578_019_572e-6,
-        1.505_632_735_149_311_6e-7,
-    ];
-    let x = x - 1.0;
-    let t = x + 7.5;
-    let a = C[1..]
-        .iter()
-        .enumerate()
-        .fold(C[0], |a, (i, c)| a + c / (x + 1.0 + i as f64));
-    0.5 * (2.0 * PI).ln() + (x + 0.5) * t.ln() - t + a.ln()
-}
-
-/// ln Q(a, x), Q the regularised upper incomplete gamma function: the series of P for
-/// x < a + 1, else Lentz's continued fraction for Q (Numerical Recipes' `gammq`), which
-/// stays accurate in logs however small Q is.
-pub fn ln_gamma_q(a: f64, x: f64) -> f64 {
-    if x <= 0.0 {
-        return 0.0;
-    }
-    if x.is_infinite() {
-        return f64::NEG_INFINITY;
-    }
-    let ln_front = -x + a * x.ln() - ln_gamma(a);
-    if x < a + 1.0 {
-        let (mut ap, mut term, mut sum) = (a, 1.0 / a, 1.0 / a);
-        for _ in 0..100_000 {
-            ap += 1.0;
-            term *= x / ap;
-            sum += term;
-            if term.abs() < sum.abs() * 1e-15 {
-                break;
-            }
-        }
-        (1.0 - sum * ln_front.exp()).max(f64::MIN_POSITIVE).ln()
-    } else {
-        let tiny = 1e-300;
-        let (mut b, mut c) = (x + 1.0 - a, 1.0 / tiny);
-        let mut d = 1.0 / b;
-        let mut h = d;
-        for i in 1..100_000 {
-            let an = -(i as f64) * (i as f64 - a);
-            b += 2.0;
-            d = an * d + b;
-            if d.abs() < tiny {
-                d = tiny;
-            }
-            c = b + an / c;
-            if c.abs() < tiny {
-                c = tiny;
-            }
-            d = 1.0 / d;
-            let delta = d * c;
-            h *= delta;
-            if (delta - 1.0).abs() < 1e-15 {
-                break;
-            }
-        }
-        ln_front + h.ln()
     }
 }

@@ -9,6 +9,8 @@
 //! - [`stats`]: means and standard errors, relative errors, error and failure trackers.
 //! - [`materials`]: BSDF test helpers (material names, directions, GGX conditioning).
 //! - [`chi2`]: the chi-square goodness-of-fit test of sampled directions.
+//! - [`gamma`]: ln Gamma and the regularised incomplete gamma function (in logs), for the
+//!   chi-square p-values here and in the algorithm benches.
 //! - [`kernels`]: running the WGSL test kernels (case packing, bits, BSDF cases).
 //! - [`traversal`]: the GPU's traversal against the CPU's over random rays, with bounds.
 //!
@@ -18,6 +20,7 @@
 pub mod chi2;
 pub mod cli;
 pub mod fs;
+pub mod gamma;
 pub mod gltf;
 pub mod kernels;
 pub mod materials;
