@@ -501,50 +501,43 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         ));
     }
     let wanted = samples.end - samples.start;
-    let Some(window) = window else {
-        return Prepared {
-            args,
-            rs: &rs,
-            job: &job,
-            backend: &backend,
-            denoiser,
-            write,
-            began,
-            saved,
-        }
-        .finish();
-    };
-    let setup = preview::Setup {
-        scene: &rs,
-        settings,
-        spp: wanted,
-        title: format!(
-            "{} on {}",
-            args.scene.as_ref().unwrap_or(&default).display(),
-            backend.name()
-        ),
-        output: args.output.clone(),
-        gathered: job.aovs,
-        cancel,
-        pixels_every: match backend {
-            Backend::Cpu => Duration::ZERO,
-            Backend::Gpu(_) => Duration::from_millis(200),
-        },
-    };
-    let (watch, picture) = window.watch(&setup);
-    job.watch = Some(watch);
-    let (rs, job, backend) = (&rs, &job, &backend);
+    // With --preview, the job reports to the window, which runs the render beside it.
+    let shown = window.map(|window| {
+        let setup = preview::Setup {
+            scene: &rs,
+            settings,
+            spp: wanted,
+            title: format!(
+                "{} on {}",
+                args.scene.as_ref().unwrap_or(&default).display(),
+                backend.name()
+            ),
+            output: args.output.clone(),
+            gathered: job.aovs,
+            cancel,
+            pixels_every: match backend {
+                Backend::Cpu => Duration::ZERO,
+                Backend::Gpu(_) => Duration::from_millis(200),
+            },
+        };
+        let (watch, picture) = window.watch(&setup);
+        job.watch = Some(watch);
+        (window, setup, picture)
+    });
     let prepared = Prepared {
         args,
-        rs,
-        job,
-        backend,
+        rs: &rs,
+        job: &job,
+        backend: &backend,
         denoiser,
         write,
         began,
         saved,
     };
-    window.run(setup, picture, move || prepared.finish())
+    match shown {
+        None => prepared.finish(),
+        Some((window, setup, picture)) => window.run(setup, picture, move || prepared.finish()),
+    }
 }
 
 /// What writes a render's film: as an image or as a part file.
