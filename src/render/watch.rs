@@ -42,7 +42,8 @@ pub trait Watch: Send + Sync {
     fn finished(&self, worker: usize, region: Region, pixels: Option<&Film>);
 
     /// Whether the next finished region should bring its pixels. The GPU reads them back
-    /// from the device only when this says so, so a watcher can bound what that costs.
+    /// from the device only when this says so (and for a region's last samples), so a
+    /// watcher can bound what that costs.
     fn wants_pixels(&self) -> bool {
         true
     }

@@ -326,7 +326,10 @@ impl GpuRenderer {
                 (samples.end - samples.start) as u64 * w as u64 * (rows.end - rows.start) as u64,
             );
             if let Some(watch) = &job.watch {
-                let band = if watch.wants_pixels() {
+                // A band's last dispatch always brings its pixels: the window ends on
+                // the final image.
+                let last = samples.end == job.samples.end;
+                let band = if last || watch.wants_pixels() {
                     let template = Film::with_aovs(w, region.height(), job.aovs, job.transparent);
                     Some(self.read_rows(rows.clone(), template, samples.end - job.samples.start)?)
                 } else {
