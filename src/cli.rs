@@ -325,16 +325,6 @@ fn denoiser(wanted: bool, threads: Option<usize>) -> Result<Option<Denoiser>> {
     }
 }
 
-/// The AOVs the denoiser is guided by (when there is one): they are in the film whether
-/// or not they are written.
-fn denoise_guides(denoising: bool) -> u32 {
-    if denoising {
-        Aov::Albedo.bit() | Aov::Normal.bit()
-    } else {
-        0
-    }
-}
-
 /// An axis for `--up`.
 #[derive(Clone, Copy, ValueEnum)]
 pub enum UpAxis {
@@ -447,7 +437,11 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     // The denoiser is guided by the first surface's albedo and normal, which the film then
     // holds whether or not they are written.
     let saved = Aov::mask(&aovs);
-    let guides = denoise_guides(denoiser.is_some());
+    let guides = if denoiser.is_some() {
+        Aov::Albedo.bit() | Aov::Normal.bit()
+    } else {
+        0
+    };
     let mut job = RenderJob::new(settings).with_aovs(saved | guides, args.transparent);
     let samples = match part {
         Some((k, n)) => PartHeader::range(k, n, settings.spp),
@@ -477,8 +471,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     // current pass, which is then written with its sample count.
     let signalled = cancel.clone();
     ctrlc::set_handler(move || {
-        let cancel = &signalled;
-        if cancel.swap(true, Ordering::SeqCst) {
+        if signalled.swap(true, Ordering::SeqCst) {
             // A second signal: stop now, without waiting for the pass.
             std::process::exit(130);
         }
@@ -526,6 +519,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     });
     let prepared = Prepared {
         args,
+        part,
         rs: &rs,
         job: &job,
         backend: &backend,
@@ -546,6 +540,8 @@ type WriteFn = Arc<dyn Fn(&Film) -> Result<(), meshtrace::film::FilmError> + Sen
 /// A render set up and ready to run: what [`Prepared::finish`] needs.
 struct Prepared<'a> {
     args: &'a RenderArgs,
+    /// `--part`, parsed.
+    part: Option<(u32, u32)>,
     rs: &'a RenderScene,
     job: &'a RenderJob,
     backend: &'a Backend,
@@ -563,6 +559,7 @@ impl Prepared<'_> {
     fn finish(self) -> Result<()> {
         let Prepared {
             args,
+            part,
             rs,
             job,
             backend,
@@ -573,7 +570,6 @@ impl Prepared<'_> {
         } = self;
         let settings = job.settings;
         let samples = job.samples.clone();
-        let part = args.part.as_deref().map(parse_part).transpose()?;
         let wanted = samples.end - samples.start;
         let progress = Progress::new(settings.width, settings.height, wanted, args.quiet);
         // What a split render pays again in every part: loading the scene, building its BVH and

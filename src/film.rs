@@ -607,7 +607,6 @@ fn write_atomically(
     Ok(())
 }
 
-/// Flushes a written file to the disk.
 /// Puts the header attributes of a single-part EXR file in name order. The `exr` crate
 /// writes its custom attributes from a `HashMap`, whose order changes from one map to the
 /// next, so a part file (ten attributes) came out in a different byte order on every write.
@@ -654,6 +653,7 @@ fn sort_exr_attributes(bytes: &mut [u8]) -> Result<(), String> {
     Ok(())
 }
 
+/// Flushes a written file to the disk.
 fn finish_file(mut out: std::io::BufWriter<std::fs::File>) -> Result<(), String> {
     use std::io::Write;
     out.flush().map_err(|e| e.to_string())?;

@@ -16,6 +16,16 @@ pub struct Region {
 }
 
 impl Region {
+    /// All of a `width` × `height` image.
+    pub fn whole(width: u32, height: u32) -> Self {
+        Self {
+            x0: 0,
+            y0: 0,
+            x1: width,
+            y1: height,
+        }
+    }
+
     pub fn width(&self) -> u32 {
         self.x1 - self.x0
     }

@@ -162,7 +162,7 @@ impl Preview {
             let mut app = App::new(setup, picture, go, self.pending.clone());
             let ran = self.event_loop.run_app(&mut app);
             // However the loop ended, the render must not go on without its window.
-            if app.ended.is_none() {
+            if !app.ended {
                 app.setup.cancel.store(true, Ordering::SeqCst);
             }
             drop(app.go.take());
@@ -241,7 +241,9 @@ struct App<'a> {
     last_frame: Option<Instant>,
     /// A frame is wanted as soon as the frame rate allows.
     due: bool,
-    ended: Option<String>,
+    /// The render has ended (or, the window failing, never started): closing no longer
+    /// stops it, and the clock no longer ticks.
+    ended: bool,
     error: Option<anyhow::Error>,
 }
 
@@ -272,7 +274,7 @@ impl<'a> App<'a> {
             window: None,
             last_frame: None,
             due: true,
-            ended: None,
+            ended: false,
             error: None,
         }
     }
@@ -365,7 +367,7 @@ impl<'a> App<'a> {
 
     /// Closes the window; a render still running stops after its pass and is written.
     fn close(&mut self, event_loop: &ActiveEventLoop) {
-        if self.ended.is_none() {
+        if !self.ended {
             self.setup.cancel.store(true, Ordering::SeqCst);
         }
         event_loop.exit();
@@ -465,7 +467,7 @@ impl ApplicationHandler<Wake> for App<'_> {
                     let _ = go.send(false);
                 }
                 self.error = Some(e);
-                self.ended = Some(String::new());
+                self.ended = true;
                 event_loop.exit();
             }
         }
@@ -483,9 +485,9 @@ impl ApplicationHandler<Wake> for App<'_> {
             Wake::Ended { outcome, close } => {
                 if let Ok(mut p) = self.picture.lock() {
                     p.active.clear();
-                    p.ended = Some((outcome.clone(), Instant::now()));
+                    p.ended = Some((outcome, Instant::now()));
                 }
-                self.ended = Some(outcome);
+                self.ended = true;
                 if close {
                     event_loop.exit();
                 } else {
@@ -527,10 +529,7 @@ impl ApplicationHandler<Wake> for App<'_> {
             .last_frame
             .map(|t| t + Duration::from_secs(1) / FPS)
             .filter(|_| self.due);
-        let tick = self
-            .last_frame
-            .map(|t| t + TICK)
-            .filter(|_| self.ended.is_none());
+        let tick = self.last_frame.map(|t| t + TICK).filter(|_| !self.ended);
         match next_frame.into_iter().chain(tick).min() {
             Some(at) => event_loop.set_control_flow(ControlFlow::WaitUntil(at)),
             None => event_loop.set_control_flow(ControlFlow::Wait),

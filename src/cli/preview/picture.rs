@@ -166,13 +166,7 @@ impl Picture {
     /// those views showed.
     pub fn set_views(&mut self, film: &Film) {
         if (film.width, film.height) == (self.width, self.height) {
-            let all = Region {
-                x0: 0,
-                y0: 0,
-                x1: self.width,
-                y1: self.height,
-            };
-            self.copy_views(all, film);
+            self.copy_views(Region::whole(self.width, self.height), film);
             self.dirty = true;
         }
     }
@@ -322,12 +316,7 @@ mod tests {
     #[test]
     fn aov_views_read_the_regions_channels() {
         let mut p = Picture::new(16, 16, 4);
-        let r = Region {
-            x0: 0,
-            y0: 0,
-            x1: 16,
-            y1: 16,
-        };
+        let r = Region::whole(16, 16);
         p.finished(0, r, Some(&tile(r, 4, 0.25, Aov::mask(&VIEW_AOVS))));
         // Depth: every sample hit at 2 (the hit count is in w).
         let (img, range) = p.image(View::Depth, 0.0);
@@ -344,12 +333,7 @@ mod tests {
     #[test]
     fn views_from_first_hits_leave_the_radiance_and_counts_alone() {
         let mut p = Picture::new(16, 16, 4);
-        let r = Region {
-            x0: 0,
-            y0: 0,
-            x1: 16,
-            y1: 16,
-        };
+        let r = Region::whole(16, 16);
         p.set_views(&tile(r, 4, 0.25, Aov::mask(&VIEW_AOVS)));
         assert_eq!((p.samples_done, p.rays_done), (0, 0));
         assert_eq!(p.image(View::Beauty, 0.0).0[0], [0; 3]);
@@ -359,12 +343,7 @@ mod tests {
     #[test]
     fn a_region_of_the_wrong_size_is_ignored() {
         let mut p = Picture::new(16, 16, 4);
-        let r = Region {
-            x0: 0,
-            y0: 0,
-            x1: 8,
-            y1: 8,
-        };
+        let r = Region::whole(8, 8);
         let wrong = Region { x1: 4, ..r };
         p.finished(0, r, Some(&tile(wrong, 4, 1.0, 0)));
         assert_eq!(p.samples_done, 0);
