@@ -21,6 +21,17 @@ fn bsdf_is_delta(m: Material) -> bool {
     return m.kind == MAT_CONDUCTOR || m.kind == MAT_DIELECTRIC;
 }
 
+// Whether bsdf_sample reads its lobe number. mirror: src/render/bsdf.rs `bsdf_draws_lobe`
+fn bsdf_draws_lobe(m: Material) -> bool {
+    return m.kind == MAT_DIELECTRIC || m.kind == MAT_PBR;
+}
+
+// Whether bsdf_sample reads its direction pair.
+// mirror: src/render/bsdf.rs `bsdf_draws_direction`
+fn bsdf_draws_direction(m: Material) -> bool {
+    return m.kind != MAT_CONDUCTOR && m.kind != MAT_DIELECTRIC;
+}
+
 // mirror: src/render/bsdf.rs `bsdf_is_two_sided`
 fn bsdf_is_two_sided(m: Material) -> bool {
     if m.kind == MAT_DIELECTRIC {

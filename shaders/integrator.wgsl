@@ -122,9 +122,16 @@ fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
         }
     }
 
-    // BSDF sampling.
-    let bs = bsdf_sample(mat, wo, rng_1d(rng, (*st).depth, DIM_BSDF_LOBE),
-        rng_2d(rng, (*st).depth, DIM_BSDF_U));
+    // BSDF sampling, drawing only the numbers the material reads.
+    var u_lobe = 0.0;
+    if bsdf_draws_lobe(mat) {
+        u_lobe = rng_1d(rng, (*st).depth, DIM_BSDF_LOBE);
+    }
+    var u = vec2<f32>(0.0);
+    if bsdf_draws_direction(mat) {
+        u = rng_2d(rng, (*st).depth, DIM_BSDF_U);
+    }
+    let bs = bsdf_sample(mat, wo, u_lobe, u);
     if !bs.valid {
         return true;
     }

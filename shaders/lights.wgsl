@@ -41,7 +41,11 @@ struct LightSample {
 // mirror: src/render/lights.rs `sample_light`
 fn sample_light(p: vec3<f32>, ng: vec3<f32>, rng: Rng, depth: u32) -> LightSample {
     var none = LightSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, false, false);
-    let k = sample_cdf(rng_1d(rng, depth, DIM_LIGHT_PICK));
+    // A single light needs no pick, nor its number.
+    var k = 0u;
+    if params.num_emitters > 1u {
+        k = sample_cdf(rng_1d(rng, depth, DIM_LIGHT_PICK));
+    }
     let light = load_emitter(k);
     let u = rng_2d(rng, depth, DIM_LIGHT_U);
     if light == SKY_EMITTER {

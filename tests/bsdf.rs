@@ -39,7 +39,8 @@ use common::scenes::material_table;
 use common::stats::{Worst, mean_and_stderr, rel, rel3};
 use glam::{Vec2, Vec3};
 use meshtrace::render::bsdf::{
-    bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample, fresnel_dielectric, ggx_alpha,
+    bsdf_draws_direction, bsdf_draws_lobe, bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample,
+    fresnel_dielectric, ggx_alpha,
 };
 use meshtrace::render::sampling::sample_uniform_sphere;
 use meshtrace::scene::{Material, MaterialKind};
@@ -283,6 +284,63 @@ fn sampled_pdf_and_weight_match_eval() {
         if !bsdf_is_delta(m) {
             pdf_err.check("pdf consistency");
             weight_err.check("pdf consistency");
+        }
+    }
+}
+
+/// The path draws a material's lobe number and direction pair only where
+/// `bsdf_draws_lobe` and `bsdf_draws_direction` say that `bsdf_sample` reads them: where
+/// they say it does not, changing the number changes no sample (a draw skipped is then
+/// the same path). Also where they say it does, for a `pbr` material with every lobe, the
+/// sample depends on the number somewhere (the predicates do not claim too much).
+#[test]
+fn the_draws_a_material_skips_are_the_numbers_it_ignores() {
+    let pbr = Material {
+        roughness: 0.4,
+        metallic: 0.3,
+        transmission: 0.3,
+        ior: 1.5,
+        ..Material::new(MaterialKind::PBR)
+    };
+    let mut materials = all_materials();
+    materials.push(pbr);
+    let same = |a: &Option<meshtrace::render::bsdf::BsdfSample>,
+                b: &Option<meshtrace::render::bsdf::BsdfSample>| {
+        match (a, b) {
+            (None, None) => true,
+            (Some(a), Some(b)) => {
+                a.wi.to_array().map(f32::to_bits) == b.wi.to_array().map(f32::to_bits)
+                    && a.weight.to_array().map(f32::to_bits)
+                        == b.weight.to_array().map(f32::to_bits)
+                    && a.pdf.to_bits() == b.pdf.to_bits()
+                    && a.delta == b.delta
+            }
+            _ => false,
+        }
+    };
+    for m in &materials {
+        let s = stream(&format!("draws {}", material_name(m)), 0);
+        let (mut lobe_matters, mut direction_matters) = (false, false);
+        for i in 0..2_000 {
+            let wo = random_wo(m, s, i);
+            let (u, v) = (u3(s ^ 1, i), u3(s ^ 2, i));
+            let base = sample(m, wo, u);
+            let other_lobe = sample(m, wo, [v[0], u[1], u[2]]);
+            let other_direction = sample(m, wo, [u[0], v[1], v[2]]);
+            lobe_matters |= !same(&base, &other_lobe);
+            direction_matters |= !same(&base, &other_direction);
+        }
+        let name = material_name(m);
+        assert!(
+            bsdf_draws_lobe(m) || !lobe_matters,
+            "{name}: bsdf_sample reads the lobe number, which the path does not draw"
+        );
+        assert!(
+            bsdf_draws_direction(m) || !direction_matters,
+            "{name}: bsdf_sample reads the direction pair, which the path does not draw"
+        );
+        if m.kind == MaterialKind::PBR {
+            assert!(lobe_matters && direction_matters, "{name} reads both");
         }
     }
 }

@@ -37,6 +37,21 @@ pub fn bsdf_is_delta(m: &Material) -> bool {
     }
 }
 
+/// Whether [`bsdf_sample`] reads its lobe number for the material: a dielectric's choice
+/// of reflection or refraction, a `pbr` material's lobe. The path draws the number only
+/// then (the numbers are counter-based, so a draw skipped changes no other).
+/// mirror: shaders/bsdf.wgsl `bsdf_draws_lobe`
+pub fn bsdf_draws_lobe(m: &Material) -> bool {
+    matches!(m.kind, MaterialKind::DIELECTRIC | MaterialKind::PBR)
+}
+
+/// Whether [`bsdf_sample`] reads its pair of direction numbers: every material but a
+/// smooth conductor and a smooth dielectric, whose directions follow from `wo`.
+/// mirror: shaders/bsdf.wgsl `bsdf_draws_direction`
+pub fn bsdf_draws_direction(m: &Material) -> bool {
+    !matches!(m.kind, MaterialKind::CONDUCTOR | MaterialKind::DIELECTRIC)
+}
+
 /// Whether the BSDF is two-sided: the caller turns the frame towards `wo`. A dielectric,
 /// and a `pbr` material that transmits into a volume, tell entering from leaving instead.
 /// mirror: shaders/bsdf.wgsl `bsdf_is_two_sided`

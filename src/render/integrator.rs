@@ -8,7 +8,8 @@
 //! on either device is the same path.
 
 use super::bsdf::{
-    bsdf_eval, bsdf_is_delta, bsdf_is_two_sided, bsdf_pdf, bsdf_sample, bsdf_transmits,
+    bsdf_draws_direction, bsdf_draws_lobe, bsdf_eval, bsdf_is_delta, bsdf_is_two_sided, bsdf_pdf,
+    bsdf_sample, bsdf_transmits,
 };
 use super::lights::{light_pdf, sample_light, sky_pdf, sky_radiance};
 use super::rng::{self, Rng};
@@ -215,13 +216,18 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
         }
     }
 
-    // BSDF sampling.
-    let Some(bs) = bsdf_sample(
-        mat,
-        wo,
-        rng.rng_1d(st.depth, rng::DIM_BSDF_LOBE),
-        rng.rng_2d(st.depth, rng::DIM_BSDF_U),
-    ) else {
+    // BSDF sampling, drawing only the numbers the material reads.
+    let u_lobe = if bsdf_draws_lobe(mat) {
+        rng.rng_1d(st.depth, rng::DIM_BSDF_LOBE)
+    } else {
+        0.0
+    };
+    let u = if bsdf_draws_direction(mat) {
+        rng.rng_2d(st.depth, rng::DIM_BSDF_U)
+    } else {
+        Vec2::ZERO
+    };
+    let Some(bs) = bsdf_sample(mat, wo, u_lobe, u) else {
         return true;
     };
     let wi_world = bs.wi.x * t + bs.wi.y * b + bs.wi.z * ns;

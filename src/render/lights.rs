@@ -71,7 +71,12 @@ pub fn sample_light(
     rng: &Rng,
     depth: u32,
 ) -> Option<LightSample> {
-    let k = sample_cdf(&scene.emitter_cdf, rng.rng_1d(depth, rng::DIM_LIGHT_PICK));
+    // A single light needs no pick, nor its number.
+    let k = if scene.emitter_cdf.len() > 1 {
+        sample_cdf(&scene.emitter_cdf, rng.rng_1d(depth, rng::DIM_LIGHT_PICK))
+    } else {
+        0
+    };
     let light = scene.emitters[k];
     let u = rng.rng_2d(depth, rng::DIM_LIGHT_U);
     if light == SKY_EMITTER {
