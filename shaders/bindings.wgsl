@@ -10,7 +10,23 @@
 // from the Rust list of tables and the Rust structs' layouts (src/render/gpu/tables.rs
 // `TABLES`, `wgsl_tables`).
 
+// The claims a trusted module rests on (src/render/gpu/shader.rs `ShaderChecks`) that a
+// checked one (SHADER_CHECKS, generated) tests where it relies on them: each that fails
+// counts here, and the render kernel reports the count. A trusted module compiles the
+// calls away.
+var<private> check_failures: u32;
+
+fn check(ok: bool) {
+    if SHADER_CHECKS && !ok {
+        check_failures += 1u;
+    }
+}
+
 // Texel i of a table, TABLE_WIDTH_LOG2 being generated from the Rust TABLE_WIDTH.
 fn table_texel(t: texture_2d<u32>, i: u32) -> vec4<u32> {
+    if SHADER_CHECKS {
+        let size = textureDimensions(t);
+        check(i < size.x * size.y);
+    }
     return textureLoad(t, vec2<u32>(i & ((1u << TABLE_WIDTH_LOG2) - 1u), i >> TABLE_WIDTH_LOG2), 0);
 }

@@ -41,6 +41,7 @@ fn texel_luminance(t: Texture, x: u32, y: u32) -> f32 {
 
 // mirror: src/render/environment.rs `cell_corners`
 fn cell_corners(t: Texture, i: u32, j: u32) -> vec4<f32> {
+    check(t.width > 0u && t.height > 0u);
     let k = (j + 1u) % t.width;
     let below = min(i + 1u, t.height - 1u);
     return vec4<f32>(

@@ -9,8 +9,16 @@
 @group(1) @binding(0) var<storage, read_write> film: array<Texel>;
 
 // [0]: invocations whose work a driver's loop limit cut short; [1]: always 0, read where
-// the compiler must not know it. The host reads them as `Status` (render/gpu/session.rs).
-@group(1) @binding(1) var<storage, read_write> status: array<atomic<u32>, 2>;
+// the compiler must not know it; [2]: a checked module's failed checks (bindings.wgsl
+// `check`); [3]: padding. The host reads them as `Status` (render/gpu/session.rs).
+@group(1) @binding(1) var<storage, read_write> status: array<atomic<u32>, 4>;
+
+// Adds this invocation's failed checks (bindings.wgsl `check`) to status[2].
+fn report_checks() {
+    if SHADER_CHECKS && check_failures != 0u {
+        atomicAdd(&status[2], check_failures);
+    }
+}
 
 fn is_finite3(v: vec3<f32>) -> bool {
     let e = bitcast<vec3<u32>>(v) & vec3<u32>(0x7f800000u);
@@ -83,11 +91,15 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let pixel = y * params.width + x;
     let base = pixel * params.film_texels;
+    if SHADER_CHECKS {
+        check(base + params.film_texels <= arrayLength(&film));
+    }
     // The radiance texel's w holds the next sample's index as is (adding 0 keeps it).
     var radiance = film[base];
     var rays = film[base + 1u];
     var s = max(params.sample_start, radiance.zw.z);
     if s >= params.sample_end {
+        report_checks();
         return;
     }
     // Persistent paths: a lane whose path ends starts its next sample at once, so the lanes
@@ -123,6 +135,7 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
             break;
         }
     }
+    report_checks();
     if s < params.sample_end || rounds != bound {
         atomicAdd(&status[0], 1u);
         return;

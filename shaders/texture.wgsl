@@ -32,6 +32,7 @@ struct TexelSpan {
 
 // mirror: src/render/texture.rs `texel_span`
 fn texel_span(s: f32, size: u32, mode: u32) -> TexelSpan {
+    check(size > 0u);
     let n = i32(size);
     if mode == WRAP_CLAMP {
         let x = clamp(s, 0.0, 1.0) * f32(size) - 0.5;
@@ -80,6 +81,7 @@ fn triangle_uv(tri: u32, b1: f32, b2: f32) -> vec2<f32> {
 // mirror: src/render/texture.rs `scalar_lookup`
 fn scalar_lookup(index: u32, uv: vec2<f32>) -> f32 {
     let channel = load_texture(index).channel;
+    check(channel < 4u);
     return texture_lookup(index, uv)[channel];
 }
 

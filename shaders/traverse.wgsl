@@ -75,7 +75,8 @@ fn walk(ray: Ray, t_max: f32, any_hit: bool, counted: bool) -> Hit {
             let cb = load_node(b);
             var ta = intersect_aabb(ray.origin, inv_dir, ca.min, ca.max, best.t);
             var tb = intersect_aabb(ray.origin, inv_dir, cb.min, cb.max, best.t);
-            if tb < ta {
+            let swapped = tb < ta;
+            if swapped {
                 let t = ta;
                 ta = tb;
                 tb = t;
@@ -90,14 +91,21 @@ fn walk(ray: Ray, t_max: f32, any_hit: bool, counted: bool) -> Hit {
                 }
                 sp -= 1u;
                 node = stack[sp];
+                n = load_node(node);
             } else {
+                // The nearer child is already loaded: no second read of it.
                 node = a;
+                if swapped {
+                    n = cb;
+                } else {
+                    n = ca;
+                }
                 if tb != T_INF {
+                    check(sp < STACK_SIZE);
                     stack[sp] = b;
                     sp += 1u;
                 }
             }
-            n = load_node(node);
         }
         if done {
             break;

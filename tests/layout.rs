@@ -3,7 +3,7 @@
 //! as its `#[repr(C)]` Rust twin; the shared constants agree; and every `mirror:` tag
 //! names something that exists on the other side.
 
-use meshtrace::render::gpu::shader::{self, Value};
+use meshtrace::render::gpu::shader::{self, ShaderChecks, Value};
 use meshtrace::render::gpu::tables;
 use meshtrace::render::rng;
 use meshtrace::scene::MaterialKind;
@@ -20,25 +20,27 @@ fn parse_and_validate(what: &str, source: &str) -> naga::Module {
     module
 }
 
-/// Every module the host compiles, one per entry-point file and traversal (the software
-/// BVH, then hardware ray queries); the test module with the software BVH first.
+/// Every module the host compiles, one per entry-point file, traversal (the software
+/// BVH, then hardware ray queries) and checks; the test module with the software BVH,
+/// trusted, first.
 fn modules() -> Vec<(String, naga::Module)> {
-    type Source = fn(bool) -> String;
+    type Source = fn(bool, ShaderChecks) -> String;
     let sources: [(&str, Source); 3] = [
         ("test_source", shader::test_source),
         ("render_source", shader::render_source),
         ("bench_source", shader::bench_source),
     ];
-    [false, true]
-        .iter()
-        .flat_map(|&ray_query| {
-            sources.iter().map(move |&(name, source)| {
-                let name = format!("{name}({ray_query})");
-                let module = parse_and_validate(&name, &source(ray_query));
-                (name, module)
-            })
-        })
-        .collect()
+    let mut out = Vec::new();
+    for ray_query in [false, true] {
+        for checks in [ShaderChecks::Trusted, ShaderChecks::Checked] {
+            for &(name, source) in &sources {
+                let name = format!("{name}({ray_query}, {checks:?})");
+                let module = parse_and_validate(&name, &source(ray_query, checks));
+                out.push((name, module));
+            }
+        }
+    }
+    out
 }
 
 #[test]

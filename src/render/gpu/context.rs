@@ -2,6 +2,7 @@
 //! real limits (never wgpu's conservative defaults, which would cap storage bindings).
 
 use super::pipelines::Pipeline;
+use super::shader::ShaderChecks;
 use super::{Accel, GpuError};
 use std::sync::{Arc, Mutex};
 
@@ -73,6 +74,8 @@ pub struct GpuContext {
     pub ray_query: bool,
     /// The layout of every scene's bind group on this device ([`super::tables::scene_layout`]).
     pub scene_layout: wgpu::BindGroupLayout,
+    /// How the render kernel is compiled: trusted unless [`GpuContext::with_shader_checks`].
+    pub checks: ShaderChecks,
     /// The render kernel, compiled by the first render on this device and kept for every
     /// later scene (a batch's meshes), since its source and layouts do not depend on them.
     render: Arc<Mutex<Option<Arc<Pipeline>>>>,
@@ -138,9 +141,20 @@ impl GpuContext {
             limits,
             ray_query,
             scene_layout,
+            checks: ShaderChecks::Trusted,
             render: Arc::new(Mutex::new(None)),
             fault,
         })
+    }
+
+    /// This device with a render kernel of its own that is compiled checked
+    /// ([`ShaderChecks::Checked`]): every render on it then fails with
+    /// [`GpuError::Fault`] where the kernel indexed out of range or divided by zero.
+    /// For tests, and for telling a kernel's fault from a driver's.
+    pub fn with_shader_checks(mut self) -> Self {
+        self.checks = ShaderChecks::Checked;
+        self.render = Arc::new(Mutex::new(None));
+        self
     }
 
     /// The render kernel (`shaders/render.wgsl`), compiled on first use.
@@ -149,7 +163,7 @@ impl GpuContext {
         if let Some(p) = slot.as_ref() {
             return Ok(p.clone());
         }
-        let source = super::shader::render_source(self.ray_query);
+        let source = super::shader::render_source(self.ray_query, self.checks);
         let p = Arc::new(Pipeline::new(
             self,
             &self.scene_layout,
@@ -157,6 +171,7 @@ impl GpuContext {
             "render",
             0,
             2,
+            self.checks,
         )?);
         *slot = Some(p.clone());
         Ok(p)

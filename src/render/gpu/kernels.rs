@@ -3,6 +3,7 @@
 //! ray-throughput kernels of `shaders/bench.wgsl` (one ray in, one hit out).
 
 use super::pipelines::Pipeline;
+use super::shader::ShaderChecks;
 use super::tables::params_buffer;
 use super::{GpuContext, GpuError, GpuRenderer, shader};
 use crate::render::RenderScene;
@@ -19,12 +20,14 @@ pub struct Kernel<'a> {
 }
 
 impl<'a> Kernel<'a> {
-    /// Compiles `entry` of the module `source` (a function of [`shader`]) over the
-    /// renderer's scene, with the parameters of a render of `settings` (all its samples).
+    /// Compiles `entry` of the module `source`, generated with `checks` (by a function of
+    /// [`shader`]), over the renderer's scene, with the parameters of a render of
+    /// `settings` (all its samples).
     pub fn new(
         renderer: &'a GpuRenderer,
         settings: &RenderSettings,
         source: &str,
+        checks: ShaderChecks,
         entry: &str,
     ) -> Result<Self, GpuError> {
         let ctx = renderer.context();
@@ -34,7 +37,7 @@ impl<'a> Kernel<'a> {
         let params = params_buffer(ctx);
         ctx.queue.write_buffer(&params, 0, bytemuck::bytes_of(&p));
         let scene_group = tables.bind_group(ctx, &params);
-        let pipeline = Pipeline::new(ctx, &tables.layout, source, entry, 1, 1)?;
+        let pipeline = Pipeline::new(ctx, &tables.layout, source, entry, 1, 1, checks)?;
         Ok(Self {
             renderer,
             pipeline,
@@ -88,7 +91,8 @@ impl<'a> Kernel<'a> {
 }
 
 /// Uploads `scene` and runs test entry point `entry` over `input` (two words per case);
-/// returns its two output words per case.
+/// returns its two output words per case. The module is checked ([`ShaderChecks`]), since
+/// the unit tests feed it arbitrary inputs.
 pub fn run_test_kernel(
     ctx: &GpuContext,
     scene: &RenderScene,
@@ -98,11 +102,8 @@ pub fn run_test_kernel(
 ) -> Result<Vec<[u32; 4]>, GpuError> {
     assert!(input.len().is_multiple_of(2), "two input words per case");
     let renderer = GpuRenderer::new(ctx, scene)?;
-    let kernel = Kernel::new(
-        &renderer,
-        settings,
-        &shader::test_source(ctx.ray_query),
-        entry,
-    )?;
+    let checks = ShaderChecks::Checked;
+    let source = shader::test_source(ctx.ray_query, checks);
+    let kernel = Kernel::new(&renderer, settings, &source, checks, entry)?;
     Ok(kernel.run(input, input.len() / 2, input.len())?.0)
 }

@@ -1,6 +1,7 @@
 //! Compute pipelines: a WGSL module compiled once for one entry point, over the scene's
 //! bind group (group 0) and one group of storage buffers of its own (group 1).
 
+use super::shader::ShaderChecks;
 use super::{GpuContext, GpuError};
 
 /// A compiled entry point and the layout of its storage group.
@@ -11,7 +12,9 @@ pub struct Pipeline {
 
 impl Pipeline {
     /// Compiles `entry` of `source` over `scene_layout` plus one group of storage buffers:
-    /// `inputs` read-only ones, then `outputs` read-write ones.
+    /// `inputs` read-only ones, then `outputs` read-write ones. `checks` must be what
+    /// `source` was generated with ([`ShaderChecks`]).
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &GpuContext,
         scene_layout: &wgpu::BindGroupLayout,
@@ -19,6 +22,7 @@ impl Pipeline {
         entry: &str,
         inputs: u32,
         outputs: u32,
+        checks: ShaderChecks,
     ) -> Result<Self, GpuError> {
         let io_entries: Vec<_> = (0..inputs + outputs)
             .map(|binding| wgpu::BindGroupLayoutEntry {
@@ -40,12 +44,27 @@ impl Pipeline {
                 label: Some("io"),
                 entries: &io_entries,
             });
-        let module = ctx
-            .device
-            .create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("meshtrace"),
-                source: wgpu::ShaderSource::Wgsl(source.into()),
-            });
+        let desc = wgpu::ShaderModuleDescriptor {
+            label: Some("meshtrace"),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        };
+        let module = match checks {
+            ShaderChecks::Checked => ctx.device.create_shader_module(desc),
+            // SAFETY: the kernels index only in range, divide by no zero and end all
+            // their loops, as `ShaderChecks` sets out; tests/shader_checks.rs checks it
+            // on the test scenes with the checked build of the same source. Ray-query
+            // tracking stays on: it also guards queries against rays with NaN in them,
+            // which a degenerate path can produce.
+            ShaderChecks::Trusted => unsafe {
+                ctx.device.create_shader_module_trusted(
+                    desc,
+                    wgpu::ShaderRuntimeChecks {
+                        ray_query_initialization_tracking: true,
+                        ..wgpu::ShaderRuntimeChecks::unchecked()
+                    },
+                )
+            },
+        };
         let layout = ctx
             .device
             .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {

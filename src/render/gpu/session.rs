@@ -38,6 +38,10 @@ struct Status {
     cut: u32,
     /// Always 0: the kernel's canary loop reads its bound from here.
     zero: u32,
+    /// A checked kernel's out-of-range indices and zero divisors
+    /// ([`ShaderChecks`](super::shader::ShaderChecks)); always 0 in a trusted one.
+    check_failures: u32,
+    _pad: u32,
 }
 
 /// The film being accumulated on the device: one texel per pixel for radiance, then one per
@@ -266,6 +270,12 @@ impl GpuRenderer {
         self.ctx.queue.submit([enc.finish()]);
         let status = self.ctx.read_buffer(&film.status)?;
         let status: Status = bytemuck::pod_read_unaligned(&status);
+        if status.check_failures != 0 {
+            return Err(GpuError::Fault(format!(
+                "the checked render kernel indexed out of range or divided by zero {} times",
+                status.check_failures
+            )));
+        }
         Ok(status.cut)
     }
 

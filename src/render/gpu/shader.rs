@@ -162,13 +162,38 @@ const RENDER: Source = shader!("render.wgsl");
 const TESTS: Source = shader!("tests.wgsl");
 const BENCH: Source = shader!("bench.wgsl");
 
-fn join(entry_points: Source, ray_query: bool) -> String {
+/// How a module is compiled and what it checks at run time.
+///
+/// A trusted module is created with `create_shader_module_trusted` and every runtime
+/// check off but ray-query tracking: naga then adds no index clamps, no loop counters and no guards on integer
+/// division, which it would otherwise put in every iteration of the traversal. That is
+/// sound because the kernels index only in range and every loop ends: the traversal stack
+/// holds at most the tree's depth, which `Bvh::build` keeps under `STACK_SIZE`; every
+/// table index comes from validated scene data; the divisors are texture sizes, at least 1.
+/// A checked module keeps naga's checks and also tests each of those claims itself where
+/// it relies on them (`check` in shaders/bindings.wgsl), counting the failures, which the
+/// render kernel reports: tests/shader_checks.rs renders the test scenes checked, and
+/// requires no failure and the trusted kernel's bits.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ShaderChecks {
+    /// No runtime checks (but ray-query tracking): what renders and benchmarks run.
+    #[default]
+    Trusted,
+    /// naga's checks, plus the kernel's own count of out-of-range indices and zero divisors.
+    Checked,
+}
+
+fn join(entry_points: Source, ray_query: bool, checks: ShaderChecks) -> String {
     let mut src = String::new();
     if ray_query {
         src += "enable wgpu_ray_query;\n\n";
     }
     src += "// ---- generated: src/render/gpu/shader.rs `wgsl_constants`\n";
     src += &wgsl_constants();
+    src += &format!(
+        "const SHADER_CHECKS: bool = {};\n",
+        checks == ShaderChecks::Checked
+    );
     src += "\n// ---- generated: src/render/gpu/tables.rs `wgsl_tables`\n";
     src += &wgsl_tables();
     if ray_query {
@@ -188,18 +213,18 @@ fn join(entry_points: Source, ray_query: bool) -> String {
 }
 
 /// The module with the `render` entry point; with `ray_query`, traversing by hardware ray
-/// queries.
-pub fn render_source(ray_query: bool) -> String {
-    join(RENDER, ray_query)
+/// queries; `checks` as [`ShaderChecks`] says.
+pub fn render_source(ray_query: bool, checks: ShaderChecks) -> String {
+    join(RENDER, ray_query, checks)
 }
 
-/// The module with the `test_*` entry points; with `ray_query`, as [`render_source`].
-pub fn test_source(ray_query: bool) -> String {
-    join(TESTS, ray_query)
+/// The module with the `test_*` entry points; arguments as [`render_source`].
+pub fn test_source(ray_query: bool, checks: ShaderChecks) -> String {
+    join(TESTS, ray_query, checks)
 }
 
-/// The module with the `bench_*` ray-throughput entry points; with `ray_query`, as
+/// The module with the `bench_*` ray-throughput entry points; arguments as
 /// [`render_source`].
-pub fn bench_source(ray_query: bool) -> String {
-    join(BENCH, ray_query)
+pub fn bench_source(ray_query: bool, checks: ShaderChecks) -> String {
+    join(BENCH, ray_query, checks)
 }
