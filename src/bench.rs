@@ -386,10 +386,9 @@ pub fn bench_scene(
         let first = out.len();
         let mut renderer = GpuRenderer::new(ctx, &rs)?;
         let checks = shader::ShaderChecks::Trusted;
-        let source = shader::bench_source(ctx.ray_query, checks);
         for (measure, set, any) in sets {
             let entry = if any { "bench_any" } else { "bench_closest" };
-            let kernel = Kernel::new(&renderer, &settings, &source, checks, entry)?;
+            let kernel = Kernel::new(&renderer, &settings, shader::bench_source, checks, entry)?;
             let words = ray_words(set);
             let n = set.len() as f64 / 1e6;
             let rates = timed(opts.repeats, n, || {

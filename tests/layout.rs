@@ -24,8 +24,7 @@ fn parse_and_validate(what: &str, source: &str) -> naga::Module {
 /// BVH, then hardware ray queries) and checks; the test module with the software BVH,
 /// trusted, first.
 fn modules() -> Vec<(String, naga::Module)> {
-    type Source = fn(bool, ShaderChecks) -> String;
-    let sources: [(&str, Source); 3] = [
+    let sources: [(&str, shader::Module); 3] = [
         ("test_source", shader::test_source),
         ("render_source", shader::render_source),
         ("bench_source", shader::bench_source),

@@ -75,7 +75,7 @@ pub struct GpuContext {
     /// The layout of every scene's bind group on this device ([`super::tables::scene_layout`]).
     pub scene_layout: wgpu::BindGroupLayout,
     /// How the render kernel is compiled: trusted unless [`GpuContext::with_shader_checks`].
-    pub checks: ShaderChecks,
+    checks: ShaderChecks,
     /// The render kernel, compiled by the first render on this device and kept for every
     /// later scene (a batch's meshes), since its source and layouts do not depend on them.
     render: Arc<Mutex<Option<Arc<Pipeline>>>>,
@@ -163,11 +163,10 @@ impl GpuContext {
         if let Some(p) = slot.as_ref() {
             return Ok(p.clone());
         }
-        let source = super::shader::render_source(self.ray_query, self.checks);
         let p = Arc::new(Pipeline::new(
             self,
             &self.scene_layout,
-            &source,
+            super::shader::render_source,
             "render",
             0,
             2,

@@ -3,7 +3,7 @@
 //! ray-throughput kernels of `shaders/bench.wgsl` (one ray in, one hit out).
 
 use super::pipelines::Pipeline;
-use super::shader::ShaderChecks;
+use super::shader::{Module, ShaderChecks};
 use super::tables::params_buffer;
 use super::{GpuContext, GpuError, GpuRenderer, shader};
 use crate::render::RenderScene;
@@ -20,13 +20,12 @@ pub struct Kernel<'a> {
 }
 
 impl<'a> Kernel<'a> {
-    /// Compiles `entry` of the module `source`, generated with `checks` (by a function of
-    /// [`shader`]), over the renderer's scene, with the parameters of a render of
-    /// `settings` (all its samples).
+    /// Compiles `entry` of `module` (a function of [`shader`]), as `checks` says, over the
+    /// renderer's scene, with the parameters of a render of `settings` (all its samples).
     pub fn new(
         renderer: &'a GpuRenderer,
         settings: &RenderSettings,
-        source: &str,
+        module: Module,
         checks: ShaderChecks,
         entry: &str,
     ) -> Result<Self, GpuError> {
@@ -37,7 +36,7 @@ impl<'a> Kernel<'a> {
         let params = params_buffer(ctx);
         ctx.queue.write_buffer(&params, 0, bytemuck::bytes_of(&p));
         let scene_group = tables.bind_group(ctx, &params);
-        let pipeline = Pipeline::new(ctx, &tables.layout, source, entry, 1, 1, checks)?;
+        let pipeline = Pipeline::new(ctx, &tables.layout, module, entry, 1, 1, checks)?;
         Ok(Self {
             renderer,
             pipeline,
@@ -103,7 +102,6 @@ pub fn run_test_kernel(
     assert!(input.len().is_multiple_of(2), "two input words per case");
     let renderer = GpuRenderer::new(ctx, scene)?;
     let checks = ShaderChecks::Checked;
-    let source = shader::test_source(ctx.ray_query, checks);
-    let kernel = Kernel::new(&renderer, settings, &source, checks, entry)?;
+    let kernel = Kernel::new(&renderer, settings, shader::test_source, checks, entry)?;
     Ok(kernel.run(input, input.len() / 2, input.len())?.0)
 }

@@ -1,7 +1,7 @@
 //! Compute pipelines: a WGSL module compiled once for one entry point, over the scene's
 //! bind group (group 0) and one group of storage buffers of its own (group 1).
 
-use super::shader::ShaderChecks;
+use super::shader::{Module, ShaderChecks};
 use super::{GpuContext, GpuError};
 
 /// A compiled entry point and the layout of its storage group.
@@ -11,14 +11,14 @@ pub struct Pipeline {
 }
 
 impl Pipeline {
-    /// Compiles `entry` of `source` over `scene_layout` plus one group of storage buffers:
-    /// `inputs` read-only ones, then `outputs` read-write ones. `checks` must be what
-    /// `source` was generated with ([`ShaderChecks`]).
+    /// Compiles `entry` of `module` (a function of [`super::shader`]), generated for the
+    /// device's traversal and compiled as `checks` says, over `scene_layout` plus one group
+    /// of storage buffers: `inputs` read-only ones, then `outputs` read-write ones.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &GpuContext,
         scene_layout: &wgpu::BindGroupLayout,
-        source: &str,
+        module: Module,
         entry: &str,
         inputs: u32,
         outputs: u32,
@@ -46,7 +46,7 @@ impl Pipeline {
             });
         let desc = wgpu::ShaderModuleDescriptor {
             label: Some("meshtrace"),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
+            source: wgpu::ShaderSource::Wgsl(module(ctx.ray_query, checks).into()),
         };
         let module = match checks {
             ShaderChecks::Checked => ctx.device.create_shader_module(desc),

@@ -165,8 +165,9 @@ const BENCH: Source = shader!("bench.wgsl");
 /// How a module is compiled and what it checks at run time.
 ///
 /// A trusted module is created with `create_shader_module_trusted` and every runtime
-/// check off but ray-query tracking: naga then adds no index clamps, no loop counters and no guards on integer
-/// division, which it would otherwise put in every iteration of the traversal. That is
+/// check off but ray-query tracking: naga then adds no index clamps, no loop counters
+/// and no guards on integer division, which it would otherwise put in every iteration
+/// of the traversal. That is
 /// sound because the kernels index only in range and every loop ends: the traversal stack
 /// holds at most the tree's depth, which `Bvh::build` keeps under `STACK_SIZE`; every
 /// table index comes from validated scene data; the divisors are texture sizes, at least 1.
@@ -182,6 +183,10 @@ pub enum ShaderChecks {
     /// naga's checks, plus the kernel's own count of out-of-range indices and zero divisors.
     Checked,
 }
+
+/// A module's source for a traversal (`ray_query`) and [`ShaderChecks`]: one of
+/// [`render_source`], [`test_source`] and [`bench_source`].
+pub type Module = fn(bool, ShaderChecks) -> String;
 
 fn join(entry_points: Source, ray_query: bool, checks: ShaderChecks) -> String {
     let mut src = String::new();
