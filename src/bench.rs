@@ -94,9 +94,7 @@ fn camera_rays(cam: &CameraRays) -> Vec<BenchRay> {
 fn closest(scene: &RenderScene, ray: &Ray, t_max: f32) -> Option<Hit> {
     scene
         .wide
-        .traverse_closest(&scene.tris, ray, t_max, |k, u, v| {
-            alpha_test(scene, k, u, v)
-        })
+        .traverse_closest(ray, t_max, |k, u, v| alpha_test(scene, k, u, v))
 }
 
 /// The share of `rays` whose closest hit is on a triangle that `subject` marks.
@@ -362,7 +360,7 @@ pub fn bench_scene(
                     .map(|(r, t)| {
                         if any {
                             rs.wide
-                                .traverse_any(&rs.tris, r, *t, |k, u, v| alpha_test(&rs, k, u, v))
+                                .traverse_any(r, *t, |k, u, v| alpha_test(&rs, k, u, v))
                                 as usize
                         } else {
                             closest(&rs, r, *t).is_some() as usize

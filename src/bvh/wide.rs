@@ -5,13 +5,15 @@
 //!
 //! A binary subtree of at most [`LEAF_MAX`] triangles becomes one leaf, over the same
 //! leaf-ordered triangles, copied into packs of eight as a struct of arrays: one AVX2
-//! sequence computes the eight edge functions and distances of the watertight test, as it
-//! rounds them, and keeps the lanes whose signs allow a hit within the ray's extent; only
-//! those go through the scalar test, which adds its rounding bound. Being the same
-//! function, the scalar test makes the wide traversal return the binary traversal's
-//! hit (the same triangle, distance and barycentrics), except where two triangles are hit at
-//! exactly the same distance, where either may be returned. The GPU keeps the binary tree
-//! (`shaders/traverse.wgsl`), which [`super::traverse_closest`] mirrors.
+//! sequence runs the watertight test on the eight triangles at once, its edge functions,
+//! distance, barycentrics and rounding bound each computed in the order and rounding of the
+//! scalar test, so that a lane hits exactly where `intersect_triangle` would, with the same
+//! distance and barycentrics, and the traversal never reads the triangle table (a portable
+//! build calls the scalar test on each lane). The wide traversal thus returns the binary
+//! traversal's hit (the same triangle, distance and barycentrics), except where two
+//! triangles are hit at exactly the same distance, where either may be returned. The GPU
+//! keeps the binary tree (`shaders/traverse.wgsl`), which [`super::traverse_closest`]
+//! mirrors.
 
 use super::{BvhNode, Hit, STACK_SIZE};
 use crate::geometry::{SLAB_SLACK, ShearedRay, T_INF, TriVerts, intersect_triangle, safe_inverse};
@@ -21,12 +23,18 @@ use std::mem::MaybeUninit;
 /// Children per node, and triangles per pack.
 pub const WIDTH: usize = 8;
 
+/// The bit of [`TriPack::tri`] that marks a triangle whose hits pass an alpha test first, so
+/// that the traversal need not read the triangle table; the other bits are the index.
+/// (Triangle indices stay below it, as those of `RenderScene::emitters` do.)
+pub const PACK_MASKED: u32 = 1 << 31;
+
 /// The most triangles of a leaf: a binary subtree of at most this many becomes one leaf.
 pub const LEAF_MAX: u32 = 8;
 
 /// Up to eight triangles of a leaf as a struct of arrays: corner `c`'s axis `a` of lane `l`
-/// is `v[3 * c + a][l]`, and `tri[l]` is the lane's leaf-order triangle index, `u32::MAX`
-/// for an unused lane.
+/// is `v[3 * c + a][l]`, and `tri[l]` is the lane's leaf-order triangle index, with
+/// [`PACK_MASKED`] set where the triangle [`is_masked`](TriVerts::is_masked), and
+/// `u32::MAX` for an unused lane.
 #[repr(C, align(64))]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TriPack {
@@ -158,7 +166,6 @@ impl WideBvh {
     /// it; masked triangles count where `accept(tri, u, v)` says so.
     pub fn traverse_closest(
         &self,
-        tris: &[TriVerts],
         ray: &Ray,
         t_max: f32,
         accept: impl FnMut(u32, f32, f32) -> bool,
@@ -166,16 +173,15 @@ impl WideBvh {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2, the only requirement of `closest_avx2`.
-            return unsafe { closest_avx2(self, tris, ray, t_max, accept) };
+            return unsafe { closest_avx2(self, ray, t_max, accept) };
         }
-        closest::<Portable>(self, tris, ray, t_max, accept)
+        closest::<Portable>(self, ray, t_max, accept)
     }
 
     /// Whether anything lies on the ray with `0 < t < t_max`, as [`super::traverse_any`]
     /// decides it.
     pub fn traverse_any(
         &self,
-        tris: &[TriVerts],
         ray: &Ray,
         t_max: f32,
         accept: impl FnMut(u32, f32, f32) -> bool,
@@ -183,9 +189,9 @@ impl WideBvh {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2, the only requirement of `any_avx2`.
-            return unsafe { any_avx2(self, tris, ray, t_max, accept) };
+            return unsafe { any_avx2(self, ray, t_max, accept) };
         }
-        any::<Portable>(self, tris, ray, t_max, accept)
+        any::<Portable>(self, ray, t_max, accept)
     }
 
     /// The same traversals with the portable box test whatever the CPU, so that tests can
@@ -202,23 +208,21 @@ impl PortableWide<'_> {
     /// [`WideBvh::traverse_closest`] without SIMD.
     pub fn traverse_closest(
         &self,
-        tris: &[TriVerts],
         ray: &Ray,
         t_max: f32,
         accept: impl FnMut(u32, f32, f32) -> bool,
     ) -> Option<Hit> {
-        closest::<Portable>(self.0, tris, ray, t_max, accept)
+        closest::<Portable>(self.0, ray, t_max, accept)
     }
 
     /// [`WideBvh::traverse_any`] without SIMD.
     pub fn traverse_any(
         &self,
-        tris: &[TriVerts],
         ray: &Ray,
         t_max: f32,
         accept: impl FnMut(u32, f32, f32) -> bool,
     ) -> bool {
-        any::<Portable>(self.0, tris, ray, t_max, accept)
+        any::<Portable>(self.0, ray, t_max, accept)
     }
 }
 
@@ -226,24 +230,22 @@ impl PortableWide<'_> {
 #[target_feature(enable = "avx2")]
 fn closest_avx2(
     bvh: &WideBvh,
-    tris: &[TriVerts],
     ray: &Ray,
     t_max: f32,
     accept: impl FnMut(u32, f32, f32) -> bool,
 ) -> Option<Hit> {
-    closest::<Avx2>(bvh, tris, ray, t_max, accept)
+    closest::<Avx2>(bvh, ray, t_max, accept)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn any_avx2(
     bvh: &WideBvh,
-    tris: &[TriVerts],
     ray: &Ray,
     t_max: f32,
     accept: impl FnMut(u32, f32, f32) -> bool,
 ) -> bool {
-    any::<Avx2>(bvh, tris, ray, t_max, accept)
+    any::<Avx2>(bvh, ray, t_max, accept)
 }
 
 /// Triangles `range` of `tris` as a pack.
@@ -259,29 +261,50 @@ fn pack(tris: &[TriVerts], range: std::ops::Range<u32>) -> TriPack {
                 p.v[3 * c + axis][lane] = x;
             }
         }
-        p.tri[lane] = i;
+        p.tri[lane] = if t.is_masked() { i | PACK_MASKED } else { i };
     }
     p
 }
 
-/// A ray as the triangle filter takes it: [`ShearedRay`]'s frame, with the axes that
-/// become x, y and z and the origin in that order.
+/// A ray as the pack test takes it: the [`ShearedRay`], and its frame as arrays, with the
+/// axes that become x, y and z and the origin in that order.
 struct TriRay {
+    sheared: ShearedRay,
     axes: [usize; 3],
     origin: [f32; 3],
     shear: [f32; 3],
 }
 
 #[inline(always)]
-fn tri_ray(sheared: &ShearedRay) -> TriRay {
+fn tri_ray(ray: &Ray) -> TriRay {
+    let sheared = ShearedRay::new(ray);
     let kz = sheared.kz as usize;
     let axes = [(kz + 1) % 3, (kz + 2) % 3, kz];
     let o = sheared.origin.to_array();
     TriRay {
+        sheared,
         axes,
         origin: axes.map(|a| o[a]),
         shear: sheared.shear.to_array(),
     }
+}
+
+/// The lanes of a pack that `intersect_triangle` hits within the ray's extent, and each
+/// lane's distance and barycentrics as it returns them (read only in the lanes of `mask`).
+struct PackHits {
+    mask: u32,
+    t: [f32; WIDTH],
+    u: [f32; WIDTH],
+    v: [f32; WIDTH],
+}
+
+impl PackHits {
+    const NONE: Self = Self {
+        mask: 0,
+        t: [0.0; WIDTH],
+        u: [0.0; WIDTH],
+        v: [0.0; WIDTH],
+    };
 }
 
 /// A ray as the box test takes it.
@@ -297,9 +320,8 @@ struct BoxRay {
 trait BoxTest {
     fn hits(node: &WideNode, ray: &BoxRay, t_max: f32) -> (u32, [f32; WIDTH]);
 
-    /// The lanes of `pack` that `intersect_triangle` may hit with `t < t_max`: a superset
-    /// of its hits.
-    fn candidates(pack: &TriPack, ray: &TriRay, t_max: f32) -> u32;
+    /// `intersect_triangle` with `t_max` on each lane of `pack`, bit for bit.
+    fn pack_hits(pack: &TriPack, ray: &TriRay, t_max: f32) -> PackHits;
 }
 
 /// `minps`/`maxps` semantics, so that the portable test rounds as the SIMD one does.
@@ -336,10 +358,26 @@ impl BoxTest for Portable {
         (mask, near)
     }
 
-    /// Every lane in use: the scalar test decides.
+    /// The scalar test on each lane in use.
     #[inline(always)]
-    fn candidates(pack: &TriPack, _ray: &TriRay, _t_max: f32) -> u32 {
-        (0..WIDTH).fold(0, |m, l| m | (((pack.tri[l] != u32::MAX) as u32) << l))
+    fn pack_hits(pack: &TriPack, ray: &TriRay, t_max: f32) -> PackHits {
+        let mut hits = PackHits::NONE;
+        for l in (0..WIDTH).take_while(|&l| pack.tri[l] != u32::MAX) {
+            let corner = |c: usize| {
+                let v = |a: usize| pack.v[3 * c + a][l];
+                [v(0), v(1), v(2), 0.0]
+            };
+            let tri = TriVerts {
+                v0: corner(0),
+                v1: corner(1),
+                v2: corner(2),
+            };
+            if let Some(h) = intersect_triangle(&ray.sheared, &tri, t_max) {
+                hits.mask |= 1 << l;
+                (hits.t[l], hits.u[l], hits.v[l]) = (h.t, h.u, h.v);
+            }
+        }
+        hits
     }
 }
 
@@ -357,20 +395,21 @@ impl BoxTest for Avx2 {
     }
 
     #[inline(always)]
-    fn candidates(pack: &TriPack, ray: &TriRay, t_max: f32) -> u32 {
+    fn pack_hits(pack: &TriPack, ray: &TriRay, t_max: f32) -> PackHits {
         // SAFETY: as for `hits`.
-        unsafe { candidates_avx2(pack, ray, t_max) }
+        unsafe { pack_hits_avx2(pack, ray, t_max) }
     }
 }
 
-/// The edge functions and the distance of `intersect_triangle`, computed as it computes
-/// them (so that a lane is dropped only where it would return no hit) for eight triangles
-/// at once: the lanes in use whose three signs do not disagree and whose `t` lies in
-/// (0, `t_max`). The scalar test then only checks the rounding bound.
+/// `intersect_triangle` on eight triangles at once: the edge functions, the distance, the
+/// rounding bound and the barycentrics, each computed in the scalar test's order of
+/// operations (IEEE arithmetic rounds a lane as it rounds a scalar), so that a lane hits
+/// where the scalar test hits, with the same bits.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-fn candidates_avx2(pack: &TriPack, ray: &TriRay, t_max: f32) -> u32 {
+fn pack_hits_avx2(pack: &TriPack, ray: &TriRay, t_max: f32) -> PackHits {
+    use crate::geometry::{GAMMA_2, GAMMA_3};
     use std::arch::x86_64::*;
     let [ax, ay, az] = ray.axes;
     let (sx, sy) = (_mm256_set1_ps(ray.shear[0]), _mm256_set1_ps(ray.shear[1]));
@@ -381,18 +420,20 @@ fn candidates_avx2(pack: &TriPack, ray: &TriRay, t_max: f32) -> u32 {
     );
     // SAFETY: each load reads one whole `[f32; 8]` or `[u32; 8]`.
     let load = |row: &[f32; WIDTH]| unsafe { _mm256_loadu_ps(row.as_ptr()) };
-    // A corner translated, permuted and sheared: (x + Sx z, y + Sy z, z).
+    // A corner translated and permuted, (x, y, z), and then sheared: (x + Sx z, y + Sy z).
     let corner = |c: usize| {
         let x = _mm256_sub_ps(load(&pack.v[3 * c + ax]), ox);
         let y = _mm256_sub_ps(load(&pack.v[3 * c + ay]), oy);
         let z = _mm256_sub_ps(load(&pack.v[3 * c + az]), oz);
-        (
+        let sheared = (
             _mm256_add_ps(x, _mm256_mul_ps(sx, z)),
             _mm256_add_ps(y, _mm256_mul_ps(sy, z)),
-            z,
-        )
+        );
+        ((x, y, z), sheared)
     };
-    let ((p0x, p0y, p0z), (p1x, p1y, p1z), (p2x, p2y, p2z)) = (corner(0), corner(1), corner(2));
+    let (a0, (p0x, p0y)) = corner(0);
+    let (a1, (p1x, p1y)) = corner(1);
+    let (a2, (p2x, p2y)) = corner(2);
     let e0 = _mm256_sub_ps(_mm256_mul_ps(p1x, p2y), _mm256_mul_ps(p1y, p2x));
     let e1 = _mm256_sub_ps(_mm256_mul_ps(p2x, p0y), _mm256_mul_ps(p2y, p0x));
     let e2 = _mm256_sub_ps(_mm256_mul_ps(p0x, p1y), _mm256_mul_ps(p0y, p1x));
@@ -413,12 +454,13 @@ fn candidates_avx2(pack: &TriPack, ray: &TriRay, t_max: f32) -> u32 {
     let det = _mm256_add_ps(_mm256_add_ps(e0, e1), e2);
     let t_scaled = _mm256_add_ps(
         _mm256_add_ps(
-            _mm256_mul_ps(e0, _mm256_mul_ps(sz, p0z)),
-            _mm256_mul_ps(e1, _mm256_mul_ps(sz, p1z)),
+            _mm256_mul_ps(e0, _mm256_mul_ps(sz, a0.2)),
+            _mm256_mul_ps(e1, _mm256_mul_ps(sz, a1.2)),
         ),
-        _mm256_mul_ps(e2, _mm256_mul_ps(sz, p2z)),
+        _mm256_mul_ps(e2, _mm256_mul_ps(sz, a2.2)),
     );
-    let t = _mm256_mul_ps(t_scaled, _mm256_div_ps(_mm256_set1_ps(1.0), det));
+    let inv_det = _mm256_div_ps(_mm256_set1_ps(1.0), det);
+    let t = _mm256_mul_ps(t_scaled, inv_det);
     let in_range = _mm256_and_ps(
         _mm256_cmp_ps::<_CMP_GT_OQ>(t, zero),
         _mm256_cmp_ps::<_CMP_LT_OQ>(t, _mm256_set1_ps(t_max)),
@@ -426,7 +468,52 @@ fn candidates_avx2(pack: &TriPack, ray: &TriRay, t_max: f32) -> u32 {
     // SAFETY: as above.
     let tri = unsafe { _mm256_loadu_si256(pack.tri.as_ptr().cast()) };
     let unused = _mm256_castsi256_ps(_mm256_cmpeq_epi32(tri, _mm256_set1_epi32(-1)));
-    _mm256_movemask_ps(_mm256_andnot_ps(_mm256_or_ps(reject, unused), in_range)) as u32
+    let mut mask = _mm256_movemask_ps(_mm256_andnot_ps(_mm256_or_ps(reject, unused), in_range));
+    if mask == 0 {
+        return PackHits::NONE;
+    }
+    // The rounding bound of `edge_rounding`, term by term in its order.
+    let abs = |x| _mm256_andnot_ps(_mm256_set1_ps(-0.0), x);
+    let (g2, g3) = (_mm256_set1_ps(GAMMA_2), _mm256_set1_ps(GAMMA_3));
+    let (asx, asy) = (abs(sx), abs(sy));
+    let err = |(x, y, z): (__m256, __m256, __m256)| {
+        let (x, y, z) = (abs(x), abs(y), abs(z));
+        (
+            _mm256_mul_ps(g3, _mm256_add_ps(x, _mm256_mul_ps(asx, z))),
+            _mm256_mul_ps(g3, _mm256_add_ps(y, _mm256_mul_ps(asy, z))),
+        )
+    };
+    let (p, d) = (
+        [
+            (abs(p0x), abs(p0y)),
+            (abs(p1x), abs(p1y)),
+            (abs(p2x), abs(p2y)),
+        ],
+        [err(a0), err(a1), err(a2)],
+    );
+    let edge = |i: usize, j: usize| {
+        let ((ax, ay), (bx, by)) = (p[i], p[j]);
+        let ((dix, diy), (djx, djy)) = (d[i], d[j]);
+        let mut r = _mm256_add_ps(_mm256_mul_ps(by, dix), _mm256_mul_ps(ax, djy));
+        r = _mm256_add_ps(r, _mm256_mul_ps(bx, diy));
+        r = _mm256_add_ps(r, _mm256_mul_ps(ay, djx));
+        let cross = _mm256_add_ps(_mm256_mul_ps(ax, by), _mm256_mul_ps(ay, bx));
+        _mm256_add_ps(r, _mm256_mul_ps(g2, cross))
+    };
+    let bound = _mm256_add_ps(_mm256_add_ps(edge(1, 2), edge(2, 0)), edge(0, 1));
+    // The scalar test rejects `|det| <= bound`; a NaN bound rejects nothing.
+    mask &= _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_NLE_UQ>(abs(det), bound));
+    let mut hits = PackHits {
+        mask: mask as u32,
+        ..PackHits::NONE
+    };
+    // SAFETY: each store writes one whole `[f32; 8]`.
+    unsafe {
+        _mm256_storeu_ps(hits.t.as_mut_ptr(), t);
+        _mm256_storeu_ps(hits.u.as_mut_ptr(), _mm256_mul_ps(e1, inv_det));
+        _mm256_storeu_ps(hits.v.as_mut_ptr(), _mm256_mul_ps(e2, inv_det));
+    }
+    hits
 }
 
 /// [`Avx2`]'s test, as a function of its own so that the intrinsics inline into it.
@@ -538,7 +625,6 @@ fn entry(node: &WideNode, k: usize, t: f32) -> Entry {
 #[inline(always)]
 fn closest<B: BoxTest>(
     bvh: &WideBvh,
-    tris: &[TriVerts],
     ray: &Ray,
     t_max: f32,
     mut accept: impl FnMut(u32, f32, f32) -> bool,
@@ -546,8 +632,7 @@ fn closest<B: BoxTest>(
     if bvh.nodes.is_empty() {
         return None;
     }
-    let sheared = ShearedRay::new(ray);
-    let tr = tri_ray(&sheared);
+    let tr = tri_ray(ray);
     let r = box_ray(ray);
     let mut best = None;
     let mut t_best = t_max;
@@ -560,21 +645,18 @@ fn closest<B: BoxTest>(
     loop {
         if cur.count > 0 {
             for pack in &bvh.packs[cur.child as usize..(cur.child + cur.count) as usize] {
-                let mut lanes = B::candidates(pack, &tr, t_best);
+                let hits = B::pack_hits(pack, &tr, t_best);
+                let mut lanes = hits.mask;
+                // In lane order, each against the nearest hit so far, as the scalar test
+                // would be called.
                 while lanes != 0 {
-                    let i = pack.tri[lanes.trailing_zeros() as usize];
+                    let l = lanes.trailing_zeros() as usize;
                     lanes &= lanes - 1;
-                    let tri = &tris[i as usize];
-                    if let Some(h) = intersect_triangle(&sheared, tri, t_best)
-                        && (!tri.is_masked() || accept(i, h.u, h.v))
-                    {
-                        t_best = h.t;
-                        best = Some(Hit {
-                            t: h.t,
-                            u: h.u,
-                            v: h.v,
-                            tri: i,
-                        });
+                    let (t, u, v) = (hits.t[l], hits.u[l], hits.v[l]);
+                    let i = pack.tri[l] & !PACK_MASKED;
+                    if t < t_best && (pack.tri[l] & PACK_MASKED == 0 || accept(i, u, v)) {
+                        t_best = t;
+                        best = Some(Hit { t, u, v, tri: i });
                     }
                 }
             }
@@ -630,7 +712,6 @@ fn closest<B: BoxTest>(
 #[inline(always)]
 fn any<B: BoxTest>(
     bvh: &WideBvh,
-    tris: &[TriVerts],
     ray: &Ray,
     t_max: f32,
     mut accept: impl FnMut(u32, f32, f32) -> bool,
@@ -638,8 +719,7 @@ fn any<B: BoxTest>(
     if bvh.nodes.is_empty() {
         return false;
     }
-    let sheared = ShearedRay::new(ray);
-    let tr = tri_ray(&sheared);
+    let tr = tri_ray(ray);
     let r = box_ray(ray);
     let mut stack = Stack::new();
     let mut cur = Entry {
@@ -650,14 +730,13 @@ fn any<B: BoxTest>(
     loop {
         if cur.count > 0 {
             for pack in &bvh.packs[cur.child as usize..(cur.child + cur.count) as usize] {
-                let mut lanes = B::candidates(pack, &tr, t_max);
+                let hits = B::pack_hits(pack, &tr, t_max);
+                let mut lanes = hits.mask;
                 while lanes != 0 {
-                    let i = pack.tri[lanes.trailing_zeros() as usize];
+                    let l = lanes.trailing_zeros() as usize;
                     lanes &= lanes - 1;
-                    let tri = &tris[i as usize];
-                    if intersect_triangle(&sheared, tri, t_max)
-                        .is_some_and(|h| !tri.is_masked() || accept(i, h.u, h.v))
-                    {
+                    let i = pack.tri[l] & !PACK_MASKED;
+                    if pack.tri[l] & PACK_MASKED == 0 || accept(i, hits.u[l], hits.v[l]) {
                         return true;
                     }
                 }

@@ -131,10 +131,9 @@ pub fn path_start(ray: Ray) -> PathState {
 #[inline]
 pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: u32) -> bool {
     // The CPU traverses the wide tree, which finds the hits the GPU's binary tree finds.
-    let (wide, tris) = (&scene.wide, &scene.tris);
+    let wide = &scene.wide;
     st.rays += 1;
-    let Some(hit) =
-        wide.traverse_closest(tris, &st.ray, T_INF, |t, u, v| alpha_test(scene, t, u, v))
+    let Some(hit) = wide.traverse_closest(&st.ray, T_INF, |t, u, v| alpha_test(scene, t, u, v))
     else {
         let w = if st.prev_delta || scene.sky_pmf == 0.0 {
             1.0
@@ -202,7 +201,7 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
             let f = bsdf_eval(mat, wo, wi);
             if f != Vec3::ZERO {
                 st.rays += 1;
-                if !wide.traverse_any(tris, &Ray::new(ls.origin, ls.wi), ls.t_max, |t, u, v| {
+                if !wide.traverse_any(&Ray::new(ls.origin, ls.wi), ls.t_max, |t, u, v| {
                     alpha_test(scene, t, u, v)
                 }) {
                     let w = if ls.delta {
