@@ -58,7 +58,7 @@ fn sample_linear(u: f32, a: f32, b: f32) -> f32 {
         return u;
     }
     let x = u * (a + b) / (a + sqrt(max(a * a + u * (b * b - a * a), 0.0)));
-    return clamp(x, 0.0, 0.99999994);
+    return clamp(x, 0.0, ONE_MINUS_EPSILON);
 }
 
 // mirror: src/render/environment.rs `cell_density`
@@ -128,7 +128,7 @@ fn search_cdf(start: u32, n: u32, u: f32) -> CdfPick {
     if p > 0.0 {
         within = (u - prev) / p;
     }
-    return CdfPick(lo, clamp(within, 0.0, 0.99999994));
+    return CdfPick(lo, clamp(within, 0.0, ONE_MINUS_EPSILON));
 }
 
 // A direction drawn from the environment and its solid-angle density (sample_env's pair).

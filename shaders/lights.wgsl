@@ -41,13 +41,19 @@ struct LightSample {
 // mirror: src/render/lights.rs `sample_light`
 fn sample_light(p: vec3<f32>, ng: vec3<f32>, rng: Rng, depth: u32) -> LightSample {
     var none = LightSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, false, false);
-    // A single light needs no pick, nor its number.
+    // The pair's first number picks the light and, rescaled, is the first of the point on
+    // it, which keeps each light's points stratified (lights.rs says more).
+    var u = rng_2d(rng, depth, DIM_LIGHT_U);
     var k = 0u;
     if params.num_emitters > 1u {
-        k = sample_cdf(rng_1d(rng, depth, DIM_LIGHT_PICK));
+        k = sample_cdf(u.x);
+        var lo = 0.0;
+        if k > 0u {
+            lo = load_emitter_cdf(k - 1u);
+        }
+        u.x = min((u.x - lo) / (load_emitter_cdf(k) - lo), ONE_MINUS_EPSILON);
     }
     let light = load_emitter(k);
-    let u = rng_2d(rng, depth, DIM_LIGHT_U);
     if light == SKY_EMITTER {
         var wi = sample_uniform_sphere(u);
         var pdf = UNIFORM_SPHERE_PDF;

@@ -292,11 +292,11 @@ fn constants_match_rust() {
             Value::F32(_) => panic!("a float DIM"),
         })
         .collect();
-    assert_eq!(dims.len(), 11);
+    assert_eq!(dims.len(), 10);
     assert!(dims.iter().all(|&d| d < rng::DIMS_PER_BOUNCE));
     dims.sort();
     dims.dedup();
-    assert_eq!(dims.len(), 11, "DIM_* values collide");
+    assert_eq!(dims.len(), 10, "DIM_* values collide");
     assert!(list.contains(&(
         "MAT_DIELECTRIC".into(),
         Value::U32(MaterialKind::DIELECTRIC.0)

@@ -11,6 +11,7 @@
 //! rows, over which the radiance is bilinear.
 
 use super::RenderScene;
+use super::sampling::ONE_MINUS_EPSILON;
 use super::texture::{texel, texel_span};
 use crate::scene::{Texture, Wrap};
 use glam::{Vec2, Vec3, Vec4};
@@ -101,7 +102,7 @@ pub fn sample_linear(u: f32, a: f32, b: f32) -> f32 {
         return u;
     }
     let x = u * (a + b) / (a + (a * a + u * (b * b - a * a)).max(0.0).sqrt());
-    x.clamp(0.0, 0.99999994)
+    x.clamp(0.0, ONE_MINUS_EPSILON)
 }
 
 /// The density, relative to the cell's mean, of the bilinear luminance `c` (as
@@ -203,7 +204,7 @@ pub fn search_cdf(scene: &RenderScene, start: u32, n: u32, u: f32) -> (u32, f32)
     let p = cdf_step(scene, start, lo);
     let prev = scene.env_cdf[(start + lo) as usize] - p;
     let within = if p > 0.0 { (u - prev) / p } else { 0.5 };
-    (lo, within.clamp(0.0, 0.99999994))
+    (lo, within.clamp(0.0, ONE_MINUS_EPSILON))
 }
 
 /// A direction drawn from the environment's distribution with the uniform numbers `u`,

@@ -6,7 +6,8 @@ use super::environment::{env_pdf, env_radiance, sample_env};
 use super::integrator::offset_ray_origin;
 use super::rng::{self, Rng};
 use super::sampling::{
-    UNIFORM_SPHERE_PDF, sample_cdf, sample_uniform_sphere, sample_uniform_triangle,
+    ONE_MINUS_EPSILON, UNIFORM_SPHERE_PDF, sample_cdf, sample_uniform_sphere,
+    sample_uniform_triangle,
 };
 use super::texture::{alpha_test, material_at, triangle_uv};
 use super::{LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_SPOT, Light, RenderScene, SKY_EMITTER};
@@ -71,14 +72,20 @@ pub fn sample_light(
     rng: &Rng,
     depth: u32,
 ) -> Option<LightSample> {
-    // A single light needs no pick, nor its number.
+    // The pair's first number picks the light (where there are several) and, rescaled
+    // within the pick's share of [0, 1), is the first of the point on it: the points a
+    // pixel's samples put on each light then stay stratified, where a pick number of its own
+    // would leave each light a scattered subset of them.
+    let mut u = rng.rng_2d(depth, rng::DIM_LIGHT_U);
     let k = if scene.emitter_cdf.len() > 1 {
-        sample_cdf(&scene.emitter_cdf, rng.rng_1d(depth, rng::DIM_LIGHT_PICK))
+        let k = sample_cdf(&scene.emitter_cdf, u.x);
+        let lo = if k > 0 { scene.emitter_cdf[k - 1] } else { 0.0 };
+        u.x = ((u.x - lo) / (scene.emitter_cdf[k] - lo)).min(ONE_MINUS_EPSILON);
+        k
     } else {
         0
     };
     let light = scene.emitters[k];
-    let u = rng.rng_2d(depth, rng::DIM_LIGHT_U);
     if light == SKY_EMITTER {
         let (wi, pdf) = match scene.sky {
             Sky::Environment { .. } => sample_env(scene, u),

@@ -7,7 +7,7 @@
 //! 2020): each pair of dimensions that a stage draws together (pixel x and y, lens u and v,
 //! light u and v, BSDF u and v) takes the first two Sobol dimensions at the sample index
 //! shuffled per (pixel, bounce, pair, seed), each component Owen-scrambled by its own seed;
-//! the single dimensions (light pick, lobe, roulette) take the first. A pixel's samples are
+//! the single dimensions (lobe, roulette) take the first. A pixel's samples are
 //! thus stratified in every pair, and pixels, bounces and pairs stay independent. The
 //! seeds come from `pcg4d` (Jarzynski and Olano, "Hash Functions for GPU Rendering", JCGT
 //! 2020); everything is integer arithmetic and thus exact on every device.
@@ -19,8 +19,8 @@ pub const DIM_PIXEL_X: u32 = 0;
 pub const DIM_PIXEL_Y: u32 = 1;
 pub const DIM_LENS_U: u32 = 2;
 pub const DIM_LENS_V: u32 = 3;
-/// Dimensions used at each path vertex (bounce b counts from 0 at the first hit).
-pub const DIM_LIGHT_PICK: u32 = 4;
+/// Dimensions used at each path vertex (bounce b counts from 0 at the first hit). (4 is
+/// free: the light pick, which had it, now comes from the light pair's first number.)
 pub const DIM_LIGHT_U: u32 = 5;
 pub const DIM_LIGHT_V: u32 = 6;
 pub const DIM_BSDF_LOBE: u32 = 7;
@@ -240,7 +240,7 @@ mod tests {
                     );
                 }
             }
-            for dim in [DIM_LIGHT_PICK, DIM_BSDF_LOBE, DIM_ROULETTE] {
+            for dim in [DIM_BSDF_LOBE, DIM_ROULETTE] {
                 let mut cells = vec![0u32; 256];
                 for sample in 0..256 {
                     let x = Rng::new(pixel, sample, seed).rng_1d(bounce, dim);

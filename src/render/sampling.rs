@@ -40,6 +40,9 @@ pub fn sample_uniform_sphere(u: Vec2) -> Vec3 {
     Vec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 
+/// The largest float below 1: where a uniform number rescaled to [0, 1) is clamped.
+pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+
 /// The pdf of `sample_uniform_sphere`: 1 / (4 pi).
 pub const UNIFORM_SPHERE_PDF: f32 = 0.25 * FRAC_1_PI;
 

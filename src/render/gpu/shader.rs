@@ -15,7 +15,7 @@ use crate::fixed::{FIXED_LIMIT, FIXED_ONE};
 use crate::geometry::{GAMMA_2, GAMMA_3, SLAB_SLACK, T_INF};
 use crate::render::integrator::RR_DEPTH;
 use crate::render::rng;
-use crate::render::sampling::UNIFORM_SPHERE_PDF;
+use crate::render::sampling::{ONE_MINUS_EPSILON, UNIFORM_SPHERE_PDF};
 use crate::render::{
     LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_POINT, LIGHT_SPOT, SKY_EMITTER, TRI_SMOOTH,
     TRI_TANGENT, TRI_UV,
@@ -40,7 +40,6 @@ pub fn shared_constants() -> Vec<(String, Value)> {
         ("DIM_PIXEL_Y", U32(rng::DIM_PIXEL_Y)),
         ("DIM_LENS_U", U32(rng::DIM_LENS_U)),
         ("DIM_LENS_V", U32(rng::DIM_LENS_V)),
-        ("DIM_LIGHT_PICK", U32(rng::DIM_LIGHT_PICK)),
         ("DIM_LIGHT_U", U32(rng::DIM_LIGHT_U)),
         ("DIM_LIGHT_V", U32(rng::DIM_LIGHT_V)),
         ("DIM_BSDF_LOBE", U32(rng::DIM_BSDF_LOBE)),
@@ -75,6 +74,7 @@ pub fn shared_constants() -> Vec<(String, Value)> {
         ("FRAC_PI_2", F32(FRAC_PI_2)),
         ("FRAC_PI_4", F32(FRAC_PI_4)),
         ("UNIFORM_SPHERE_PDF", F32(UNIFORM_SPHERE_PDF)),
+        ("ONE_MINUS_EPSILON", F32(ONE_MINUS_EPSILON)),
         ("FIXED_ONE", F32(FIXED_ONE)),
         ("FIXED_LIMIT", F32(FIXED_LIMIT)),
     ]
