@@ -38,22 +38,33 @@ struct LightSample {
     valid: bool,
 }
 
+// mirror: src/render/lights.rs `LightPick`
+struct LightPick {
+    index: u32,
+    pmf: f32,
+    u: vec2<f32>,
+}
+
+// mirror: src/render/lights.rs `pick_light`
+fn pick_light(u: vec2<f32>) -> LightPick {
+    if params.num_emitters == 1u {
+        return LightPick(0u, load_emitter_cdf(0u), u);
+    }
+    let index = sample_cdf(u.x);
+    var lo = 0.0;
+    if index > 0u {
+        lo = load_emitter_cdf(index - 1u);
+    }
+    let pmf = load_emitter_cdf(index) - lo;
+    return LightPick(index, pmf, vec2<f32>(min((u.x - lo) / pmf, ONE_MINUS_EPSILON), u.y));
+}
+
 // mirror: src/render/lights.rs `sample_light`
 fn sample_light(p: vec3<f32>, ng: vec3<f32>, rng: Rng, depth: u32) -> LightSample {
     var none = LightSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, false, false);
-    // The pair's first number picks the light and, rescaled, is the first of the point on
-    // it, which keeps each light's points stratified (lights.rs says more).
-    var u = rng_2d(rng, depth, DIM_LIGHT_U);
-    var k = 0u;
-    if params.num_emitters > 1u {
-        k = sample_cdf(u.x);
-        var lo = 0.0;
-        if k > 0u {
-            lo = load_emitter_cdf(k - 1u);
-        }
-        u.x = min((u.x - lo) / (load_emitter_cdf(k) - lo), ONE_MINUS_EPSILON);
-    }
-    let light = load_emitter(k);
+    let pick = pick_light(rng_2d(rng, depth, DIM_LIGHT_U));
+    let light = load_emitter(pick.index);
+    let u = pick.u;
     if light == SKY_EMITTER {
         var wi = sample_uniform_sphere(u);
         var pdf = UNIFORM_SPHERE_PDF;
@@ -68,11 +79,7 @@ fn sample_light(p: vec3<f32>, ng: vec3<f32>, rng: Rng, depth: u32) -> LightSampl
         return LightSample(offset_ray_origin(p, ng, wi), wi, T_INF, sky_radiance(wi), params.sky_pmf * pdf, false, true);
     }
     if (light & LIGHT_EMITTER) != 0u {
-        var prev = 0.0;
-        if k > 0u {
-            prev = load_emitter_cdf(k - 1u);
-        }
-        return sample_punctual(light & ~LIGHT_EMITTER, p, ng, load_emitter_cdf(k) - prev);
+        return sample_punctual(light & ~LIGHT_EMITTER, p, ng, pick.pmf);
     }
     let tri = load_tri(light);
     let bary = sample_uniform_triangle(u);

@@ -95,14 +95,17 @@ fn test_sampling(@builtin(global_invocation_id) gid: vec3<u32>) {
     case_out(i, u4(vec4<f32>(d, b)), u4(vec4<f32>(c, cosine_hemisphere_pdf(c.z))));
 }
 
-// in: (u, _, _, _) | out: (emitter index, its triangle, power_heuristic(u, 1 - u) bits, _)
+// in: (u xy, _, _) | out: (pick_light's index, its emitter, power_heuristic(u.x, 1 - u.x)
+// bits, _), (its pmf, u.x, u.y bits, _)
 @compute @workgroup_size(64)
 fn test_light_pick(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = case_index(gid);
     if i >= case_count() { return; }
-    let u = f4(case_in(i, 0u)).x;
-    let k = sample_cdf(u);
-    case_out(i, vec4<u32>(k, load_emitter(k), bitcast<u32>(power_heuristic(u, 1.0 - u)), 0u), vec4<u32>(0u));
+    let u = f4(case_in(i, 0u)).xy;
+    let pick = pick_light(u);
+    let k = pick.index;
+    case_out(i, vec4<u32>(k, load_emitter(k), bitcast<u32>(power_heuristic(u.x, 1.0 - u.x)), 0u),
+        vec4<u32>(bitcast<u32>(pick.pmf), bitcast<u32>(pick.u.x), bitcast<u32>(pick.u.y), 0u));
 }
 
 // in: (wo xyz, material), (u_lobe, u1, u2, _) | out: (wi xyz, pdf), (weight xyz, flags:

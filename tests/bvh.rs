@@ -6,7 +6,7 @@ mod common;
 use common::rand::hashed_unit;
 use glam::Vec3;
 use meshtrace::bvh::Hit;
-use meshtrace::bvh::wide::{LEAF_MAX, WIDTH};
+use meshtrace::bvh::wide::{LEAF_MAX, PACK_MASKED, WIDTH};
 use meshtrace::bvh::{BuildParams, Bvh, WideBvh, solid, traverse_any, traverse_closest, validate};
 use meshtrace::geometry::{ShearedRay, T_INF, TriVerts, intersect_triangle};
 use meshtrace::math::{Aabb, Ray};
@@ -55,20 +55,36 @@ fn rays(bounds: Aabb, n: u32) -> Vec<Ray> {
 }
 
 fn check(name: &str, corners: &[[Vec3; 3]]) {
-    check_rays(name, corners, |bounds| rays(bounds, 100_000));
+    check_rays(name, corners, false, |bounds| rays(bounds, 100_000));
+}
+
+/// The alpha test of a masked run: a masked triangle's hits count where `u > 0.3`.
+fn cutout(_tri: u32, u: f32, _v: f32) -> bool {
+    u > 0.3
 }
 
 /// Every tree's closest and any hit on `corners` against brute force, for the rays
-/// `make_rays` gives for the triangles' bounds.
-fn check_rays(name: &str, corners: &[[Vec3; 3]], make_rays: impl FnOnce(Aabb) -> Vec<Ray>) {
+/// `make_rays` gives for the triangles' bounds. With `masked`, every third triangle (in
+/// leaf order) is masked, and its hits count where [`cutout`] passes.
+fn check_rays(
+    name: &str,
+    corners: &[[Vec3; 3]],
+    masked: bool,
+    make_rays: impl FnOnce(Aabb) -> Vec<Ray>,
+) {
     let bounds: Vec<Aabb> = corners.iter().map(|c| Aabb::from_points(c)).collect();
     let bvh = Bvh::build(&bounds, &BuildParams::default()).expect("the tree fits the stack");
     validate(&bvh, &bounds).unwrap_or_else(|e| panic!("{name}: {e}"));
-    let tris: Vec<TriVerts> = bvh
-        .order
-        .iter()
-        .map(|&i| TriVerts::new(corners[i as usize]))
+    let tris: Vec<TriVerts> = (bvh.order.iter().enumerate())
+        .map(|(k, &i)| {
+            let mut t = TriVerts::new(corners[i as usize]);
+            if masked && k % 3 == 0 {
+                t.set_masked();
+            }
+            t
+        })
         .collect();
+    let accept: fn(u32, f32, f32) -> bool = if masked { cutout } else { solid };
     let wide = WideBvh::collapse(&bvh.nodes, &tris);
     validate_wide(&wide, &tris).unwrap_or_else(|e| panic!("{name}: {e}"));
     let all = bounds.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
@@ -106,6 +122,7 @@ fn check_rays(name: &str, corners: &[[Vec3; 3]], make_rays: impl FnOnce(Aabb) ->
                 }
                 if let Some(h) =
                     intersect_triangle(&ShearedRay::new(ray), t, best.map_or(T_INF, |b| b.0))
+                    && (!t.is_masked() || accept(k as u32, h.u, h.v))
                 {
                     best = Some((h.t, k as u32));
                 }
@@ -118,19 +135,20 @@ fn check_rays(name: &str, corners: &[[Vec3; 3]], make_rays: impl FnOnce(Aabb) ->
             };
             // The binary tree (the GPU's), the wide one (the CPU's) and its portable test.
             let hits = [
-                traverse_closest(&bvh.nodes, &tris, ray, T_INF, solid),
-                wide.traverse_closest(ray, T_INF, solid),
-                wide.portable().traverse_closest(ray, T_INF, solid),
+                traverse_closest(&bvh.nodes, &tris, ray, T_INF, accept),
+                wide.traverse_closest(ray, T_INF, accept),
+                wide.portable().traverse_closest(ray, T_INF, accept),
             ];
             let anys = [
-                traverse_any(&bvh.nodes, &tris, ray, T_INF, solid),
-                wide.traverse_any(ray, T_INF, solid),
-                wide.portable().traverse_any(ray, T_INF, solid),
+                traverse_any(&bvh.nodes, &tris, ray, T_INF, accept),
+                wide.traverse_any(ray, T_INF, accept),
+                wide.portable().traverse_any(ray, T_INF, accept),
             ];
             // The wide tree's hit on the binary tree's triangle has its distance and
             // barycentrics bit for bit; its SIMD and portable tests agree entirely.
+            let bits = |h: Hit| [h.t, h.u, h.v].map(f32::to_bits);
             let exact = match (hits[0], hits[1]) {
-                (Some(a), Some(b)) if a.tri == b.tri => a == b,
+                (Some(a), Some(b)) if a.tri == b.tri => bits(a) == bits(b),
                 _ => true,
             };
             let all_same = hits.iter().all(|&h| same(h)) && exact && hits[1] == hits[2];
@@ -151,17 +169,17 @@ fn check_rays(name: &str, corners: &[[Vec3; 3]], make_rays: impl FnOnce(Aabb) ->
     );
     // A shorter ray must stop at the hit: any-hit with t_max just short of the closest hit is false.
     for ray in rays.iter().take(10_000) {
-        if let Some(h) = traverse_closest(&bvh.nodes, &tris, ray, T_INF, solid) {
+        if let Some(h) = traverse_closest(&bvh.nodes, &tris, ray, T_INF, accept) {
             assert!(
-                !traverse_any(&bvh.nodes, &tris, ray, h.t * 0.999, solid),
+                !traverse_any(&bvh.nodes, &tris, ray, h.t * 0.999, accept),
                 "{name}: any-hit beyond t_max"
             );
             assert!(
-                !wide.traverse_any(ray, h.t * 0.999, solid),
+                !wide.traverse_any(ray, h.t * 0.999, accept),
                 "{name}: wide any-hit beyond t_max"
             );
             assert!(
-                wide.traverse_closest(ray, h.t * 0.999, solid).is_none(),
+                wide.traverse_closest(ray, h.t * 0.999, accept).is_none(),
                 "{name}: wide closest hit beyond t_max"
             );
             assert!(traverse_any(
@@ -169,7 +187,7 @@ fn check_rays(name: &str, corners: &[[Vec3; 3]], make_rays: impl FnOnce(Aabb) ->
                 &tris,
                 ray,
                 h.t * 1.001 + 1e-6,
-                solid
+                accept
             ));
         }
     }
@@ -178,6 +196,15 @@ fn check_rays(name: &str, corners: &[[Vec3; 3]], make_rays: impl FnOnce(Aabb) ->
 #[test]
 fn closest_hit_matches_brute_force_on_a_generated_mesh() {
     check("generated", &generated_mesh());
+}
+
+/// Masked triangles count only where their alpha test passes, in every traversal; the wide
+/// tree knows them from its packs alone.
+#[test]
+fn masked_triangles_count_where_their_alpha_test_passes() {
+    check_rays("generated, masked", &generated_mesh(), true, |b| {
+        rays(b, 20_000)
+    });
 }
 
 /// Triangles and rays in one tilted plane (up to rounding): there the edge functions are
@@ -197,7 +224,7 @@ fn rays_in_the_plane_of_the_triangles_hit_what_the_scalar_test_hits() {
             [at(x, y), corner(3), corner(5)]
         })
         .collect();
-    check_rays("in-plane", &corners, |_| {
+    check_rays("in-plane", &corners, false, |_| {
         (0..20_000)
             .map(|i| {
                 let origin = at(14.0 * rand(i, 200) - 7.0, 14.0 * rand(i, 201) - 7.0);
@@ -219,7 +246,7 @@ fn sampled_splits_keep_the_tree_exact_and_cheap() {
         .collect();
     corners.extend(generated_mesh());
     assert!(corners.len() >= 4 * 4096, "the root must be sampled");
-    check_rays("sphere and soup", &corners, |b| rays(b, 20_000));
+    check_rays("sphere and soup", &corners, false, |b| rays(b, 20_000));
     let bounds: Vec<Aabb> = corners.iter().map(|c| Aabb::from_points(c)).collect();
     let fast = Bvh::build(&bounds, &BuildParams::default()).unwrap().stats;
     let precise = Bvh::build(&bounds, &BuildParams::precise()).unwrap().stats;
@@ -369,7 +396,12 @@ fn validate_wide(wide: &WideBvh, tris: &[TriVerts]) -> Result<(), String> {
             }
             for &(p, l) in &lanes[..used] {
                 let pack = &wide.packs[p];
-                let t = pack.tri[l] as usize;
+                let t = (pack.tri[l] & !PACK_MASKED) as usize;
+                if (pack.tri[l] & PACK_MASKED != 0) != tris.get(t).is_some_and(|t| t.is_masked()) {
+                    return Err(format!(
+                        "pack {p} lane {l}: the mask bit is not triangle {t}'s"
+                    ));
+                }
                 let slot = covered
                     .get_mut(t)
                     .ok_or(format!("pack {p} names triangle {t}"))?;

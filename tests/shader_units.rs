@@ -26,6 +26,7 @@ use meshtrace::render::camera::{CameraRays, generate_camera_ray, pixel_centre_ra
 use meshtrace::render::environment::{env_pdf, env_radiance, sample_env};
 use meshtrace::render::gpu::GpuContext;
 use meshtrace::render::integrator::{first_hit, trace_path};
+use meshtrace::render::lights::pick_light;
 use meshtrace::render::rng::{DIMS_PER_BOUNCE, Rng, dim_pair, pcg4d};
 use meshtrace::render::sampling::{
     cosine_hemisphere_pdf, power_heuristic, sample_cdf, sample_concentric_disk,
@@ -636,15 +637,37 @@ fn light_pick_matches() {
     while us.len() < 20_000 {
         us.push(r.unit());
     }
-    let cases: Vec<Case> = us.iter().map(|&u| [[b(u), 0, 0, 0], [0; 4]]).collect();
+    let v = |i: usize| (i as f32 + 0.5) / us.len() as f32;
+    let cases: Vec<Case> = (us.iter().enumerate())
+        .map(|(i, &u)| [[b(u), b(v(i)), 0, 0], [0; 4]])
+        .collect();
     let out = run(&ctx, &rs, &settings, "test_light_pick", &cases);
     let mut fail = Failures::new("test_light_pick");
     let mut ph = Worst::new("power_heuristic (relative)", 1e-6);
+    // WGSL's division may be off by 2.5 ulp.
+    let mut rescaled = Worst::new("pick_light's rescaled u (abs)", 1e-6);
     let mut picked = vec![0usize; rs.emitters.len()];
-    for (&u, o) in us.iter().zip(&out) {
-        let k = sample_cdf(&rs.emitter_cdf, u);
+    for (i, (&u, o)) in us.iter().zip(&out).enumerate() {
+        let pick = pick_light(&rs, Vec2::new(u, v(i)));
+        let k = pick.index;
+        assert_eq!(
+            k,
+            sample_cdf(&rs.emitter_cdf, u),
+            "pick_light picks by the CDF"
+        );
+        assert!(
+            (0.0..1.0).contains(&pick.u.x),
+            "u {u}: rescaled to {}",
+            pick.u.x
+        );
         picked[k] += 1;
         let want_ph = power_heuristic(u, 1.0 - u);
+        rescaled.add((pick.u.x - f(o[1][1])).abs() as f64, || {
+            format!("u {u}: GPU {}, CPU {}", f(o[1][1]), pick.u.x)
+        });
+        if o[1][0] != b(pick.pmf) || o[1][2] != b(pick.u.y) {
+            fail.add(|| format!("u {u}: GPU pmf and v {:?}, CPU {pick:?}", &o[1][..3]));
+        }
         if o[0][0] as usize != k || o[0][1] != rs.emitters[k] {
             fail.add(|| {
                 format!(
@@ -668,6 +691,7 @@ fn light_pick_matches() {
     );
     fail.check(us.len());
     ph.check("test_light_pick");
+    rescaled.check("test_light_pick");
     assert!(picked.iter().all(|&n| n > 0), "every emitter is tested");
 }
 

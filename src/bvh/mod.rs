@@ -79,11 +79,23 @@ pub enum BvhError {
         "the BVH is {depth} levels deep but traversal stacks hold {STACK_SIZE}; the mesh has extreme clustering of degenerate geometry"
     )]
     TooDeep { depth: u32 },
+    #[error("the scene has {triangles} triangles; meshtrace renders at most {MAX_TRIANGLES}")]
+    TooMany { triangles: usize },
 }
+
+/// The most triangles a tree takes: their indices stay below bit 31, which marks masked
+/// triangles in the wide tree's packs (`wide::PACK_MASKED`) and punctual lights in the
+/// emitter table.
+pub const MAX_TRIANGLES: usize = (1 << 31) - 1;
 
 impl Bvh {
     /// Builds a tree over triangle bounds; the input order is kept in [`Bvh::order`].
     pub fn build(bounds: &[Aabb], params: &BuildParams) -> Result<Self, BvhError> {
+        if bounds.len() > MAX_TRIANGLES {
+            return Err(BvhError::TooMany {
+                triangles: bounds.len(),
+            });
+        }
         let start = std::time::Instant::now();
         let mut bvh = build::build(bounds, params);
         bvh.stats.build_seconds = start.elapsed().as_secs_f64();

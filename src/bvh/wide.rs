@@ -8,8 +8,9 @@
 //! sequence runs the watertight test on the eight triangles at once, its edge functions,
 //! distance, barycentrics and rounding bound each computed in the order and rounding of the
 //! scalar test, so that a lane hits exactly where `intersect_triangle` would, with the same
-//! distance and barycentrics, and the traversal never reads the triangle table (a portable
-//! build calls the scalar test on each lane). The wide traversal thus returns the binary
+//! distance and barycentrics, and the traversal never reads the triangle table (the portable
+//! path, on a CPU without AVX2, calls the scalar test on each lane). The wide traversal thus
+//! returns the binary
 //! traversal's hit (the same triangle, distance and barycentrics), except where two
 //! triangles are hit at exactly the same distance, where either may be returned. The GPU
 //! keeps the binary tree (`shaders/traverse.wgsl`), which [`super::traverse_closest`]
@@ -24,8 +25,8 @@ use std::mem::MaybeUninit;
 pub const WIDTH: usize = 8;
 
 /// The bit of [`TriPack::tri`] that marks a triangle whose hits pass an alpha test first, so
-/// that the traversal need not read the triangle table; the other bits are the index.
-/// (Triangle indices stay below it, as those of `RenderScene::emitters` do.)
+/// that the traversal need not read the triangle table; the other bits are the index, which
+/// stays below it ([`super::MAX_TRIANGLES`]).
 pub const PACK_MASKED: u32 = 1 << 31;
 
 /// The most triangles of a leaf: a binary subtree of at most this many becomes one leaf.
@@ -194,14 +195,14 @@ impl WideBvh {
         any::<Portable>(self, ray, t_max, accept)
     }
 
-    /// The same traversals with the portable box test whatever the CPU, so that tests can
-    /// compare the two box tests.
+    /// The same traversals with the portable box and pack tests whatever the CPU, so that
+    /// tests can compare the two implementations.
     pub fn portable(&self) -> PortableWide<'_> {
         PortableWide(self)
     }
 }
 
-/// [`WideBvh`] traversed with the portable box test only.
+/// [`WideBvh`] traversed with the portable box and pack tests only.
 pub struct PortableWide<'a>(&'a WideBvh);
 
 impl PortableWide<'_> {
@@ -267,7 +268,8 @@ fn pack(tris: &[TriVerts], range: std::ops::Range<u32>) -> TriPack {
 }
 
 /// A ray as the pack test takes it: the [`ShearedRay`], and its frame as arrays, with the
-/// axes that become x, y and z and the origin in that order.
+/// axes that become x, y and z and the origin in that order (which only the AVX2 test reads).
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
 struct TriRay {
     sheared: ShearedRay,
     axes: [usize; 3],
@@ -313,11 +315,12 @@ struct BoxRay {
     inv_dir: [f32; 3],
 }
 
-/// The slab test of a node's eight boxes against a ray: the mask of the boxes hit with
-/// `t_near <= t_far` and each box's `t_near`, computed as `geometry::intersect_aabb` does
-/// (the same rounding, and the same slack on `t_far`), so both implementations agree bit
-/// for bit.
-trait BoxTest {
+/// The tests the traversal runs eight lanes at a time: a node's boxes and a pack's
+/// triangles. Both implementations agree bit for bit.
+trait WideTests {
+    /// The slab test of a node's eight boxes against a ray: the mask of the boxes hit with
+    /// `t_near <= t_far` and each box's `t_near`, computed as `geometry::intersect_aabb`
+    /// does (the same rounding, and the same slack on `t_far`).
     fn hits(node: &WideNode, ray: &BoxRay, t_max: f32) -> (u32, [f32; WIDTH]);
 
     /// `intersect_triangle` with `t_max` on each lane of `pack`, bit for bit.
@@ -335,10 +338,10 @@ fn max(a: f32, b: f32) -> f32 {
     if a > b { a } else { b }
 }
 
-/// The box test as a loop over the slots.
+/// The tests as loops over the lanes.
 struct Portable;
 
-impl BoxTest for Portable {
+impl WideTests for Portable {
     #[inline(always)]
     fn hits(node: &WideNode, ray: &BoxRay, t_max: f32) -> (u32, [f32; WIDTH]) {
         let mut near = [0.0; WIDTH];
@@ -381,12 +384,12 @@ impl BoxTest for Portable {
     }
 }
 
-/// The box test in AVX registers, eight slots at once.
+/// The tests in AVX registers, eight lanes at once.
 #[cfg(target_arch = "x86_64")]
 struct Avx2;
 
 #[cfg(target_arch = "x86_64")]
-impl BoxTest for Avx2 {
+impl WideTests for Avx2 {
     #[inline(always)]
     fn hits(node: &WideNode, ray: &BoxRay, t_max: f32) -> (u32, [f32; WIDTH]) {
         // SAFETY: only reached from `closest_avx2` and `any_avx2`, which run where the CPU
@@ -492,12 +495,12 @@ fn pack_hits_avx2(pack: &TriPack, ray: &TriRay, t_max: f32) -> PackHits {
         [err(a0), err(a1), err(a2)],
     );
     let edge = |i: usize, j: usize| {
-        let ((ax, ay), (bx, by)) = (p[i], p[j]);
+        let ((pix, piy), (pjx, pjy)) = (p[i], p[j]);
         let ((dix, diy), (djx, djy)) = (d[i], d[j]);
-        let mut r = _mm256_add_ps(_mm256_mul_ps(by, dix), _mm256_mul_ps(ax, djy));
-        r = _mm256_add_ps(r, _mm256_mul_ps(bx, diy));
-        r = _mm256_add_ps(r, _mm256_mul_ps(ay, djx));
-        let cross = _mm256_add_ps(_mm256_mul_ps(ax, by), _mm256_mul_ps(ay, bx));
+        let mut r = _mm256_add_ps(_mm256_mul_ps(pjy, dix), _mm256_mul_ps(pix, djy));
+        r = _mm256_add_ps(r, _mm256_mul_ps(pjx, diy));
+        r = _mm256_add_ps(r, _mm256_mul_ps(piy, djx));
+        let cross = _mm256_add_ps(_mm256_mul_ps(pix, pjy), _mm256_mul_ps(piy, pjx));
         _mm256_add_ps(r, _mm256_mul_ps(g2, cross))
     };
     let bound = _mm256_add_ps(_mm256_add_ps(edge(1, 2), edge(2, 0)), edge(0, 1));
@@ -623,7 +626,7 @@ fn entry(node: &WideNode, k: usize, t: f32) -> Entry {
 }
 
 #[inline(always)]
-fn closest<B: BoxTest>(
+fn closest<B: WideTests>(
     bvh: &WideBvh,
     ray: &Ray,
     t_max: f32,
@@ -710,7 +713,7 @@ fn closest<B: BoxTest>(
 }
 
 #[inline(always)]
-fn any<B: BoxTest>(
+fn any<B: WideTests>(
     bvh: &WideBvh,
     ray: &Ray,
     t_max: f32,

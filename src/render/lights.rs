@@ -13,7 +13,7 @@ use super::texture::{alpha_test, material_at, triangle_uv};
 use super::{LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_SPOT, Light, RenderScene, SKY_EMITTER};
 use crate::geometry::{self, T_INF};
 use crate::scene::{NO_TEXTURE, Sky};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 /// Radiance arriving along unit `dir` from outside the scene.
 /// mirror: shaders/lights.wgsl `sky_radiance`
@@ -62,7 +62,43 @@ pub struct LightSample {
     pub delta: bool,
 }
 
-/// Picks a light by the emitter CDF and a point (triangle) or direction (sky) on it, as
+/// The light next event estimation samples, and the pair of numbers its own sampling then
+/// takes. mirror: shaders/lights.wgsl `LightPick`
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightPick {
+    /// The entry of `RenderScene::emitters`.
+    pub index: usize,
+    /// The probability of its pick.
+    pub pmf: f32,
+    pub u: Vec2,
+}
+
+/// Picks a light for the light pair `u`: where there are several, `u.x` picks by the emitter
+/// CDF and is then rescaled within the pick's share of [0, 1), so that the points a pixel's
+/// samples put on each light stay stratified (a pick number of its own would leave each
+/// light a scattered subset of them). As in pbrt-v4 and Mitsuba 3, which reuse a number the
+/// same way, the rescaled number keeps fewer bits the rarer its pick: 24 less log2 of
+/// 1 / `pmf`. mirror: shaders/lights.wgsl `pick_light`
+pub fn pick_light(scene: &RenderScene, u: Vec2) -> LightPick {
+    let cdf = &scene.emitter_cdf;
+    if cdf.len() == 1 {
+        return LightPick {
+            index: 0,
+            pmf: cdf[0],
+            u,
+        };
+    }
+    let index = sample_cdf(cdf, u.x);
+    let lo = if index > 0 { cdf[index - 1] } else { 0.0 };
+    let pmf = cdf[index] - lo;
+    LightPick {
+        index,
+        pmf,
+        u: Vec2::new(((u.x - lo) / pmf).min(ONE_MINUS_EPSILON), u.y),
+    }
+}
+
+/// Picks a light ([`pick_light`]) and a point (triangle) or direction (sky) on it, as
 /// seen from surface point `p` with geometric normal `ng` facing the viewer. `None` when
 /// the point faces away. mirror: shaders/lights.wgsl `sample_light`
 pub fn sample_light(
@@ -72,20 +108,8 @@ pub fn sample_light(
     rng: &Rng,
     depth: u32,
 ) -> Option<LightSample> {
-    // The pair's first number picks the light (where there are several) and, rescaled
-    // within the pick's share of [0, 1), is the first of the point on it: the points a
-    // pixel's samples put on each light then stay stratified, where a pick number of its own
-    // would leave each light a scattered subset of them.
-    let mut u = rng.rng_2d(depth, rng::DIM_LIGHT_U);
-    let k = if scene.emitter_cdf.len() > 1 {
-        let k = sample_cdf(&scene.emitter_cdf, u.x);
-        let lo = if k > 0 { scene.emitter_cdf[k - 1] } else { 0.0 };
-        u.x = ((u.x - lo) / (scene.emitter_cdf[k] - lo)).min(ONE_MINUS_EPSILON);
-        k
-    } else {
-        0
-    };
-    let light = scene.emitters[k];
+    let pick = pick_light(scene, rng.rng_2d(depth, rng::DIM_LIGHT_U));
+    let (light, u) = (scene.emitters[pick.index], pick.u);
     if light == SKY_EMITTER {
         let (wi, pdf) = match scene.sky {
             Sky::Environment { .. } => sample_env(scene, u),
@@ -104,9 +128,7 @@ pub fn sample_light(
         });
     }
     if light & LIGHT_EMITTER != 0 {
-        let prev = if k > 0 { scene.emitter_cdf[k - 1] } else { 0.0 };
-        let pmf = scene.emitter_cdf[k] - prev;
-        return sample_punctual(scene, light & !LIGHT_EMITTER, p, ng, pmf);
+        return sample_punctual(scene, light & !LIGHT_EMITTER, p, ng, pick.pmf);
     }
     let tri = &scene.tris[light as usize];
     let [a, b, c] = tri.corners();

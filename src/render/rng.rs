@@ -19,8 +19,8 @@ pub const DIM_PIXEL_X: u32 = 0;
 pub const DIM_PIXEL_Y: u32 = 1;
 pub const DIM_LENS_U: u32 = 2;
 pub const DIM_LENS_V: u32 = 3;
-/// Dimensions used at each path vertex (bounce b counts from 0 at the first hit). (4 is
-/// free: the light pick, which had it, now comes from the light pair's first number.)
+// 4 is free: the light pick, which had it, comes from the light pair's first number.
+/// Dimensions used at each path vertex (bounce b counts from 0 at the first hit).
 pub const DIM_LIGHT_U: u32 = 5;
 pub const DIM_LIGHT_V: u32 = 6;
 pub const DIM_BSDF_LOBE: u32 = 7;
