@@ -140,6 +140,10 @@ pub struct Rng {
     pub pixel: u32,
     pub sample: u32,
     pub seed: u32,
+    /// `sample` with its bits reversed, as the index shuffle of every draw takes it: kept
+    /// so that draws do not reverse it again (x86 has no bit-reversal instruction; the WGSL
+    /// twin, whose `reverseBits` is one, keeps no such copy).
+    sample_reversed: u32,
 }
 
 impl Rng {
@@ -148,6 +152,7 @@ impl Rng {
             pixel,
             sample,
             seed,
+            sample_reversed: sample.reverse_bits(),
         }
     }
 
@@ -186,7 +191,10 @@ impl Rng {
     fn pair_index(&self, bounce: u32, pair: u32) -> ([u32; 4], u32) {
         let key = bounce.wrapping_mul(DIMS_PER_BOUNCE).wrapping_add(pair);
         let seeds = pcg4d([self.pixel, key, self.seed, 0x5eed]);
-        (seeds, owen_scramble(self.sample, seeds[0]))
+        (
+            seeds,
+            owen_hash(self.sample_reversed, seeds[0]).reverse_bits(),
+        )
     }
 }
 
