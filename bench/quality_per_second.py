@@ -72,6 +72,7 @@ SCENES = {
 }
 GOAL = 1.5
 WARMUP_SEED = 999_983
+# tests/cli.rs checks this pattern against the CLI's output
 TIME_RE = re.compile(r" in ([0-9]+(?:\.[0-9]+)?) s \(")
 
 

@@ -551,3 +551,67 @@ fn hardware_ray_queries_are_refused_where_there_are_none() {
         &["--accel hardware", "offers no hardware ray queries"],
     );
 }
+
+/// bench/quality_per_second.py and bench/device.sh read the render time (device.sh also the
+/// ray rate) from `render`'s summary line, each with its own `TIME_RE`: every one of them must
+/// match the line, so that a change to it fails here and not on a lent GPU. Skips, saying
+/// so, where there is no python3.
+#[test]
+fn the_benchmark_scripts_parse_the_render_summary() {
+    let probe =
+        "import re, sys; m = re.search(sys.argv[1], sys.stdin.read()); sys.exit(0 if m else 1)";
+    if Command::new("python3").arg("--version").output().is_err() {
+        eprintln!("skipped: no python3 to run the scripts' patterns");
+        return;
+    }
+    let dir = TempDir::new("summary");
+    let scene = common::fs::root().join("assets/cornell/cornell.toml");
+    let (code, stderr) = run(
+        &dir,
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            "out.exr",
+            "--spp",
+            "1",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--device",
+            "cpu",
+        ],
+    );
+    assert_eq!(code, 0, "{stderr}");
+    for script in ["bench/quality_per_second.py", "bench/device.sh"] {
+        let text = std::fs::read_to_string(common::fs::root().join(script)).unwrap();
+        let patterns: Vec<&str> = text
+            .lines()
+            .filter_map(|l| l.trim().strip_prefix("TIME_RE = re.compile(r\""))
+            .filter_map(|l| l.strip_suffix("\")"))
+            .collect();
+        assert_eq!(
+            patterns.len(),
+            1,
+            "{script}: one TIME_RE = re.compile(r\"...\")"
+        );
+        let mut child = Command::new("python3")
+            .args(["-c", probe, patterns[0]])
+            .stdin(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        use std::io::Write;
+        child
+            .stdin
+            .take()
+            .unwrap()
+            .write_all(stderr.as_bytes())
+            .unwrap();
+        assert!(
+            child.wait().unwrap().success(),
+            "{script}'s TIME_RE {:?} does not match render's output:\n{stderr}",
+            patterns[0]
+        );
+    }
+}
