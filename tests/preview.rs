@@ -53,8 +53,12 @@ impl Display {
         }
         // A test that failed while holding the lock poisons it; the next may still run.
         let guard = DISPLAYS.lock().unwrap_or_else(|e| e.into_inner());
+        // -noreset: an X server otherwise resets when its last client leaves, and a client
+        // that connects meanwhile is refused; the searches for the window come and go
+        // every 100 ms, so meshtrace's own connection could meet a reset.
         let mut server = Command::new("Xvfb")
             .args([
+                "-noreset",
                 "-displayfd",
                 "1",
                 "-screen",
