@@ -10,11 +10,10 @@
 //! scalar test, so that a lane hits exactly where `intersect_triangle` would, with the same
 //! distance and barycentrics, and the traversal never reads the triangle table (the portable
 //! path, on a CPU without AVX2, calls the scalar test on each lane). The wide traversal thus
-//! returns the binary
-//! traversal's hit (the same triangle, distance and barycentrics), except where two
-//! triangles are hit at exactly the same distance, where either may be returned. The GPU
-//! keeps the binary tree (`shaders/traverse.wgsl`), which [`super::traverse_closest`]
-//! mirrors.
+//! returns the binary traversal's hit (the same triangle, distance and barycentrics), except
+//! where two triangles are hit at exactly the same distance, where either may be returned.
+//! The GPU keeps the binary tree (`shaders/traverse.wgsl`), which
+//! [`super::traverse_closest`] mirrors.
 
 use super::{BvhNode, Hit, STACK_SIZE};
 use crate::geometry::{SLAB_SLACK, ShearedRay, T_INF, TriVerts, intersect_triangle, safe_inverse};
