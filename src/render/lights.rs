@@ -40,8 +40,13 @@ pub fn sky_pdf(scene: &RenderScene, dir: Vec3) -> f32 {
 /// mirror: shaders/lights.wgsl `light_pdf`
 #[inline]
 pub fn light_pdf(scene: &RenderScene, tri: u32, dist: f32, cos_l: f32) -> f32 {
-    let pmf = scene.shading[tri as usize].emitter_pmf;
     let area = geometry::triangle_area(&scene.tris[tri as usize]);
+    area_to_solid_angle(scene.shading[tri as usize].emitter_pmf, area, dist, cos_l)
+}
+
+/// [`light_pdf`]'s arithmetic, given the triangle's pick probability and area.
+#[inline]
+fn area_to_solid_angle(pmf: f32, area: f32, dist: f32, cos_l: f32) -> f32 {
     pmf * dist * dist / (cos_l * area)
 }
 
@@ -131,6 +136,7 @@ pub fn sample_light(
         return sample_punctual(scene, light & !LIGHT_EMITTER, p, ng, pick.pmf);
     }
     let tri = &scene.tris[light as usize];
+    let shape = &scene.emitter_shapes[pick.index];
     let [a, b, c] = tri.corners();
     let bary = sample_uniform_triangle(u);
     let q = (1.0 - bary.x - bary.y) * a + bary.x * b + bary.y * c;
@@ -138,7 +144,7 @@ pub fn sample_light(
     let to_light = q - origin;
     let dist = to_light.length();
     let wi = to_light / dist;
-    let cos_l = -wi.dot(geometry::geometric_normal(tri));
+    let cos_l = -wi.dot(shape.normal);
     // A point that an alpha mask cuts out emits nothing.
     if !(cos_l > 0.0 && dist > 0.0)
         || (tri.is_masked() && !alpha_test(scene, light, bary.x, bary.y))
@@ -156,7 +162,12 @@ pub fn sample_light(
         wi,
         t_max: dist * (1.0 - 1e-4),
         le,
-        pdf: light_pdf(scene, light, dist, cos_l),
+        pdf: area_to_solid_angle(
+            scene.shading[light as usize].emitter_pmf,
+            shape.area,
+            dist,
+            cos_l,
+        ),
         delta: false,
     })
 }
