@@ -133,6 +133,21 @@ pub fn u32_to_unit(x: u32) -> f32 {
     (x >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 
+/// `x.reverse_bits()` in three instructions where the CPU has GFNI (x86 has no bit
+/// reversal of its own): an affine transform over GF(2) that reverses the bits of each byte,
+/// then a byte swap.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "gfni")]
+#[inline]
+fn reverse_bits_gfni(x: u32) -> u32 {
+    use std::arch::x86_64::*;
+    // The 8x8 bit matrix whose row k picks bit 7 - k: each byte's bits reversed.
+    const REVERSE_BYTE: u64 = 0x8040_2010_0804_0201;
+    let v = _mm_cvtsi32_si128(x as i32);
+    let r = _mm_gf2p8affine_epi64_epi8::<0>(v, _mm_set1_epi64x(REVERSE_BYTE as i64));
+    (_mm_cvtsi128_si32(r) as u32).swap_bytes()
+}
+
 /// The random stream of one camera sample: the key that, with a bounce and a
 /// dimension, names every number the path uses. mirror: shaders/rng.wgsl `Rng`
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -166,7 +181,7 @@ impl Rng {
     /// component. mirror: shaders/rng.wgsl `rng_u32`
     pub fn rng_u32(&self, bounce: u32, dim: u32) -> u32 {
         let (pair, c) = dim_pair(dim);
-        let (seeds, index) = self.pair_index(bounce, pair);
+        let (seeds, index) = self.pair_index(bounce, pair, u32::reverse_bits);
         owen_hash(sobol_reversed(index, c), seeds[1 + c as usize]).reverse_bits()
     }
 
@@ -179,22 +194,41 @@ impl Rng {
             (dim, 1),
             "dimension {dim} starts no pair"
         );
-        let (seeds, index) = self.pair_index(bounce, dim);
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("gfni") {
+            // SAFETY: the CPU has GFNI, the only requirement of `rng_2d_gfni`.
+            return unsafe { self.rng_2d_gfni(bounce, dim) };
+        }
+        self.rng_2d_with(bounce, dim, u32::reverse_bits)
+    }
+
+    /// [`Self::rng_2d`] with its three bit reversals done by [`reverse_bits_gfni`].
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "gfni")]
+    fn rng_2d_gfni(&self, bounce: u32, dim: u32) -> Vec2 {
+        // A closure inside a GFNI function may call GFNI functions safely.
+        self.rng_2d_with(bounce, dim, |x| reverse_bits_gfni(x))
+    }
+
+    /// [`Self::rng_2d`]'s arithmetic, reversing bits with `reverse`.
+    #[inline(always)]
+    fn rng_2d_with(&self, bounce: u32, dim: u32, reverse: impl Fn(u32) -> u32) -> Vec2 {
+        let (seeds, index) = self.pair_index(bounce, dim, &reverse);
         let component = |c: u32| {
-            u32_to_unit(owen_hash(sobol_reversed(index, c), seeds[1 + c as usize]).reverse_bits())
+            u32_to_unit(reverse(owen_hash(
+                sobol_reversed(index, c),
+                seeds[1 + c as usize],
+            )))
         };
         Vec2::new(component(0), component(1))
     }
 
     /// The seeds of (pixel, bounce, pair, seed) and the sample index shuffled by the first.
-    #[inline]
-    fn pair_index(&self, bounce: u32, pair: u32) -> ([u32; 4], u32) {
+    #[inline(always)]
+    fn pair_index(&self, bounce: u32, pair: u32, reverse: impl Fn(u32) -> u32) -> ([u32; 4], u32) {
         let key = bounce.wrapping_mul(DIMS_PER_BOUNCE).wrapping_add(pair);
         let seeds = pcg4d([self.pixel, key, self.seed, 0x5eed]);
-        (
-            seeds,
-            owen_hash(self.sample_reversed, seeds[0]).reverse_bits(),
-        )
+        (seeds, reverse(owen_hash(self.sample_reversed, seeds[0])))
     }
 }
 
@@ -295,6 +329,28 @@ mod tests {
                     assert_eq!(pair.y.to_bits(), rng.rng_1d(bounce, dim + 1).to_bits());
                 }
             }
+        }
+    }
+
+    /// The GFNI reversal is `reverse_bits` (where the CPU has GFNI; elsewhere there is
+    /// nothing to compare), on every single bit and on hashed words.
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn the_gfni_bit_reversal_is_reverse_bits() {
+        if !std::arch::is_x86_feature_detected!("gfni") {
+            eprintln!("skipped: this CPU has no GFNI");
+            return;
+        }
+        let words = (0..32)
+            .map(|b| 1u32 << b)
+            .chain((0..100_000).map(|i| pcg4d([i, 9, 8, 7])[1]));
+        for x in words.chain([0, u32::MAX]) {
+            // SAFETY: the CPU has GFNI.
+            assert_eq!(
+                unsafe { reverse_bits_gfni(x) },
+                x.reverse_bits(),
+                "{x:#010x}"
+            );
         }
     }
 
