@@ -18,7 +18,7 @@ use super::texture::{alpha_test, material_at, normal_mapped, triangle_uv};
 use super::{RenderScene, TRI_SMOOTH, TRI_TANGENT, TRI_UV};
 use crate::bvh::{Hit, traverse_closest_counted};
 use crate::film::NO_ID;
-use crate::geometry::{self, T_INF};
+use crate::geometry::T_INF;
 use crate::math::{Ray, onb_from_normal};
 use crate::scene::MaterialKind;
 use glam::{Vec2, Vec3};
@@ -45,9 +45,8 @@ pub struct SurfaceHit {
 
 /// mirror: shaders/integrator.wgsl `surface_at`
 pub fn surface_at(scene: &RenderScene, ray: &Ray, hit: &Hit) -> SurfaceHit {
-    let tri = &scene.tris[hit.tri as usize];
     let sh = &scene.shading[hit.tri as usize];
-    let ng = geometry::geometric_normal(tri);
+    let ng = scene.tri_normals[hit.tri as usize];
     let mut ns = ng;
     if sh.flags & TRI_SMOOTH != 0 {
         let w = 1.0 - hit.u - hit.v;

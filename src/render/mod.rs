@@ -171,6 +171,10 @@ pub struct RenderScene {
     /// (the GPU traverses `bvh`).
     pub wide: WideBvh,
     pub tris: Vec<TriVerts>,
+    /// Each triangle's unit geometric normal, as `geometry::geometric_normal` gives it:
+    /// derived data of the CPU renderer, which would otherwise take a square root and a
+    /// division at every hit (the shaders recompute it).
+    pub tri_normals: Vec<Vec3>,
     pub shading: Vec<TriShading>,
     /// Texture coordinates of every triangle, or empty when the scene has no textures.
     pub tri_uvs: Vec<TriUvs>,
@@ -317,6 +321,7 @@ impl RenderScene {
         let mut rs = Self {
             wide: WideBvh::collapse(&bvh.nodes, &tris),
             bvh,
+            tri_normals: tris.iter().map(geometry::geometric_normal).collect(),
             tris,
             shading,
             tri_uvs,
