@@ -6,16 +6,21 @@ fn sample_concentric_disk(u: vec2<f32>) -> vec2<f32> {
     if o.x == 0.0 && o.y == 0.0 {
         return vec2<f32>(0.0);
     }
-    var r: f32;
-    var theta: f32;
     if abs(o.x) > abs(o.y) {
-        r = o.x;
-        theta = FRAC_PI_4 * (o.y / o.x);
-    } else {
-        r = o.y;
-        theta = FRAC_PI_2 - FRAC_PI_4 * (o.x / o.y);
+        let sc = sincos_octant(FRAC_PI_4 * (o.y / o.x));
+        return o.x * vec2<f32>(sc.y, sc.x);
     }
-    return r * vec2<f32>(cos(theta), sin(theta));
+    // theta = pi/2 - phi: cos theta = sin phi, sin theta = cos phi.
+    let sc = sincos_octant(FRAC_PI_4 * (o.x / o.y));
+    return o.y * sc;
+}
+
+// (sin x, cos x) for x in [-pi/4, pi/4]. mirror: src/render/sampling.rs `sincos_octant`
+fn sincos_octant(x: f32) -> vec2<f32> {
+    let z = x * x;
+    let s = ((-1.9515296e-4 * z + 8.332161e-3) * z - 1.6666655e-1) * z * x + x;
+    let c = ((2.4433157e-5 * z - 1.3887316e-3) * z + 4.1666646e-2) * z * z - 0.5 * z + 1.0;
+    return vec2<f32>(s, c);
 }
 
 // mirror: src/render/sampling.rs `sample_cosine_hemisphere`

@@ -2,21 +2,36 @@
 //! Each function has a WGSL twin of the same name in `shaders/sampling.wgsl`.
 
 use glam::{Vec2, Vec3};
-use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4};
+use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
 
-/// Concentric map of the square onto the unit disk (Shirley and Chiu 1997).
+/// Concentric map of the square onto the unit disk (Shirley and Chiu 1997). The angle
+/// within the octant is at most pi/4 from an axis, so its sine and cosine come from
+/// [`sincos_octant`] (swapped in the octants about the y axis), not from a library call.
 /// mirror: shaders/sampling.wgsl `sample_concentric_disk`
 pub fn sample_concentric_disk(u: Vec2) -> Vec2 {
     let o = 2.0 * u - Vec2::ONE;
     if o.x == 0.0 && o.y == 0.0 {
         return Vec2::ZERO;
     }
-    let (r, theta) = if o.x.abs() > o.y.abs() {
-        (o.x, FRAC_PI_4 * (o.y / o.x))
+    if o.x.abs() > o.y.abs() {
+        let (s, c) = sincos_octant(FRAC_PI_4 * (o.y / o.x));
+        o.x * Vec2::new(c, s)
     } else {
-        (o.y, FRAC_PI_2 - FRAC_PI_4 * (o.x / o.y))
-    };
-    r * Vec2::new(theta.cos(), theta.sin())
+        // theta = pi/2 - phi: cos theta = sin phi, sin theta = cos phi.
+        let (s, c) = sincos_octant(FRAC_PI_4 * (o.x / o.y));
+        o.y * Vec2::new(s, c)
+    }
+}
+
+/// The sine and cosine of `x` in [−pi/4, pi/4], by the minimax polynomials of Cephes'
+/// `sinf` and `cosf` (within 2 × 10⁻⁷ of the true values there), in plain multiplies and
+/// adds that both devices round alike: no range reduction, no library call.
+/// mirror: shaders/sampling.wgsl `sincos_octant`
+pub fn sincos_octant(x: f32) -> (f32, f32) {
+    let z = x * x;
+    let s = ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1) * z * x + x;
+    let c = ((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2) * z * z - 0.5 * z + 1.0;
+    (s, c)
 }
 
 /// Cosine-weighted direction about +Z; its pdf is `cos_theta / pi`.
@@ -98,6 +113,21 @@ mod tests {
         // A quarter of a uniform disk's area lies within radius 1/2; binomial sd is ~0.002.
         let frac = inner as f32 / n as f32;
         assert!((frac - 0.25).abs() < 0.01, "{frac}");
+    }
+
+    #[test]
+    fn octant_sine_and_cosine_are_within_two_ten_millionths() {
+        let n = 200_000;
+        let mut worst: f64 = 0.0;
+        for i in 0..=n {
+            let x = FRAC_PI_4 * (2.0 * i as f32 / n as f32 - 1.0);
+            let (s, c) = sincos_octant(x);
+            let x = x as f64;
+            worst = worst
+                .max((s as f64 - x.sin()).abs())
+                .max((c as f64 - x.cos()).abs());
+        }
+        assert!(worst < 2e-7, "{worst}");
     }
 
     #[test]

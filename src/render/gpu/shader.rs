@@ -22,7 +22,7 @@ use crate::render::{
 };
 use crate::scene::material::{MAT_ALPHA_MASK, MAT_THIN_WALLED};
 use crate::scene::{MaterialKind, NO_TEXTURE, TextureFormat, Wrap};
-use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4, PI};
+use std::f32::consts::{FRAC_1_PI, FRAC_PI_4, PI};
 
 /// The value of a shared constant.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -71,7 +71,6 @@ pub fn shared_constants() -> Vec<(String, Value)> {
         ("SLAB_SLACK", F32(SLAB_SLACK)),
         ("PI", F32(PI)),
         ("FRAC_1_PI", F32(FRAC_1_PI)),
-        ("FRAC_PI_2", F32(FRAC_PI_2)),
         ("FRAC_PI_4", F32(FRAC_PI_4)),
         ("UNIFORM_SPHERE_PDF", F32(UNIFORM_SPHERE_PDF)),
         ("ONE_MINUS_EPSILON", F32(ONE_MINUS_EPSILON)),
