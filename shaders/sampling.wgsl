@@ -26,7 +26,9 @@ fn sincos_octant(x: f32) -> vec2<f32> {
 // mirror: src/render/sampling.rs `sample_cosine_hemisphere`
 fn sample_cosine_hemisphere(u: vec2<f32>) -> vec3<f32> {
     let d = sample_concentric_disk(u);
-    let z = sqrt(max(1.0 - d.x * d.x - d.y * d.y, 0.0));
+    let o = 2.0 * u - vec2<f32>(1.0);
+    let r = max(abs(o.x), abs(o.y));
+    let z = sqrt(max((1.0 - r) * (1.0 + r), 0.0));
     return vec3<f32>(d.x, d.y, z);
 }
 

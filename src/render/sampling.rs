@@ -34,11 +34,15 @@ pub fn sincos_octant(x: f32) -> (f32, f32) {
     (s, c)
 }
 
-/// Cosine-weighted direction about +Z; its pdf is `cos_theta / pi`.
+/// Cosine-weighted direction about +Z; its pdf is `cos_theta / pi`. The height comes from
+/// the disk point's radius (the larger of |2u − 1|'s components), not from the point, so
+/// that it need not wait for the point's sine and cosine.
 /// mirror: shaders/sampling.wgsl `sample_cosine_hemisphere`
 pub fn sample_cosine_hemisphere(u: Vec2) -> Vec3 {
     let d = sample_concentric_disk(u);
-    let z = (1.0 - d.x * d.x - d.y * d.y).max(0.0).sqrt();
+    let o = 2.0 * u - Vec2::ONE;
+    let r = o.x.abs().max(o.y.abs());
+    let z = ((1.0 - r) * (1.0 + r)).max(0.0).sqrt();
     Vec3::new(d.x, d.y, z)
 }
 
