@@ -87,7 +87,7 @@ fn sample_light(p: vec3<f32>, ng: vec3<f32>, rng: Rng, depth: u32) -> LightSampl
     let origin = offset_ray_origin(p, ng, q - p);
     let to_light = q - origin;
     let dist = length(to_light);
-    let wi = to_light / dist;
+    let wi = to_light * (1.0 / dist);
     let cos_l = -dot(wi, geometric_normal(tri));
     // A point that an alpha mask cuts out emits nothing.
     if !(cos_l > 0.0 && dist > 0.0) || (tri.v0.w != 0.0 && !alpha_test(light, bary.x, bary.y)) {
@@ -112,7 +112,7 @@ fn sample_punctual(index: u32, p: vec3<f32>, ng: vec3<f32>, pmf: f32) -> LightSa
     if !(dist > 0.0) {
         return none;
     }
-    let wi = to_light / dist;
+    let wi = to_light * (1.0 / dist);
     var le = l.intensity / dist2;
     if l.kind == LIGHT_SPOT {
         le *= spot_falloff(l, -wi);

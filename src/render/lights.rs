@@ -143,7 +143,7 @@ pub fn sample_light(
     let origin = offset_ray_origin(p, ng, q - p);
     let to_light = q - origin;
     let dist = to_light.length();
-    let wi = to_light / dist;
+    let wi = to_light * (1.0 / dist);
     let cos_l = -wi.dot(shape.normal);
     // A point that an alpha mask cuts out emits nothing.
     if !(cos_l > 0.0 && dist > 0.0)
@@ -204,7 +204,7 @@ pub fn sample_punctual(
     if dist.is_nan() || dist <= 0.0 {
         return None;
     }
-    let wi = to_light / dist;
+    let wi = to_light * (1.0 / dist);
     let mut le = intensity / dist2;
     if l.kind == LIGHT_SPOT {
         le *= spot_falloff(l, -wi);
