@@ -136,7 +136,6 @@ pub fn sample_light(
         return sample_punctual(scene, light & !LIGHT_EMITTER, p, ng, pick.pmf);
     }
     let tri = &scene.tris[light as usize];
-    let shape = &scene.emitter_shapes[pick.index];
     let [a, b, c] = tri.corners();
     let bary = sample_uniform_triangle(u);
     let q = (1.0 - bary.x - bary.y) * a + bary.x * b + bary.y * c;
@@ -144,7 +143,7 @@ pub fn sample_light(
     let to_light = q - origin;
     let dist = to_light.length();
     let wi = to_light * (1.0 / dist);
-    let cos_l = -wi.dot(shape.normal);
+    let cos_l = -wi.dot(scene.tri_normals[light as usize]);
     // A point that an alpha mask cuts out emits nothing.
     if !(cos_l > 0.0 && dist > 0.0)
         || (tri.is_masked() && !alpha_test(scene, light, bary.x, bary.y))
@@ -164,7 +163,7 @@ pub fn sample_light(
         le,
         pdf: area_to_solid_angle(
             scene.shading[light as usize].emitter_pmf,
-            shape.area,
+            scene.emitter_areas[pick.index],
             dist,
             cos_l,
         ),

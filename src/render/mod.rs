@@ -194,11 +194,11 @@ pub struct RenderScene {
     /// if the sky is not black; and their inclusive CDF.
     pub emitters: Vec<u32>,
     pub emitter_cdf: Vec<f32>,
-    /// The geometric normal and area of each entry of `emitters` that is a triangle (zero
-    /// for the others), as `geometry::geometric_normal` and `geometry::triangle_area` give
-    /// them: derived data of the CPU renderer, which would otherwise recompute both at
-    /// every light sample (the shaders recompute them).
-    pub emitter_shapes: Vec<EmitterShape>,
+    /// The area of each entry of `emitters` that is a triangle (zero for the others), as
+    /// `geometry::triangle_area` gives it: derived data of the CPU renderer, which would
+    /// otherwise recompute it at every light sample (the shaders recompute it); the
+    /// triangle's normal is in `tri_normals`.
+    pub emitter_areas: Vec<f32>,
     /// Probability that next event estimation picks the sky (sampled uniformly over the
     /// sphere): 0 for a black sky, 1 with no emissive triangles, else 1/2.
     pub sky_pmf: f32,
@@ -209,13 +209,6 @@ pub struct RenderScene {
     /// The environment's sampling distribution ([`environment::env_distribution`]); empty
     /// for another sky.
     pub env_cdf: Vec<f32>,
-}
-
-/// An emissive triangle's unit geometric normal and area ([`RenderScene::emitter_shapes`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct EmitterShape {
-    pub normal: Vec3,
-    pub area: f32,
 }
 
 /// An environment map as both renderers read it: its texture record, strength, the cosine
@@ -333,7 +326,7 @@ impl RenderScene {
             lights: scene.lights.iter().map(Light::new).collect(),
             emitters: Vec::new(),
             emitter_cdf: Vec::new(),
-            emitter_shapes: Vec::new(),
+            emitter_areas: Vec::new(),
             sky_pmf: 0.0,
             camera: scene.camera.clone(),
             sky: scene.sky,
@@ -459,17 +452,13 @@ impl RenderScene {
             emitters.push(SKY_EMITTER);
             emitter_cdf.push(1.0);
         }
-        self.emitter_shapes = emitters
+        self.emitter_areas = emitters
             .iter()
             .map(|&i| {
                 if i & LIGHT_EMITTER != 0 || i == SKY_EMITTER {
-                    EmitterShape::default()
+                    0.0
                 } else {
-                    let tri = &self.tris[i as usize];
-                    EmitterShape {
-                        normal: geometry::geometric_normal(tri),
-                        area: geometry::triangle_area(tri),
-                    }
+                    geometry::triangle_area(&self.tris[i as usize])
                 }
             })
             .collect();
