@@ -5,7 +5,7 @@
 
 use super::camera::{CameraRays, generate_camera_ray, pixel_centre_ray};
 use super::integrator::{FirstHit, first_hit, trace_path};
-use super::rng::Rng;
+use super::rng::{Rng, SeedTable};
 use super::watch::Region;
 use super::{Checkpoints, RenderJob, RenderScene};
 use crate::film::{Aov, Film};
@@ -140,8 +140,10 @@ pub fn first_hits(scene: &RenderScene, settings: &RenderSettings, samples: u32, 
         .map(|i| {
             let (x, y) = (i % w, i / w);
             let mut sums = AovSums::default();
+            let table = SeedTable::new();
+            let mut rng = Rng::with_table(i, 0, settings.seed, &table);
             for sample in 0..samples {
-                let rng = Rng::new(i, sample, settings.seed);
+                rng.set_sample(sample);
                 let fh = first_hit(scene, &generate_camera_ray(&cam, x, y, &rng));
                 add_aov_sample(&mut sums, &cam, &fh);
             }
@@ -223,8 +225,15 @@ pub fn render_pixel(
 ) -> PixelSums {
     let s = &job.settings;
     let pixel = y * s.width + x;
+    // A pass of one sample per pixel has no seeds to reuse.
+    let table = SeedTable::new();
+    let mut rng = if samples.len() > 1 {
+        Rng::with_table(pixel, samples.start, s.seed, &table)
+    } else {
+        Rng::new(pixel, samples.start, s.seed)
+    };
     for sample in samples {
-        let rng = Rng::new(pixel, sample, s.seed);
+        rng.set_sample(sample);
         let ray = generate_camera_ray(cam, x, y, &rng);
         let mut seen = true;
         if let Some(aov) = aov.as_deref_mut() {

@@ -13,6 +13,8 @@
 //! 2020); everything is integer arithmetic and thus exact on every device.
 
 use glam::Vec2;
+use std::cell::Cell;
+use std::mem::MaybeUninit;
 
 /// Dimensions used by the camera at bounce 0.
 pub const DIM_PIXEL_X: u32 = 0;
@@ -148,27 +150,87 @@ fn reverse_bits_gfni(x: u32) -> u32 {
     (_mm_cvtsi128_si32(r) as u32).swap_bytes()
 }
 
+/// The (bounce, pair) keys whose seeds a [`SeedTable`] keeps: those of bounces below
+/// `CACHED_KEYS / DIMS_PER_BOUNCE` (8), where nearly every path's draws fall.
+const CACHED_KEYS: usize = 128;
+
+/// The seeds (`pcg4d` of pixel, bounce, pair and seed) that one pixel's draws have
+/// computed, for its next samples: they do not depend on the sample. The CPU renderer
+/// gives one to the streams of a pixel's samples in a pass ([`Rng::with_table`]), so that
+/// each key is hashed once per pixel and pass instead of once per sample; the numbers are
+/// the same bits. The GPU, one sample per invocation, keeps no such table.
+pub struct SeedTable {
+    /// Bit `key` set where `seeds[key]` holds the seeds of key `key`; the others are
+    /// uninitialised, so that a new table writes nothing but this mask.
+    cached: Cell<u128>,
+    seeds: [Cell<MaybeUninit<[u32; 4]>>; CACHED_KEYS],
+}
+
+impl SeedTable {
+    /// An empty table.
+    pub fn new() -> Self {
+        Self {
+            cached: Cell::new(0),
+            seeds: [const { Cell::new(MaybeUninit::uninit()) }; CACHED_KEYS],
+        }
+    }
+}
+
+impl Default for SeedTable {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl std::fmt::Debug for SeedTable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "SeedTable({:#x})", self.cached.get())
+    }
+}
+
 /// The random stream of one camera sample: the key that, with a bounce and a
 /// dimension, names every number the path uses. mirror: shaders/rng.wgsl `Rng`
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Rng {
-    pub pixel: u32,
-    pub sample: u32,
-    pub seed: u32,
+#[derive(Clone, Copy, Debug)]
+pub struct Rng<'a> {
+    pixel: u32,
+    sample: u32,
+    seed: u32,
     /// `sample` with its bits reversed, as the index shuffle of every draw takes it: kept
     /// so that draws do not reverse it again (x86 has no bit-reversal instruction; the WGSL
     /// twin, whose `reverseBits` is one, keeps no such copy).
     sample_reversed: u32,
+    /// Where the pixel's seeds are kept, if anywhere.
+    table: Option<&'a SeedTable>,
 }
 
-impl Rng {
+impl Rng<'static> {
+    /// The stream of one sample.
     pub fn new(pixel: u32, sample: u32, seed: u32) -> Self {
         Self {
             pixel,
             sample,
             seed,
             sample_reversed: sample.reverse_bits(),
+            table: None,
         }
+    }
+}
+
+impl<'a> Rng<'a> {
+    /// The stream of `sample`, keeping its seeds in `table` (emptied first) for the
+    /// pixel's further samples, which [`Self::set_sample`] moves it through.
+    pub fn with_table(pixel: u32, sample: u32, seed: u32, table: &'a SeedTable) -> Self {
+        table.cached.set(0);
+        Self {
+            table: Some(table),
+            ..Rng::new(pixel, sample, seed)
+        }
+    }
+
+    /// The stream of another sample of the same pixel and seed.
+    pub fn set_sample(&mut self, sample: u32) {
+        self.sample = sample;
+        self.sample_reversed = sample.reverse_bits();
     }
 
     /// The uniform number in [0, 1) for (bounce, dimension). mirror: shaders/rng.wgsl `rng_1d`
@@ -227,8 +289,30 @@ impl Rng {
     #[inline(always)]
     fn pair_index(&self, bounce: u32, pair: u32, reverse: impl Fn(u32) -> u32) -> ([u32; 4], u32) {
         let key = bounce.wrapping_mul(DIMS_PER_BOUNCE).wrapping_add(pair);
-        let seeds = pcg4d([self.pixel, key, self.seed, 0x5eed]);
+        let seeds = self.key_seeds(key);
         (seeds, reverse(owen_hash(self.sample_reversed, seeds[0])))
+    }
+
+    /// `pcg4d` of (pixel, key, seed), from the table where it is kept.
+    #[inline(always)]
+    fn key_seeds(&self, key: u32) -> [u32; 4] {
+        let hash = || pcg4d([self.pixel, key, self.seed, 0x5eed]);
+        let Some((table, slot)) = self
+            .table
+            .and_then(|table| Some((table, table.seeds.get(key as usize)?)))
+        else {
+            return hash();
+        };
+        let bit = 1u128 << key;
+        let cached = table.cached.get();
+        if cached & bit != 0 {
+            // SAFETY: the slot was written when its bit was set.
+            return unsafe { slot.get().assume_init() };
+        }
+        let seeds = hash();
+        slot.set(MaybeUninit::new(seeds));
+        table.cached.set(cached | bit);
+        seeds
     }
 }
 
@@ -289,6 +373,26 @@ mod tests {
                     cells[(x * 256.0) as usize] += 1;
                 }
                 assert!(cells.iter().all(|&c| c == 1), "dim {dim}: {cells:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_seed_table_changes_no_number() {
+        let table = SeedTable::new();
+        for (pixel, seed) in [(3, 0), (3, 1), (40_000, 1)] {
+            let mut kept = Rng::with_table(pixel, 0, seed, &table);
+            for sample in [0, 1, 7, 63, 1 << 20] {
+                kept.set_sample(sample);
+                let fresh = Rng::new(pixel, sample, seed);
+                for bounce in 0..12 {
+                    for dim in [DIM_PIXEL_X, DIM_LIGHT_U, DIM_BSDF_U] {
+                        assert_eq!(kept.rng_2d(bounce, dim), fresh.rng_2d(bounce, dim));
+                    }
+                    for dim in [DIM_LIGHT_V, DIM_BSDF_LOBE, DIM_ROULETTE] {
+                        assert_eq!(kept.rng_u32(bounce, dim), fresh.rng_u32(bounce, dim));
+                    }
+                }
             }
         }
     }
