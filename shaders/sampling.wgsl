@@ -6,13 +6,12 @@ fn sample_concentric_disk(u: vec2<f32>) -> vec2<f32> {
     if o.x == 0.0 && o.y == 0.0 {
         return vec2<f32>(0.0);
     }
-    if abs(o.x) > abs(o.y) {
-        let sc = sincos_octant(FRAC_PI_4 * (o.y / o.x));
-        return o.x * vec2<f32>(sc.y, sc.x);
-    }
-    // theta = pi/2 - phi: cos theta = sin phi, sin theta = cos phi.
-    let sc = sincos_octant(FRAC_PI_4 * (o.x / o.y));
-    return o.y * sc;
+    // About the y axis theta = pi/2 - phi: cos theta = sin phi, sin theta = cos phi. Both
+    // kinds of octant run the same operations on selected operands, as on the CPU.
+    let x_major = abs(o.x) > abs(o.y);
+    let rq = select(o.yx, o, x_major);
+    let sc = sincos_octant(FRAC_PI_4 * (rq.y / rq.x));
+    return rq.x * select(sc, sc.yx, x_major);
 }
 
 // (sin x, cos x) for x in [-pi/4, pi/4]. mirror: src/render/sampling.rs `sincos_octant`

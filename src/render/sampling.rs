@@ -1,26 +1,36 @@
 //! Warps from the unit square to the distributions the path tracer draws from.
 //! Each function has a WGSL twin of the same name in `shaders/sampling.wgsl`.
 
-use glam::{Vec2, Vec3};
+use glam::{BVec4A, Vec2, Vec3, Vec4};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
 
 /// Concentric map of the square onto the unit disk (Shirley and Chiu 1997). The angle
 /// within the octant is at most pi/4 from an axis, so its sine and cosine come from
 /// [`sincos_octant`] (swapped in the octants about the y axis), not from a library call.
+/// Both kinds of octant run the same operations on selected operands, without a branch:
+/// which kind a sample falls in is a coin toss that a branch would mispredict half the time.
 /// mirror: shaders/sampling.wgsl `sample_concentric_disk`
 pub fn sample_concentric_disk(u: Vec2) -> Vec2 {
     let o = 2.0 * u - Vec2::ONE;
     if o.x == 0.0 && o.y == 0.0 {
         return Vec2::ZERO;
     }
-    if o.x.abs() > o.y.abs() {
-        let (s, c) = sincos_octant(FRAC_PI_4 * (o.y / o.x));
-        o.x * Vec2::new(c, s)
-    } else {
-        // theta = pi/2 - phi: cos theta = sin phi, sin theta = cos phi.
-        let (s, c) = sincos_octant(FRAC_PI_4 * (o.x / o.y));
-        o.y * Vec2::new(s, c)
-    }
+    // About the y axis theta = pi/2 - phi: cos theta = sin phi, sin theta = cos phi. The
+    // operands are picked by four-lane selects, which compile to bitwise masks (a scalar
+    // float select becomes a branch on x86).
+    let y_major = BVec4A::splat(o.x.abs() <= o.y.abs());
+    let rq = Vec4::select(
+        y_major,
+        Vec4::new(o.y, o.x, 0.0, 0.0),
+        Vec4::new(o.x, o.y, 0.0, 0.0),
+    );
+    let (s, c) = sincos_octant(FRAC_PI_4 * (rq.y / rq.x));
+    let d = Vec4::select(
+        y_major,
+        Vec4::new(s, c, 0.0, 0.0),
+        Vec4::new(c, s, 0.0, 0.0),
+    );
+    rq.x * Vec2::new(d.x, d.y)
 }
 
 /// The sine and cosine of `x` in [−pi/4, pi/4], by the minimax polynomials of Cephes'
