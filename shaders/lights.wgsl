@@ -50,11 +50,9 @@ fn pick_light(u: vec2<f32>) -> LightPick {
     if params.num_emitters == 1u {
         return LightPick(0u, load_emitter_cdf(0u), u);
     }
-    let index = sample_cdf(u.x);
-    var lo = 0.0;
-    if index > 0u {
-        lo = load_emitter_cdf(index - 1u);
-    }
+    let bucket = sample_cdf(u.x);
+    let index = bucket.index;
+    let lo = bucket.below;
     let pmf = load_emitter_cdf(index) - lo;
     return LightPick(index, pmf, vec2<f32>(min((u.x - lo) / pmf, ONE_MINUS_EPSILON), u.y));
 }

@@ -60,17 +60,25 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
     return a2 / (a2 + b2);
 }
 
-// The emitter whose CDF bucket holds `u`. mirror: src/render/sampling.rs `sample_cdf`
-fn sample_cdf(u: f32) -> u32 {
-    var lo = 0u;
-    var hi = params.num_emitters - 1u;
-    while lo < hi {
-        let mid = (lo + hi) / 2u;
-        if load_emitter_cdf(mid) <= u {
-            lo = mid + 1u;
-        } else {
-            hi = mid;
-        }
+// The emitter whose CDF bucket holds `u`, and the CDF entry below it (0 for the first).
+struct CdfBucket {
+    index: u32,
+    below: f32,
+}
+
+// A binary search whose steps depend only on the number of emitters, as on the CPU.
+// mirror: src/render/sampling.rs `sample_cdf`
+fn sample_cdf(u: f32) -> CdfBucket {
+    // The answer lies in base .. base + n; the last entry is never at or below u.
+    var base = 0u;
+    var n = params.num_emitters;
+    var below = 0.0;
+    while n > 1u {
+        let half = n / 2u;
+        let c = load_emitter_cdf(base + half - 1u);
+        base = select(base, base + half, c <= u);
+        below = select(below, c, c <= u);
+        n -= half;
     }
-    return lo;
+    return CdfBucket(base, below);
 }

@@ -652,7 +652,7 @@ fn light_pick_matches() {
         let k = pick.index;
         assert_eq!(
             k,
-            sample_cdf(&rs.emitter_cdf, u),
+            sample_cdf(&rs.emitter_cdf, u).0,
             "pick_light picks by the CDF"
         );
         assert!(

@@ -93,8 +93,7 @@ pub fn pick_light(scene: &RenderScene, u: Vec2) -> LightPick {
             u,
         };
     }
-    let index = sample_cdf(cdf, u.x);
-    let lo = if index > 0 { cdf[index - 1] } else { 0.0 };
+    let (index, lo) = sample_cdf(cdf, u.x);
     let pmf = cdf[index] - lo;
     LightPick {
         index,

@@ -3,6 +3,7 @@
 
 use glam::{BVec4A, Vec2, Vec3, Vec4};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
+use std::hint::select_unpredictable;
 
 /// Concentric map of the square onto the unit disk (Shirley and Chiu 1997). The angle
 /// within the octant is at most pi/4 from an axis, so its sine and cosine come from
@@ -90,19 +91,24 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
     if a2 + b2 == 0.0 { 0.0 } else { a2 / (a2 + b2) }
 }
 
-/// Index of the first CDF entry greater than `u`: the discrete sample of a distribution whose
-/// inclusive CDF (last entry 1) is `cdf`. mirror: shaders/sampling.wgsl `sample_cdf`
-pub fn sample_cdf(cdf: &[f32], u: f32) -> usize {
-    let (mut lo, mut hi) = (0usize, cdf.len() - 1);
-    while lo < hi {
-        let mid = (lo + hi) / 2;
-        if cdf[mid] <= u {
-            lo = mid + 1
-        } else {
-            hi = mid
-        }
+/// Index of the first CDF entry greater than `u`, and the entry below it (0 for the
+/// first): the discrete sample of a distribution whose inclusive CDF (last entry 1) is
+/// `cdf`, and where its bucket starts. A binary search whose steps depend only on the
+/// length: each halves the range by conditional moves, not a branch (which a random `u`
+/// would mispredict at every step). mirror: shaders/sampling.wgsl `sample_cdf`
+pub fn sample_cdf(cdf: &[f32], u: f32) -> (usize, f32) {
+    // The answer lies in base .. base + n; the last entry is never at or below u.
+    // The entry below is kept as its bits: an integer select is a conditional move, a
+    // float select a branch on x86.
+    let (mut base, mut n, mut below) = (0usize, cdf.len(), 0u32);
+    while n > 1 {
+        let half = n / 2;
+        let c = cdf[base + half - 1];
+        base = select_unpredictable(c <= u, base + half, base);
+        below = select_unpredictable(c <= u, c.to_bits(), below);
+        n -= half;
     }
-    lo
+    (base, f32::from_bits(below))
 }
 
 #[cfg(test)]
@@ -177,11 +183,30 @@ mod tests {
     #[test]
     fn cdf_sampling_picks_the_right_bucket() {
         let cdf = [0.25, 0.25, 0.75, 1.0];
-        assert_eq!(sample_cdf(&cdf, 0.0), 0);
-        assert_eq!(sample_cdf(&cdf, 0.2499), 0);
-        assert_eq!(sample_cdf(&cdf, 0.25), 2); // the empty bucket 1 is never chosen
-        assert_eq!(sample_cdf(&cdf, 0.7), 2);
-        assert_eq!(sample_cdf(&cdf, 0.75), 3);
-        assert_eq!(sample_cdf(&cdf, 0.9999), 3);
+        assert_eq!(sample_cdf(&cdf, 0.0), (0, 0.0));
+        assert_eq!(sample_cdf(&cdf, 0.2499), (0, 0.0));
+        assert_eq!(sample_cdf(&cdf, 0.25), (2, 0.25)); // the empty bucket 1 is never chosen
+        assert_eq!(sample_cdf(&cdf, 0.7), (2, 0.25));
+        assert_eq!(sample_cdf(&cdf, 0.75), (3, 0.75));
+        assert_eq!(sample_cdf(&cdf, 0.9999), (3, 0.75));
+    }
+
+    #[test]
+    fn cdf_sampling_counts_the_entries_at_or_below_u_and_returns_the_last() {
+        let rng = Rng::new(0, 0, 4);
+        for len in 1..40u32 {
+            // Some buckets empty (repeated entries), the last entry 1.
+            let mut cdf: Vec<f32> = (0..len)
+                .map(|i| (rng.rng_1d(len, i) * 8.0).floor() / 8.0)
+                .collect();
+            cdf.sort_by(f32::total_cmp);
+            *cdf.last_mut().unwrap() = 1.0;
+            for k in 0..200 {
+                let u = rng.rng_1d(1000 + len, k);
+                let index = cdf.iter().filter(|&&c| c <= u).count();
+                let below = if index > 0 { cdf[index - 1] } else { 0.0 };
+                assert_eq!(sample_cdf(&cdf, u), (index, below), "{cdf:?}, u = {u}");
+            }
+        }
     }
 }
