@@ -101,6 +101,17 @@ fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
     let frame = onb_from_normal(ns);
     let wo = wo_world * frame;
 
+    // The numbers BSDF sampling reads, drawn only where the material reads them (before
+    // next event estimation, as on the CPU, where that hides their latency).
+    var u_lobe = 0.0;
+    if bsdf_draws_lobe(mat) {
+        u_lobe = rng_1d(rng, (*st).depth, DIM_BSDF_LOBE);
+    }
+    var u = vec2<f32>(0.0);
+    if bsdf_draws_direction(mat) {
+        u = rng_2d(rng, (*st).depth, DIM_BSDF_U);
+    }
+
     // Next event estimation.
     if !bsdf_is_delta(mat) && params.num_emitters > 0u {
         let ls = sample_light(si.p, ng, rng, (*st).depth);
@@ -122,15 +133,7 @@ fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
         }
     }
 
-    // BSDF sampling, drawing only the numbers the material reads.
-    var u_lobe = 0.0;
-    if bsdf_draws_lobe(mat) {
-        u_lobe = rng_1d(rng, (*st).depth, DIM_BSDF_LOBE);
-    }
-    var u = vec2<f32>(0.0);
-    if bsdf_draws_direction(mat) {
-        u = rng_2d(rng, (*st).depth, DIM_BSDF_U);
-    }
+    // BSDF sampling.
     let bs = bsdf_sample(mat, wo, u_lobe, u);
     if !bs.valid {
         return true;

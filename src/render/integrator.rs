@@ -182,6 +182,19 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
     let to_local = |w: Vec3| Vec3::new(w.dot(t), w.dot(b), w.dot(ns));
     let wo = to_local(wo_world);
 
+    // The numbers BSDF sampling reads, drawn only where the material reads them, and
+    // before next event estimation, whose shadow ray then hides their hashes' latency.
+    let u_lobe = if bsdf_draws_lobe(mat) {
+        rng.rng_1d(st.depth, rng::DIM_BSDF_LOBE)
+    } else {
+        0.0
+    };
+    let u = if bsdf_draws_direction(mat) {
+        rng.rng_2d(st.depth, rng::DIM_BSDF_U)
+    } else {
+        Vec2::ZERO
+    };
+
     // Next event estimation.
     if !bsdf_is_delta(mat)
         && !scene.emitters.is_empty()
@@ -214,17 +227,7 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
         }
     }
 
-    // BSDF sampling, drawing only the numbers the material reads.
-    let u_lobe = if bsdf_draws_lobe(mat) {
-        rng.rng_1d(st.depth, rng::DIM_BSDF_LOBE)
-    } else {
-        0.0
-    };
-    let u = if bsdf_draws_direction(mat) {
-        rng.rng_2d(st.depth, rng::DIM_BSDF_U)
-    } else {
-        Vec2::ZERO
-    };
+    // BSDF sampling.
     let Some(bs) = bsdf_sample(mat, wo, u_lobe, u) else {
         return true;
     };
