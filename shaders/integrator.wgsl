@@ -67,6 +67,12 @@ fn path_start(ray: Ray) -> PathState {
 
 // One bounce; true when the path has ended. mirror: src/render/integrator.rs `path_step`
 fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
+    // The light pair, drawn before the traversal (as on the CPU, where that hides its
+    // latency; on a miss, a delta material or the last segment it goes unused).
+    var u_light = vec2<f32>(0.0);
+    if params.num_emitters > 0u && (*st).depth + 1u < params.max_depth {
+        u_light = rng_2d(rng, (*st).depth, DIM_LIGHT_U);
+    }
     (*st).rays += 1u;
     let hit = traverse_closest((*st).ray, T_INF);
     if hit.tri == NO_HIT {
@@ -114,7 +120,7 @@ fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
 
     // Next event estimation.
     if !bsdf_is_delta(mat) && params.num_emitters > 0u {
-        let ls = sample_light(si.p, ng, rng, (*st).depth);
+        let ls = sample_light(si.p, ng, u_light);
         let cos_i = dot(ls.wi, ng);
         let usable = select(cos_i > 0.0, cos_i != 0.0, bsdf_transmits(mat));
         if ls.valid && usable {

@@ -58,9 +58,9 @@ fn pick_light(u: vec2<f32>) -> LightPick {
 }
 
 // mirror: src/render/lights.rs `sample_light`
-fn sample_light(p: vec3<f32>, ng: vec3<f32>, rng: Rng, depth: u32) -> LightSample {
+fn sample_light(p: vec3<f32>, ng: vec3<f32>, u_pair: vec2<f32>) -> LightSample {
     var none = LightSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, false, false);
-    let pick = pick_light(rng_2d(rng, depth, DIM_LIGHT_U));
+    let pick = pick_light(u_pair);
     let light = load_emitter(pick.index);
     let u = pick.u;
     if light == SKY_EMITTER {

@@ -131,6 +131,13 @@ pub fn path_start(ray: Ray) -> PathState {
 pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: u32) -> bool {
     // The CPU traverses the wide tree, which finds the hits the GPU's binary tree finds.
     let wide = &scene.wide;
+    // The light pair, drawn before the traversal so that its hashes run in the traversal's
+    // latency (on a miss, a delta material or the last segment it goes unused).
+    let u_light = if scene.emitters.is_empty() || st.depth + 1 >= max_depth {
+        Vec2::ZERO
+    } else {
+        rng.rng_2d(st.depth, rng::DIM_LIGHT_U)
+    };
     st.rays += 1;
     let Some(hit) = wide.traverse_closest(&st.ray, T_INF, |t, u, v| alpha_test(scene, t, u, v))
     else {
@@ -198,7 +205,7 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
     // Next event estimation.
     if !bsdf_is_delta(mat)
         && !scene.emitters.is_empty()
-        && let Some(ls) = sample_light(scene, si.p, ng, rng, st.depth)
+        && let Some(ls) = sample_light(scene, si.p, ng, u_light)
     {
         // A surface that light crosses sees lights on both sides; bsdf_eval says which
         // of them it passes. Others only see those on the side of ng.

@@ -4,7 +4,6 @@
 
 use super::environment::{env_pdf, env_radiance, sample_env};
 use super::integrator::offset_ray_origin;
-use super::rng::{self, Rng};
 use super::sampling::{
     ONE_MINUS_EPSILON, UNIFORM_SPHERE_PDF, sample_cdf, sample_uniform_sphere,
     sample_uniform_triangle,
@@ -102,17 +101,12 @@ pub fn pick_light(scene: &RenderScene, u: Vec2) -> LightPick {
     }
 }
 
-/// Picks a light ([`pick_light`]) and a point (triangle) or direction (sky) on it, as
-/// seen from surface point `p` with geometric normal `ng` facing the viewer. `None` when
+/// Picks a light ([`pick_light`]) and a point (triangle) or direction (sky) on it for the
+/// light pair `u` (the vertex's `DIM_LIGHT_U` pair), as seen from surface point `p` with
+/// geometric normal `ng` facing the viewer. `None` when
 /// the point faces away. mirror: shaders/lights.wgsl `sample_light`
-pub fn sample_light(
-    scene: &RenderScene,
-    p: Vec3,
-    ng: Vec3,
-    rng: &Rng,
-    depth: u32,
-) -> Option<LightSample> {
-    let pick = pick_light(scene, rng.rng_2d(depth, rng::DIM_LIGHT_U));
+pub fn sample_light(scene: &RenderScene, p: Vec3, ng: Vec3, u: Vec2) -> Option<LightSample> {
+    let pick = pick_light(scene, u);
     let (light, u) = (scene.emitters[pick.index], pick.u);
     if light == SKY_EMITTER {
         let (wi, pdf) = match scene.sky {
