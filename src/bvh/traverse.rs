@@ -8,8 +8,10 @@ use crate::geometry::{
 use crate::math::Ray;
 use glam::Vec3;
 
-/// The closest hit: distance, barycentrics and the leaf-order triangle index.
+/// The closest hit: distance, barycentrics and the leaf-order triangle index (in this
+/// order: the AVX2 traversal stores a hit as one four-lane vector).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub struct Hit {
     pub t: f32,
     pub u: f32,

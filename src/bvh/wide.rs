@@ -172,8 +172,15 @@ impl WideBvh {
     ) -> Option<Hit> {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
+            let mut hit = Hit {
+                t: 0.0,
+                u: 0.0,
+                v: 0.0,
+                tri: 0,
+            };
             // SAFETY: the CPU has AVX2, the only requirement of `closest_avx2`.
-            return unsafe { closest_avx2(self, ray, t_max, accept) };
+            let found = unsafe { closest_avx2(self, ray, t_max, accept, &mut hit) };
+            return found.then_some(hit);
         }
         closest::<Portable>(self, ray, t_max, accept)
     }
@@ -233,8 +240,18 @@ fn closest_avx2(
     ray: &Ray,
     t_max: f32,
     accept: impl FnMut(u32, f32, f32) -> bool,
-) -> Option<Hit> {
-    closest::<Avx2>(bvh, ray, t_max, accept)
+    out: &mut Hit,
+) -> bool {
+    use std::arch::x86_64::*;
+    let Some(h) = closest::<Avx2>(bvh, ray, t_max, accept) else {
+        return false;
+    };
+    // One 16-byte store, so that the caller's copy of it is forwarded from the store
+    // buffer (four 4-byte stores read back by one 16-byte load stall for them).
+    let v = _mm_setr_ps(h.t, h.u, h.v, f32::from_bits(h.tri));
+    // SAFETY: `Hit` is four 4-byte fields, sixteen bytes in all.
+    unsafe { _mm_storeu_ps((out as *mut Hit).cast(), v) };
+    true
 }
 
 #[cfg(target_arch = "x86_64")]
