@@ -103,8 +103,8 @@ pub fn pick_light(scene: &RenderScene, u: Vec2) -> LightPick {
 
 /// Picks a light ([`pick_light`]) and a point (triangle) or direction (sky) on it for the
 /// light pair `u` (the vertex's `DIM_LIGHT_U` pair), as seen from surface point `p` with
-/// geometric normal `ng` facing the viewer. `None` when
-/// the point faces away. mirror: shaders/lights.wgsl `sample_light`
+/// geometric normal `ng` facing the viewer. `None` when the point faces away.
+/// mirror: shaders/lights.wgsl `sample_light`
 pub fn sample_light(scene: &RenderScene, p: Vec3, ng: Vec3, u: Vec2) -> Option<LightSample> {
     let pick = pick_light(scene, u);
     let (light, u) = (scene.emitters[pick.index], pick.u);
