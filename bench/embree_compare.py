@@ -1,13 +1,16 @@
 #!/usr/bin/env python3
-"""Compare meshtrace's CPU primary-ray closest-hit throughput with Embree 4, per thread.
+"""Compare meshtrace's CPU ray throughput with Embree 4, per thread.
 
 `meshtrace bench SCENE --device cpu --threads 1 --json --rays-out DIR` measures its own
-rates and writes the triangles it traces (DIR/NAME.triangles.f32) and its two primary ray
-sets (DIR/NAME.primary.rays.f32: the scene's camera; DIR/NAME.primary_fill.rays.f32: a
-narrower view that the mesh fills). This script runs that command, builds an Embree scene
-of the same triangles, traces the same rays through it with the `embreex` bindings
-(single-threaded: one `rtcIntersect1` per ray) and prints both rates and their ratio for
-each view, with the BVH build rates, and a brute-force check of a sample of the rays.
+rates and writes the triangles it traces (DIR/NAME.triangles.f32) and its ray sets: two
+primary views (DIR/NAME.primary.rays.f32: the scene's camera;
+DIR/NAME.primary_fill.rays.f32: a narrower view that the mesh fills), a cosine bounce from
+each primary hit (DIR/NAME.incoherent.rays.f32) and a shadow ray from each primary hit
+towards a light (DIR/NAME.shadow.rays.f32). This script runs that command, builds an
+Embree scene of the same triangles, traces the same rays through it with the `embreex`
+bindings (single-threaded: one `rtcIntersect1` per ray, `rtcOccluded1` for the shadow
+rays) and prints both rates and their ratio for each set, with the BVH build rates, and a
+brute-force check of a sample of the rays.
 
 Needs numpy and embreex (`pip install embreex`) and a release build of meshtrace
 (`cargo build --release`). See bench/README.md.
@@ -29,7 +32,11 @@ import numpy as np
 
 REPO = Path(__file__).resolve().parent.parent
 DEFAULT_SCENE = REPO.parent / "shared" / "meshes" / "stanford-bunny.obj"
-VIEWS = ("primary", "primary_fill")
+VIEWS = ("primary", "primary_fill", "incoherent", "shadow")
+# The ray sets meshtrace reports the share of rays on the mesh for (`VIEW_hits`).
+HIT_VIEWS = ("primary", "primary_fill")
+# The sets traced as any-hit queries (occlusion up to t_max) rather than closest hit.
+ANY_HIT_VIEWS = ("shadow",)
 F = np.float32
 MAX_MISMATCH = 0.01  # hit/miss disagreements with the brute force that fail the run
 
@@ -83,7 +90,7 @@ def run_meshtrace(binary, scene, rays_dir, width, height, repeats, spp):
     if len(names) != 1:
         raise SystemExit(f"expected the rows of one scene from meshtrace, got {sorted(names)}")
     got = {(row["device"], row["measure"]): row for row in rows}
-    need = [("cpu", f"{v}_rays") for v in VIEWS] + [("host", f"{v}_hits") for v in VIEWS]
+    need = [("cpu", f"{v}_rays") for v in VIEWS] + [("host", f"{v}_hits") for v in HIT_VIEWS]
     missing = [f"{d}/{m}" for d, m in need + [("host", "bvh_build")] if (d, m) not in got]
     if missing:
         raise SystemExit(f"meshtrace's bench reported no {', '.join(missing)}")
@@ -213,15 +220,25 @@ def timed(repeats, f):
     return out
 
 
-def trace_view(scene, empty, verts, rays, repeats, verify_count):
-    """Embree's rates and hits for one ray set."""
+def trace_view(scene, empty, verts, rays, repeats, verify_count, any_hit=False):
+    """Embree's rates and hits for one ray set: closest hits, or with `any_hit` occlusion
+    within each ray's t_max (`rtcOccluded1`)."""
     origins, dirs, t_max = rays
     n = len(dirs)
     t_hit = scene.run(origins, dirs, dists=t_max.copy(), query="DISTANCE")  # in place
     hit = t_hit < t_max
     hits = int(hit.sum())
-    # The measure: closest hit of every ray, primID only (the cheapest result embreex gives).
-    prim = timed(repeats, lambda: scene.run(origins, dirs, dists=t_max))
+    if any_hit:
+        occluded = scene.run(origins, dirs, dists=t_max.copy(), query="OCCLUDED") >= 0
+        if (occluded != hit).sum() > MAX_MISMATCH * n:
+            raise SystemExit(f"Embree's occlusion and closest-hit queries disagree on "
+                             f"{int((occluded != hit).sum())} of {n} rays")
+        # The measure: occlusion of every ray within its t_max.
+        prim = timed(repeats, lambda: scene.run(origins, dirs, dists=t_max, query="OCCLUDED"))
+    else:
+        # The measure: closest hit of every ray, primID only (the cheapest result embreex
+        # gives).
+        prim = timed(repeats, lambda: scene.run(origins, dirs, dists=t_max))
     # For reference: with output=1 embreex also returns u, v, Ng, t, geomID, through
     # untyped numpy stores that add Python-level cost per ray. It writes t into `dists`.
     full = timed(repeats, lambda: scene.run(origins, dirs, dists=t_max.copy(), output=1))
@@ -379,15 +396,17 @@ def main():
     failures = []
     for view, r in rays.items():
         say(f"tracing {view} with embree ...")
-        e = trace_view(scene, empty, verts, r, args.repeats, args.verify)
+        e = trace_view(scene, empty, verts, r, args.repeats, args.verify,
+                       any_hit=view in ANY_HIT_VIEWS)
         m = None
         if mt:
             row = mt[("cpu", f"{view}_rays")]
+            hits = mt.get(("host", f"{view}_hits"))
             m = {"mrays": row["median"], "min_max": [row["min"], row["max"]],
-                 "mesh_hit_fraction": mt[("host", f"{view}_hits")]["median"]}
+                 "mesh_hit_fraction": hits["median"] if hits else None}
         result["views"][view] = {"meshtrace": m, "embree": e,
                                  "ratio": m["mrays"] / e["mrays"] if m else None}
-        if e["hits"] == 0:
+        if e["hits"] == 0 and view not in ANY_HIT_VIEWS:
             failures.append(f"{view}: no ray hits any triangle in Embree")
         c = e["verify"]
         if c and c["hit_disagree"] > MAX_MISMATCH * c["rays"]:

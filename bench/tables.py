@@ -12,7 +12,7 @@
           `meshtrace adapters` lists an adapter other than lavapipe (llvmpipe), else
           --device cpu
   embree  python3 bench/embree_compare.py --json (meshtrace against Embree 4, one thread,
-          two views of the bunny); skipped with a note where embreex is not installed
+          two views of the bunny, their bounces and shadow rays); skipped with a note where embreex is not installed
   qps     python3 bench/quality_per_second.py --json OUT (CPU quality per second against
           Mitsuba 3 llvm_ad_rgb on three scenes)
 
@@ -281,7 +281,8 @@ def render_embree(e):
         body.append([f"`{view}`", num(hits), num(em["hit_fraction"]), rate,
                      num(em["mrays"]), num(v.get("ratio")),
                      f"≥ {EMBREE_GOAL}: {verdict(v['ratio'] >= EMBREE_GOAL)}"
-                     if mostly and v.get("ratio") is not None else "— (most rays miss the mesh)"])
+                     if mostly and v.get("ratio") is not None
+                     else "—" if hits is None else "— (most rays miss the mesh)"])
     mt, emb = e.get("meshtrace") or {}, e["embree"]
     body.append(["BVH build, Mtris/s", "", "", num(mt.get("bvh_build_mtris")),
                  num(emb["bvh_build_mtris"]), num(e.get("ratio_build")), ""])
@@ -292,7 +293,10 @@ def render_embree(e):
         "",
         f"{e['name']}, {e['triangles']} triangles, {e['width']}×{e['height']} rays a view, "
         f"median of {e['repeats']}; Embree's build on {emb['bvh_build_threads']} thread(s). "
-        f"{versions}.",
+        f"{versions}."
+        + (" `incoherent`: a cosine bounce from each hit of `primary` (closest hit); "
+           "`shadow`: a ray from each such hit towards a point on a light (occlusion, "
+           "Embree's `rtcOccluded1`)." if "incoherent" in views else ""),
         f"* Target: CPU primary rays ≥ {EMBREE_GOAL}× Embree per thread on a view where most "
         "rays hit: " + (verdict(any(met)) if met else "not measured (no such view)") + ".",
     ]

@@ -240,8 +240,8 @@ pub enum BenchError {
     Write(#[from] FilmError),
 }
 
-/// Writes the scene's triangles (leaf order, nine floats each) and each primary view's
-/// rays (origin, `t_max`, direction, 0: eight floats each), little-endian, as
+/// Writes the scene's triangles (leaf order, nine floats each) and each ray set's rays
+/// (origin, `t_max`, direction, 0: eight floats each), little-endian, as
 /// `NAME.triangles.f32` and `NAME.VIEW.rays.f32` in `dir`, for comparisons with other
 /// ray tracers on exactly the same work.
 fn write_rays(
@@ -270,7 +270,8 @@ fn write_rays(
 }
 
 /// Measures one scene on the CPU and, when `gpu` is given, on that device. With
-/// `rays_out`, also writes the primary rays there ([`write_rays`]).
+/// `rays_out`, also writes the ray sets there ([`write_rays`]): the two primary views, the
+/// diffuse bounces and the shadow rays.
 pub fn bench_scene(
     name: &str,
     scene: &Scene,
@@ -332,6 +333,8 @@ pub fn bench_scene(
             &[
                 ("primary", &rays.primary),
                 ("primary_fill", &rays.primary_fill),
+                ("incoherent", &rays.incoherent),
+                ("shadow", &rays.shadow),
             ],
         )?;
     }

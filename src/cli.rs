@@ -124,7 +124,8 @@ pub struct BenchArgs {
     /// Print one JSON array instead of a table.
     #[arg(long)]
     pub json: bool,
-    /// Also write each scene's triangles and primary rays into this folder, as raw
+    /// Also write each scene's triangles and ray sets (primary, primary_fill, incoherent,
+    /// shadow) into this folder, as raw
     /// little-endian floats (see bench/README.md), for comparisons with other ray tracers.
     #[arg(long, value_name = "DIR")]
     pub rays_out: Option<PathBuf>,

@@ -386,7 +386,8 @@ fn bench_reports_every_measure() {
         assert_eq!(json.matches(&object).count(), 1, "{object} in {json}");
     }
     assert!(json.trim_start().starts_with('[') && json.trim_end().ends_with(']'));
-    // --rays-out: the triangles (9 floats each) and both views' rays (8 floats each).
+    // --rays-out: the triangles (9 floats each) and every ray set's rays (8 floats each):
+    // a camera ray per pixel in both views, a bounce and a shadow ray per primary hit.
     let rays = dir.path().join("rays");
     std::fs::create_dir(&rays).unwrap();
     let out = output(
@@ -410,6 +411,13 @@ fn bench_reports_every_measure() {
             size(&format!("cornell.{view}.rays.f32")),
             16 * 16 * 32,
             "{view}"
+        );
+    }
+    for set in ["incoherent", "shadow"] {
+        let n = size(&format!("cornell.{set}.rays.f32"));
+        assert!(
+            n > 0 && n % 32 == 0 && n <= 16 * 16 * 32,
+            "{set}: {n} bytes"
         );
     }
     assert_fails(
