@@ -6,26 +6,31 @@ rates and writes the triangles it traces (DIR/NAME.triangles.f32) and its ray se
 primary views (DIR/NAME.primary.rays.f32: the scene's camera;
 DIR/NAME.primary_fill.rays.f32: a narrower view that the mesh fills), a cosine bounce from
 each primary hit (DIR/NAME.incoherent.rays.f32) and a shadow ray from each primary hit
-towards a light (DIR/NAME.shadow.rays.f32). This script runs that command, builds an
-Embree scene of the same triangles, traces the same rays through it with the `embreex`
-bindings (single-threaded: one `rtcIntersect1` per ray, `rtcOccluded1` for the shadow
-rays) and prints both rates and their ratio for each set, with the BVH build rates, and a
-brute-force check of a sample of the rays.
+towards a light (DIR/NAME.shadow.rays.f32). This script runs that command, then
+bench/embree_rays.c (compiled here with $CC, default cc) builds an Embree scene of the same
+triangles as Mitsuba 3 builds its scenes (build quality high, no scene flags) and traces
+the same rays through it on one thread: one `rtcIntersect1` per ray (`rtcOccluded1` for
+the shadow rays), the measure; for reference also with RTC_SCENE_FLAG_ROBUST and as
+packets of 8 and 16 rays. meshtrace and Embree take turns for --rounds rounds, and each
+ratio is the median of the rounds' ratios. It prints both rates and their ratio for each
+set, with the BVH build rates, and a brute-force check of a sample of the rays.
 
-Needs numpy and embreex (`pip install embreex`) and a release build of meshtrace
+Needs numpy, embreex (`pip install embreex`: only for the Embree 4 library its wheel
+bundles; --embree-lib names another), a C compiler and a release build of meshtrace
 (`cargo build --release`). See bench/README.md.
 """
 
 import argparse
 import importlib.metadata
+import importlib.util
 import json
 import os
 import platform
+import shutil
 import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
@@ -143,117 +148,99 @@ def brute_force_t(verts, origins, dirs, t_max):
 
 
 def verify(verts, origins, dirs, t_max, t_embree, hit, count):
-    """Compares Embree's hits of `count` rays spread over the set with the brute force."""
+    """Compares Embree's hits of `count` rays spread over the set with the brute force
+    (hit or miss, and for closest hits the distance)."""
     n = len(dirs)
     sel = np.unique(np.linspace(0, n - 1, min(count, n)).astype(np.int64))
     bf = brute_force_t(verts, origins[sel], dirs[sel], t_max[sel])
     bf_hit = np.isfinite(bf)
     both = bf_hit & hit[sel]
-    rel = np.abs(t_embree[sel][both] - bf[both]) / bf[both]
+    # Occlusion queries (`t_embree` None) give no distance to compare.
+    rel = (np.abs(t_embree[sel][both] - bf[both]) / bf[both] if t_embree is not None
+           else np.zeros(0))
     return {"rays": int(len(sel)), "hit_disagree": int((bf_hit != hit[sel]).sum()),
             "brute_hits": int(bf_hit.sum()),
-            "max_rel_t_diff": float(rel.max()) if both.any() else 0.0}
+            "max_rel_t_diff": float(rel.max()) if rel.size else None}
 
 
 # --- Embree ------------------------------------------------------------------------------
 
 
-def init_embree(build_threads):
-    """Imports embreex. Embree's builder runs on TBB with one thread per CPU it may use;
-    for `build_threads` > 0 the process is confined to that many CPUs while TBB starts
-    (its thread count is fixed then), and set free again afterwards."""
-    try:
-        from embreex import mesh_construction, rtcore, rtcore_scene
-    except ImportError as e:
-        raise SystemExit(f"embreex is not installed ({e}); run: pip install embreex")
-    saved = os.sched_getaffinity(0)
-    if build_threads > 0:
-        os.sched_setaffinity(0, sorted(saved)[:build_threads])
-    try:
-        device = rtcore.EmbreeDevice()
-        # Start TBB's pool now: a small scene built with the confined affinity.
-        s = rtcore_scene.EmbreeScene(device)
-        g = np.random.default_rng(0).random((3 * 20000, 3), dtype=F)
-        mesh_construction.TriangleMesh(s, g, np.arange(3 * 20000, dtype=np.int32).reshape(-1, 3))
-        s.run(np.zeros((1, 3), F), np.ones((1, 3), F))
-    finally:
-        os.sched_setaffinity(0, saved)
-    return device, rtcore_scene, mesh_construction
+def embree_library(explicit):
+    """The Embree 4 shared library: `explicit`, or the one the embreex wheel bundles."""
+    if explicit:
+        if not explicit.is_file():
+            raise SystemExit(f"--embree-lib {explicit}: no such file")
+        return explicit
+    spec = importlib.util.find_spec("embreex")
+    if spec is None or spec.origin is None:
+        raise SystemExit("embreex is not installed: run `pip install embreex` (its wheel "
+                         "bundles Embree 4), or pass --embree-lib PATH/libembree4.so.4")
+    libs = sorted((Path(spec.origin).parent.parent / "embreex.libs").glob("libembree4*.so*"))
+    if not libs:
+        raise SystemExit(f"no libembree4*.so* beside {spec.origin}; pass --embree-lib")
+    return libs[0]
 
 
-def embree_scene(emb, verts=None, indices=None):
-    """An uncommitted scene of one triangle mesh, or of none without `verts`."""
-    device, rtcore_scene, mesh_construction = emb
-    scene = rtcore_scene.EmbreeScene(device)
-    if verts is not None:
-        mesh_construction.TriangleMesh(scene, verts, indices)
-    return scene
+def compile_helper(out_dir):
+    """Compiles bench/embree_rays.c (the timing loop, in C so that the figures are
+    Embree's and not a binding's) with $CC (default cc)."""
+    cc = os.environ.get("CC", "cc")
+    if shutil.which(cc) is None:
+        raise SystemExit(f"no C compiler `{cc}` (set CC, or install gcc): "
+                         "bench/embree_rays.c times Embree")
+    exe = out_dir / "embree_rays"
+    cmd = [cc, "-O2", "-std=c11", "-D_GNU_SOURCE", str(REPO / "bench" / "embree_rays.c"),
+           "-o", str(exe), "-ldl", "-lm"]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        raise SystemExit(f"{' '.join(cmd)} failed:\n{r.stderr}")
+    return exe
 
 
-def commit(scene):
-    """Builds the scene's BVH (`rtcCommitScene`): embreex commits on the first `run`."""
-    scene.run(np.zeros((1, 3), F), np.array([[0.0, 0.0, 1.0]], F))
-    return scene
-
-
-def embree_build_seconds(emb, verts, indices, repeats):
-    """Times the BVH build (the commit, with one ray); creating the scene and copying the
-    buffers into Embree are excluded. One warm-up build, then `repeats` timed ones."""
-    times = []
-    for _ in range(repeats + 1):
-        scene = embree_scene(emb, verts, indices)
-        start = time.perf_counter()
-        commit(scene)
-        times.append(time.perf_counter() - start)
-        del scene
-    return times[1:]
-
-
-def timed(repeats, f):
-    """Seconds of `repeats` calls of `f` after one warm-up call."""
-    f()
-    out = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        f()
-        out.append(time.perf_counter() - start)
-    return out
-
-
-def trace_view(scene, empty, verts, rays, repeats, verify_count, any_hit=False):
-    """Embree's rates and hits for one ray set: closest hits, or with `any_hit` occlusion
-    within each ray's t_max (`rtcOccluded1`)."""
+def trace_view(helper, lib, tri_path, ray_path, rays, verts, repeats, build_threads,
+               verify_count, any_hit, tmp):
+    """Embree's rates, build times and hits for one ray set (embree_rays.c): closest hits,
+    or with `any_hit` occlusion within each ray's t_max (`rtcOccluded1`)."""
     origins, dirs, t_max = rays
     n = len(dirs)
-    t_hit = scene.run(origins, dirs, dists=t_max.copy(), query="DISTANCE")  # in place
-    hit = t_hit < t_max
-    hits = int(hit.sum())
+    out = Path(tmp) / "embree_out.f32"
+    cmd = [str(helper), str(lib), str(tri_path), str(ray_path),
+           "any" if any_hit else "closest", str(repeats), str(build_threads), str(out)]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        raise SystemExit(f"{' '.join(cmd)} failed ({r.returncode}):\n{r.stderr}")
+    got = json.loads(r.stdout)
+    if got["rays"] != n:
+        raise SystemExit(f"embree_rays traced {got['rays']} rays of {ray_path}, not {n}")
+    res = np.fromfile(out, dtype="<f4")
     if any_hit:
-        occluded = scene.run(origins, dirs, dists=t_max.copy(), query="OCCLUDED") >= 0
-        if (occluded != hit).sum() > MAX_MISMATCH * n:
-            raise SystemExit(f"Embree's occlusion and closest-hit queries disagree on "
-                             f"{int((occluded != hit).sum())} of {n} rays")
-        # The measure: occlusion of every ray within its t_max.
-        prim = timed(repeats, lambda: scene.run(origins, dirs, dists=t_max, query="OCCLUDED"))
+        hit, t_hit = res > 0.5, None
     else:
-        # The measure: closest hit of every ray, primID only (the cheapest result embreex
-        # gives).
-        prim = timed(repeats, lambda: scene.run(origins, dirs, dists=t_max))
-    # For reference: with output=1 embreex also returns u, v, Ng, t, geomID, through
-    # untyped numpy stores that add Python-level cost per ray. It writes t into `dists`.
-    full = timed(repeats, lambda: scene.run(origins, dirs, dists=t_max.copy(), output=1))
-    # The loop's own cost, without geometry: an empty committed scene.
-    loop = timed(repeats, lambda: empty.run(origins, dirs, dists=t_max))
+        t_hit = res
+        hit = np.isfinite(t_hit) & (t_hit < t_max)
+    hits = int(hit.sum())
     med = statistics.median
+    modes = {m: {"mrays": n / med(v["seconds"]) / 1e6,
+                 "mrays_all": [n / t / 1e6 for t in v["seconds"]],
+                 "differ": v.get("differ")}
+             for m, v in got["modes"].items()}
+    disagree = {m: v["differ"] for m, v in modes.items() if v["differ"]}
+    if any(d > MAX_MISMATCH * n for d in disagree.values()):
+        raise SystemExit(f"{ray_path}: Embree's modes disagree with its default on "
+                         f"{disagree} of {n} rays")
     return {
         "rays": n,
-        "mrays": n / med(prim) / 1e6,
-        "mrays_all": [n / t / 1e6 for t in prim],
-        "output1_mrays": n / med(full) / 1e6,
-        "empty_scene_loop_mrays": n / med(loop) / 1e6,
+        # The measure: single rays on a scene built as Mitsuba 3 builds its scenes.
+        "mrays": modes["default"]["mrays"],
+        "mrays_all": modes["default"]["mrays_all"],
+        "modes": modes,
+        "build_seconds": got["build_seconds"],
+        "embree_version": got["embree_version"],
         "hits": hits,
         "hit_fraction": hits / n,
-        "mean_t": float(t_hit[hit].astype(np.float64).mean()) if hits else None,
+        "mean_t": (float(t_hit[hit].astype(np.float64).mean())
+                   if t_hit is not None and hits else None),
         "verify": (verify(verts, origins, dirs, t_max, t_hit, hit, verify_count)
                    if verify_count > 0 else None),
     }
@@ -302,8 +289,8 @@ def print_table(result):
         e = v["embree"]
         line = (f"{view}: embree {e['hits']} of {e['rays']} rays hit "
                 f"({e['hit_fraction']:.2%}), mean t {fmt(e['mean_t'], '.6g')}; "
-                f"output=1 {e['output1_mrays']:.3f} Mrays/s, empty-scene loop "
-                f"{e['empty_scene_loop_mrays']:.3f} Mrays/s")
+                + ", ".join(f"{k} {v['mrays']:.3f}" for k, v in e["modes"].items())
+                + " Mrays/s")
         if v["meshtrace"]:
             lo, hi = v["meshtrace"]["min_max"]
             line += f"; meshtrace min..max {lo:.3f}..{hi:.3f}"
@@ -312,11 +299,92 @@ def print_table(result):
         if c:
             print(f"  brute force, {c['rays']} rays: {c['hit_disagree']} disagree on hit/miss "
                   f"({c['brute_hits']} hits), max relative t difference "
-                  f"{c['max_rel_t_diff']:.2e}")
-    print(f"embree build threads: {result['embree']['bvh_build_threads']}; "
+                  f"{fmt(c['max_rel_t_diff'], '.2e')}")
+    print(f"embree ({result['embree']['library']}) build threads: "
+          f"{result['embree']['bvh_build_threads']}; "
           + "; ".join(f"{k} {v}" for k, v in result["versions"].items() if v))
     if m:
         print(f"meshtrace: {m['command']}")
+
+
+def trace_all(args, cmd, name, mt_first, run_mt, tri_path, verts, rays, rays_dir, lib,
+              helper, tmp, say):
+    """Traces every ray set through Embree in `args.rounds` rounds. Each round follows a
+    round of meshtrace (`mt_first`, the run that wrote the rays, then `run_mt()`; None
+    without meshtrace), and each view's ratio is the median of the rounds' ratios, so that
+    a slow spell of a shared machine hits both sides of a ratio alike. Returns the result
+    object and the checks that failed."""
+    width, height = args.size
+    ntris = len(verts) // 3
+    med = statistics.median
+    result = {
+        "scene": args.scene, "name": name, "triangles": ntris, "width": width,
+        "height": height, "repeats": args.repeats, "rounds": args.rounds,
+        "meshtrace": None,
+        "embree": {"bvh_build_threads": args.embree_build_threads or os.cpu_count(),
+                   "library": str(lib), "scene_flags": "none (as Mitsuba 3 builds its "
+                   "scenes)", "build_quality": "high"},
+        "views": {},
+        "ratio_build": None,
+        "versions": {
+            "embree": None,
+            "embreex": (importlib.metadata.version("embreex")
+                        if importlib.util.find_spec("embreex") else None),
+            "numpy": np.__version__,
+            "python": platform.python_version(),
+            "meshtrace": None if args.skip_meshtrace else meshtrace_version(args.binary),
+        },
+    }
+    failures = []
+    embree_rounds = []  # per round: {view: trace_view's result}
+    mt_rounds = [mt_first]
+    for i in range(args.rounds):
+        if i > 0:
+            say(f"round {i + 1}/{args.rounds}: meshtrace bench ...")
+            mt_rounds.append(run_mt())
+        got = {}
+        for view, r in rays.items():
+            say(f"round {i + 1}/{args.rounds}: tracing {view} with embree ...")
+            got[view] = trace_view(helper, lib, tri_path, rays_dir / f"{name}.{view}.rays.f32",
+                                   r, verts, args.repeats, args.embree_build_threads,
+                                   args.verify if i == 0 else 0, view in ANY_HIT_VIEWS, tmp)
+        embree_rounds.append(got)
+    v0 = embree_rounds[0][VIEWS[0]]["embree_version"]
+    result["versions"]["embree"] = f"{v0 // 10000}.{v0 // 100 % 100}.{v0 % 100}"
+    build = [t for rnd in embree_rounds for t in rnd[VIEWS[0]]["build_seconds"]]
+    result["embree"].update(bvh_build_s=med(build), bvh_build_mtris=ntris / med(build) / 1e6)
+    if mt_rounds[0] is not None:
+        builds = [rnd[("host", "bvh_build")]["median"] for rnd in mt_rounds]
+        result["meshtrace"] = {"command": " ".join(cmd), "bvh_build_mtris": med(builds),
+                               "bvh_build_s": ntris / med(builds) / 1e6}
+        result["ratio_build"] = med(
+            b / (ntris / med(rnd[VIEWS[0]]["build_seconds"]) / 1e6)
+            for b, rnd in zip(builds, embree_rounds))
+    for view in rays:
+        per_round = [rnd[view] for rnd in embree_rounds]
+        e = dict(per_round[0])
+        e["mrays"] = med(x["mrays"] for x in per_round)
+        e["mrays_rounds"] = [x["mrays"] for x in per_round]
+        e["modes"] = {k: {"mrays": med(x["modes"][k]["mrays"] for x in per_round),
+                          "differ": max(x["modes"][k]["differ"] or 0 for x in per_round)}
+                      for k in per_round[0]["modes"]}
+        m, ratio = None, None
+        if mt_rounds[0] is not None:
+            rows = [rnd[("cpu", f"{view}_rays")] for rnd in mt_rounds]
+            hits = mt_rounds[0].get(("host", f"{view}_hits"))
+            m = {"mrays": med(r["median"] for r in rows),
+                 "mrays_rounds": [r["median"] for r in rows],
+                 "min_max": [min(r["min"] for r in rows), max(r["max"] for r in rows)],
+                 "mesh_hit_fraction": hits["median"] if hits else None}
+            ratio = med(r["median"] / x["mrays"] for r, x in zip(rows, per_round))
+        result["views"][view] = {"meshtrace": m, "embree": e, "ratio": ratio}
+        if e["hits"] == 0 and view not in ANY_HIT_VIEWS:
+            failures.append(f"{view}: no ray hits any triangle in Embree")
+        c = e["verify"]
+        if c and c["hit_disagree"] > MAX_MISMATCH * c["rays"]:
+            failures.append(f"{view}: Embree and the brute force disagree on hit/miss for "
+                            f"{c['hit_disagree']} of {c['rays']} rays")
+    return result, failures
 
 
 def main():
@@ -326,11 +394,17 @@ def main():
                          "builtin:NAME (default: %(default)s)")
     ap.add_argument("--size", type=parse_size, default=(512, 512), help="N or WxH (default 512)")
     ap.add_argument("--repeats", type=int, default=5, help="timed runs after one warm-up (median)")
+    ap.add_argument("--rounds", type=int, default=3,
+                    help="meshtrace and Embree measured in turn this many times; each ratio "
+                         "is the median of the rounds' ratios (default 3)")
     ap.add_argument("--binary", type=Path, default=REPO / "target" / "release" / "meshtrace")
     ap.add_argument("--spp", type=int, default=1,
                     help="meshtrace bench's path-tracing spp (not compared; kept small to save time)")
     ap.add_argument("--embree-build-threads", type=int, default=1,
                     help="CPUs Embree's BVH builder may use (0: all; default 1, like --threads 1)")
+    ap.add_argument("--embree-lib", type=Path,
+                    help="an Embree 4 shared library (default: the one the embreex wheel "
+                         "bundles)")
     ap.add_argument("--verify", type=int, default=256,
                     help="rays of each view checked against a brute-force intersection (0: none)")
     ap.add_argument("--rays-dir", type=Path,
@@ -341,11 +415,15 @@ def main():
                          "--rays-dir (Embree numbers only)")
     ap.add_argument("--json", action="store_true", help="print one JSON object")
     args = ap.parse_args()
+    if args.rounds < 1 or args.repeats < 1:
+        raise SystemExit("--rounds and --repeats must be at least 1")
     width, height = args.size
     say = (lambda *a: print(*a, file=sys.stderr)) if args.json else print
 
     with tempfile.TemporaryDirectory(prefix="embree_compare.") as tmp:
         rays_dir = args.rays_dir or Path(tmp)
+        lib = embree_library(args.embree_lib)
+        helper = compile_helper(Path(tmp))
         if args.skip_meshtrace:
             if not args.rays_dir:
                 raise SystemExit("--skip-meshtrace needs --rays-dir")
@@ -359,59 +437,16 @@ def main():
         tri_path = rays_dir / f"{name}.triangles.f32"
         verts, indices = load_triangles(tri_path)
         rays = {v: load_rays(rays_dir / f"{name}.{v}.rays.f32") for v in VIEWS}
-    ntris = len(indices)
-    say(f"{tri_path}: {ntris} triangles; "
-        + ", ".join(f"{v} {len(r[1])} rays" for v, r in rays.items()))
+        say(f"{tri_path}: {len(indices)} triangles; "
+            + ", ".join(f"{v} {len(r[1])} rays" for v, r in rays.items()))
+        def run_mt():
+            # A later round of meshtrace: the same rays again (its bench is
+            # deterministic), rewritten into the same files.
+            return None if mt is None else run_meshtrace(
+                args.binary, args.scene, rays_dir, width, height, args.repeats, args.spp)[2]
 
-    emb = init_embree(args.embree_build_threads)
-    build = embree_build_seconds(emb, verts, indices, args.repeats)
-    scene = commit(embree_scene(emb, verts, indices))
-    empty = commit(embree_scene(emb))
-
-    med = statistics.median
-    result = {
-        "scene": args.scene, "name": name, "triangles": ntris, "width": width,
-        "height": height, "repeats": args.repeats,
-        "meshtrace": None,
-        "embree": {
-            "bvh_build_s": med(build),
-            "bvh_build_mtris": ntris / med(build) / 1e6,
-            "bvh_build_threads": args.embree_build_threads or os.cpu_count(),
-        },
-        "views": {},
-        "ratio_build": None,
-        "versions": {
-            "embree": repr(emb[0]).split(":")[-1].strip(),
-            "embreex": importlib.metadata.version("embreex"),
-            "numpy": np.__version__,
-            "python": platform.python_version(),
-            "meshtrace": None if args.skip_meshtrace else meshtrace_version(args.binary),
-        },
-    }
-    if mt:
-        build_mtris = mt[("host", "bvh_build")]["median"]
-        result["meshtrace"] = {"command": " ".join(cmd), "bvh_build_mtris": build_mtris,
-                               "bvh_build_s": ntris / build_mtris / 1e6}
-        result["ratio_build"] = build_mtris / result["embree"]["bvh_build_mtris"]
-    failures = []
-    for view, r in rays.items():
-        say(f"tracing {view} with embree ...")
-        e = trace_view(scene, empty, verts, r, args.repeats, args.verify,
-                       any_hit=view in ANY_HIT_VIEWS)
-        m = None
-        if mt:
-            row = mt[("cpu", f"{view}_rays")]
-            hits = mt.get(("host", f"{view}_hits"))
-            m = {"mrays": row["median"], "min_max": [row["min"], row["max"]],
-                 "mesh_hit_fraction": hits["median"] if hits else None}
-        result["views"][view] = {"meshtrace": m, "embree": e,
-                                 "ratio": m["mrays"] / e["mrays"] if m else None}
-        if e["hits"] == 0 and view not in ANY_HIT_VIEWS:
-            failures.append(f"{view}: no ray hits any triangle in Embree")
-        c = e["verify"]
-        if c and c["hit_disagree"] > MAX_MISMATCH * c["rays"]:
-            failures.append(f"{view}: Embree and the brute force disagree on hit/miss for "
-                            f"{c['hit_disagree']} of {c['rays']} rays")
+        result, failures = trace_all(args, cmd, name, mt, run_mt, tri_path, verts, rays,
+                                     rays_dir, lib, helper, tmp, say)
     result["failures"] = failures
 
     if args.json:

@@ -12,7 +12,8 @@
           `meshtrace adapters` lists an adapter other than lavapipe (llvmpipe), else
           --device cpu
   embree  python3 bench/embree_compare.py --json (meshtrace against Embree 4, one thread,
-          two views of the bunny, their bounces and shadow rays); skipped with a note where embreex is not installed
+          two views of the bunny, their bounces and shadow rays); skipped with a note
+          where embreex (which bundles Embree 4) or a C compiler is missing
   qps     python3 bench/quality_per_second.py --json OUT (CPU quality per second against
           Mitsuba 3 llvm_ad_rgb on three scenes)
 
@@ -37,6 +38,7 @@ import json
 import math
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -160,10 +162,12 @@ def run(args):
         result["embree"] = {"skipped": "--skip embree"}
     elif importlib.util.find_spec("embreex") is None:
         result["embree"] = {"skipped": "embreex is not installed (pip install embreex)"}
+    elif shutil.which(os.environ.get("CC", "cc")) is None:
+        result["embree"] = {"skipped": "no C compiler for bench/embree_rays.c (set CC)"}
     else:
         cmd = [py, "bench/embree_compare.py", "--json", "--binary", binary]
         if args.quick:
-            cmd += ["--size", "128", "--repeats", "1", "--verify", "32"]
+            cmd += ["--size", "128", "--repeats", "1", "--rounds", "1", "--verify", "32"]
         result["embree"] = script_json(cmd, commands)
 
     if "qps" in skip:
@@ -268,6 +272,9 @@ def gpu_targets(rows):
 
 def render_embree(e):
     views = e.get("views", {})
+    # Results from before embree_rays.c traced Embree through the embreex bindings, whose
+    # scenes set RTC_SCENE_FLAG_ROBUST (Mitsuba 3's do not).
+    direct = all("modes" in v["embree"] for v in views.values())
     body, met = [], []
     for view, v in views.items():
         m, em = v.get("meshtrace") or {}, v["embree"]
@@ -278,22 +285,39 @@ def render_embree(e):
         lo_hi = m.get("min_max")
         rate = num(m.get("mrays")) + (f" ({num(lo_hi[0])}..{num(lo_hi[1])})"
                                       if lo_hi and lo_hi[0] != lo_hi[1] else "")
+        modes = em.get("modes", {})
+        extra = [num(modes[k]["mrays"]) if k in modes else "—"
+                 for k in ("robust", "packet8", "packet16")] if direct else []
         body.append([f"`{view}`", num(hits), num(em["hit_fraction"]), rate,
-                     num(em["mrays"]), num(v.get("ratio")),
+                     num(em["mrays"]), *extra, num(v.get("ratio")),
                      f"≥ {EMBREE_GOAL}: {verdict(v['ratio'] >= EMBREE_GOAL)}"
                      if mostly and v.get("ratio") is not None
                      else "—" if hits is None else "— (most rays miss the mesh)"])
     mt, emb = e.get("meshtrace") or {}, e["embree"]
     body.append(["BVH build, Mtris/s", "", "", num(mt.get("bvh_build_mtris")),
-                 num(emb["bvh_build_mtris"]), num(e.get("ratio_build")), ""])
+                 num(emb["bvh_build_mtris"]), *([""] * 3 if direct else []),
+                 num(e.get("ratio_build")), ""])
     versions = ", ".join(v if v.startswith(k) else f"{k} {v}"
                          for k, v in e.get("versions", {}).items() if v)
-    lines = table(["view", "rays on the mesh (meshtrace)", "rays hitting (Embree)",
-                   "meshtrace Mrays/s", "Embree Mrays/s", "ratio", "target"], body) + [
+    head = ["view", "rays on the mesh (meshtrace)", "rays hitting (Embree)",
+            "meshtrace Mrays/s", "Embree Mrays/s"]
+    if direct:
+        head += ["Embree robust", "Embree ×8 packets", "Embree ×16 packets"]
+    how = (f"Embree traced by `bench/embree_rays.c`, built as Mitsuba 3 builds its scenes "
+           f"(build quality high, no scene flags); `rtcIntersect1`/`rtcOccluded1` a ray, the "
+           f"measure; for reference the same with `RTC_SCENE_FLAG_ROBUST`, and packets of 8 "
+           f"and 16 consecutive rays (`rtcIntersect8`/`16`, what Mitsuba's LLVM variant "
+           f"calls). Ratio: the median over {e.get('rounds', 1)} rounds of meshtrace and "
+           f"Embree measured in turn." if direct else
+           "Embree traced through the embreex bindings, whose scenes set "
+           "`RTC_SCENE_FLAG_ROBUST`, which Mitsuba 3 does not set and which cost Embree "
+           "about a fifth of its rate when measured (BENCHMARKS log, twentieth session): "
+           "these ratios flatter meshtrace.")
+    lines = table(head + ["ratio", "target"], body) + [
         "",
         f"{e['name']}, {e['triangles']} triangles, {e['width']}×{e['height']} rays a view, "
         f"median of {e['repeats']}; Embree's build on {emb['bvh_build_threads']} thread(s). "
-        f"{versions}."
+        f"{versions}. {how}"
         + (" `incoherent`: a cosine bounce from each hit of `primary` (closest hit); "
            "`shadow`: a ray from each such hit towards a point on a light (occlusion, "
            "Embree's `rtcOccluded1`)." if "incoherent" in views else ""),
