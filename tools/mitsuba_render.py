@@ -93,7 +93,8 @@ import gltf_read as gr  # noqa: E402
 def setup_mitsuba(variant=None):
     """Import mitsuba and pick a variant: llvm_ad_rgb when libLLVM >= 16 is found
     (DRJIT_LIBLLVM_PATH, else /usr/lib/*/libLLVM-1[6-9]*.so ...), else scalar_rgb."""
-    if "DRJIT_LIBLLVM_PATH" not in os.environ:
+    llvm_found = "DRJIT_LIBLLVM_PATH" in os.environ
+    if not llvm_found:
         cands = []
         for pat in ("/usr/lib/*/libLLVM-2[0-9]*.so*", "/usr/lib/*/libLLVM-1[6-9]*.so*",
                     "/usr/lib/*/libLLVM.so.2[0-9]*", "/usr/lib/*/libLLVM.so.1[6-9]*",
@@ -104,11 +105,19 @@ def setup_mitsuba(variant=None):
             digits = "".join(ch if ch.isdigit() else " " for ch in base).split()
             if digits and int(digits[0]) >= 16:
                 os.environ["DRJIT_LIBLLVM_PATH"] = c
+                llvm_found = True
                 break
     import mitsuba as mi
     wanted = [variant] if variant else ["llvm_ad_rgb", "scalar_rgb"]
     err = None
     for v in wanted:
+        if v.startswith("llvm") and not llvm_found:
+            # Dr.Jit would fall back to the system's default libLLVM, and an older one
+            # (Debian 12's 14 or 15) aborts the process in its first kernels.
+            err = ("no libLLVM >= 16 found (Debian 12: apt-get install libllvm16, or set "
+                   "DRJIT_LIBLLVM_PATH)")
+            print("mitsuba_render: variant %s unavailable: %s" % (v, err), file=sys.stderr)
+            continue
         try:
             mi.set_variant(v)
             if v.startswith("llvm"):
