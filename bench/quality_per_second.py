@@ -42,7 +42,7 @@ Usage:
 
 --threads sets both renderers' worker threads (default: every CPU this process may use).
 --keep DIR writes every render there. Needs Python 3.11+, numpy and mitsuba 3 (with
-libLLVM >= 16 for llvm_ad_rgb, found as tools/mitsuba_render.py finds it); it never builds
+libLLVM >= 17 for llvm_ad_rgb, found as tools/mitsuba_render.py finds it); it never builds
 meshtrace.
 """
 import argparse
@@ -293,6 +293,7 @@ def main():
                        "load_average": {"start": load_start, "end": load_end},
                        "cpus": os.cpu_count(),
                        "mitsuba": mi.__version__, "variant": mi.variant(),
+                       "libllvm": os.environ.get("DRJIT_LIBLLVM_PATH"),
                        "threads": {"meshtrace": args.threads, "mitsuba": dr.thread_count()},
                        "spp": args.spp, "seeds": args.seeds, "goal": GOAL,
                        "total_seconds": total, "scenes": results}, fh, indent=2)

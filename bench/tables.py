@@ -21,7 +21,8 @@ and, with --device-json, copies in the JSON that bench/device.sh wrote on a GPU 
 It writes everything to bench/results/MACHINE.json (replacing that file; committed, so the
 tables can be regenerated without measuring again), then renders. --quick passes small
 sizes, repeats and seeds to the scripts, for testing this script only: its tables say so.
-MACHINE defaults to the CPU model and the threads this process may use (`amd-epyc-2t`).
+MACHINE defaults to the CPU model, its widest vector extension and the threads this
+process may use (`amd-epyc-avx2-2t`).
 
 `render` rewrites the part of BENCHMARKS.md between the markers TABLES_BEGIN and
 TABLES_END: one `### Machine: NAME` section per bench/results/*.json, sorted by name, each
@@ -69,19 +70,35 @@ def sh(cmd, **kw):
     return subprocess.run(cmd, cwd=REPO, capture_output=True, text=True, **kw)
 
 
-def cpu_model():
+def cpu_info():
+    """The CPU's model name, family and model numbers, and its widest vector extensions
+    (which decide Mitsuba's LLVM lane width and Embree's kernels)."""
+    info = {"cpu": "unknown CPU", "family": None, "model": None, "flags": set()}
     with open("/proc/cpuinfo") as fh:
         for line in fh:
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    return "unknown CPU"
+            key, _, value = line.partition(":")
+            key, value = key.strip(), value.strip()
+            if key == "model name" and info["cpu"] == "unknown CPU":
+                info["cpu"] = value
+            elif key == "cpu family" and info["family"] is None:
+                info["family"] = int(value)
+            elif key == "model" and info["model"] is None:
+                info["model"] = int(value)
+            elif key == "flags" and not info["flags"]:
+                info["flags"] = set(value.split())
+    flags = info.pop("flags")
+    info["simd"] = ("avx512" if "avx512f" in flags else "avx2" if "avx2" in flags
+                    else "sse")
+    info["gfni"] = "gfni" in flags
+    return info
 
 
-def default_machine(cpu, threads):
-    """A stable name from the CPU model and thread count: `AMD EPYC`, 2 -> `amd-epyc-2t`."""
+def default_machine(cpu, simd, threads):
+    """A stable name from the CPU model, its widest vector extension and the thread count:
+    `AMD EPYC`, avx2, 2 -> `amd-epyc-avx2-2t`."""
     name = re.sub(r"\((R|TM)\)|\bCPU\b|\bProcessor\b|@.*$|\d+-Core", " ", cpu, flags=re.I)
     slug = re.sub(r"[^a-z0-9]+", "-", name.lower()).strip("-") or "cpu"
-    return f"{slug}-{threads}t"
+    return f"{slug}-{simd}-{threads}t"
 
 
 def adapters(binary):
@@ -131,19 +148,21 @@ def run(args):
     skip = {s for s in args.skip.split(",") if s}
     if skip - set(STEPS):
         raise SystemExit(f"tables.py: --skip takes {','.join(STEPS)}, not {args.skip}")
-    cpu, threads = cpu_model(), len(os.sched_getaffinity(0))
+    cpu, threads = cpu_info(), len(os.sched_getaffinity(0))
     listed = adapters(binary)
     gpus = [a for a in listed if "llvmpipe" not in a]
     py = sys.executable
     commands = []
     result = {
         "schema": SCHEMA,
-        "machine": args.machine or default_machine(cpu, threads),
+        "machine": args.machine or default_machine(cpu["cpu"], cpu["simd"], threads),
         "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "quick": args.quick,
         # None where nothing ran here: the device JSON then describes its own machine
         "host": None if skip == set(STEPS) else
-        {"cpu": cpu, "threads": threads, "adapters": listed, "gpus": gpus},
+        {"cpu": cpu["cpu"], "family": cpu["family"], "model": cpu["model"],
+         "simd": cpu["simd"], "gfni": cpu["gfni"], "threads": threads, "adapters": listed,
+         "gpus": gpus},
         "binary": binary_info(binary),
         "commands": commands,
     }
@@ -270,6 +289,15 @@ def gpu_targets(rows):
     return lines
 
 
+def cpu_detail(host):
+    """`(family 25, model 1; AVX2, no AVX-512)`, or a note where the result predates it."""
+    if "simd" not in host:
+        return " (vector extensions not recorded)"
+    simd = {"avx512": "AVX-512", "avx2": "AVX2, no AVX-512", "sse": "no AVX2"}[host["simd"]]
+    return (f" (family {host['family']}, model {host['model']}; {simd}"
+            f"{', GFNI' if host['gfni'] else ''})")
+
+
 def render_embree(e):
     views = e.get("views", {})
     # Results from before embree_rays.c traced Embree through the embreex bindings, whose
@@ -347,7 +375,9 @@ def render_qps(q):
     return table(["scene", "relMSE meshtrace", "relMSE Mitsuba", "s meshtrace", "s Mitsuba",
                   "q/s meshtrace", "q/s Mitsuba", "ratio", "goal"], body) + [
         "",
-        f"Mitsuba {q.get('mitsuba', '?')} {q.get('variant', '')}; {q.get('spp')} spp, "
+        f"Mitsuba {q.get('mitsuba', '?')} {q.get('variant', '')}"
+        + (f" (Dr.Jit on {os.path.basename(q['libllvm'])})" if q.get("libllvm") else "")
+        + f"; {q.get('spp')} spp, "
         f"{q.get('seeds')} seed(s): relMSE the mean, s the median render seconds, "
         "q/s = 1 / (relMSE × s), ratio = q/s meshtrace / Mitsuba.",
         f"* Target: CPU quality per second ≥ {QPS_GOAL}× Mitsuba on the {QPS_SCENES} scenes: "
@@ -391,7 +421,7 @@ def render_machine(r):
     lines = [
         f"### Machine: {r['machine']}", "",
         f"* Date: {r['date'][:16].replace('T', ' ')} UTC",
-        *([f"* CPU: {host['cpu']}, {host['threads']} threads",
+        *([f"* CPU: {host['cpu']}{cpu_detail(host)}, {host['threads']} threads",
            "* GPU: " + (", ".join(host["gpus"]) or "none; Vulkan adapters: "
                         + (", ".join(host["adapters"]) or "none"))]
           if host else ["* CPU and GPU: as the device JSON below records them"]),

@@ -91,19 +91,21 @@ import gltf_read as gr  # noqa: E402
 # ---------------------------------------------------------------- Mitsuba set-up
 
 def setup_mitsuba(variant=None):
-    """Import mitsuba and pick a variant: llvm_ad_rgb when libLLVM >= 16 is found
-    (DRJIT_LIBLLVM_PATH, else /usr/lib/*/libLLVM-1[6-9]*.so ...), else scalar_rgb."""
+    """Import mitsuba and pick a variant: llvm_ad_rgb when libLLVM >= 17 is found
+    (DRJIT_LIBLLVM_PATH, else /usr/lib/*/libLLVM-1[7-9]*.so ...), else scalar_rgb.
+    Mitsuba 3.9.1's kernels abort the process under libLLVM 15 and 16 ("Cannot select:
+    fminimum"); 19 works (Debian 12: libllvm19)."""
     llvm_found = "DRJIT_LIBLLVM_PATH" in os.environ
     if not llvm_found:
         cands = []
-        for pat in ("/usr/lib/*/libLLVM-2[0-9]*.so*", "/usr/lib/*/libLLVM-1[6-9]*.so*",
-                    "/usr/lib/*/libLLVM.so.2[0-9]*", "/usr/lib/*/libLLVM.so.1[6-9]*",
+        for pat in ("/usr/lib/*/libLLVM-2[0-9]*.so*", "/usr/lib/*/libLLVM-1[7-9]*.so*",
+                    "/usr/lib/*/libLLVM.so.2[0-9]*", "/usr/lib/*/libLLVM.so.1[7-9]*",
                     "/usr/lib/llvm-*/lib/libLLVM*.so*"):
             cands += sorted(glob.glob(pat), reverse=True)
         for c in cands:
             base = os.path.basename(c)
             digits = "".join(ch if ch.isdigit() else " " for ch in base).split()
-            if digits and int(digits[0]) >= 16:
+            if digits and int(digits[0]) >= 17:
                 os.environ["DRJIT_LIBLLVM_PATH"] = c
                 llvm_found = True
                 break
@@ -113,8 +115,8 @@ def setup_mitsuba(variant=None):
     for v in wanted:
         if v.startswith("llvm") and not llvm_found:
             # Dr.Jit would fall back to the system's default libLLVM, and an older one
-            # (Debian 12's 14 or 15) aborts the process in its first kernels.
-            err = ("no libLLVM >= 16 found (Debian 12: apt-get install libllvm16, or set "
+            # (Debian 12's 14, 15 or 16) aborts the process in its first kernels.
+            err = ("no libLLVM >= 17 found (Debian 12: apt-get install libllvm19, or set "
                    "DRJIT_LIBLLVM_PATH)")
             print("mitsuba_render: variant %s unavailable: %s" % (v, err), file=sys.stderr)
             continue
