@@ -350,7 +350,9 @@ def render_embree(e):
            "`shadow`: a ray from each such hit towards a point on a light (occlusion, "
            "Embree's `rtcOccluded1`)." if "incoherent" in views else ""),
         f"* Target: CPU primary rays ≥ {EMBREE_GOAL}× Embree per thread on a view where most "
-        "rays hit: " + (verdict(any(met)) if met else "not measured (no such view)") + ".",
+        "rays hit: " + (verdict(any(met)) if met else "not measured (no such view)")
+        + ("" if direct or not met else " against Embree's robust mode, not against "
+           "Embree as Mitsuba runs it") + ".",
     ]
     if e.get("failures"):
         lines.append("* Check failures: " + "; ".join(e["failures"]) + ".")
