@@ -199,14 +199,16 @@ def compile_helper(out_dir):
 
 
 def trace_view(helper, lib, tri_path, ray_path, rays, verts, repeats, build_threads,
-               verify_count, any_hit, tmp):
-    """Embree's rates, build times and hits for one ray set (embree_rays.c): closest hits,
-    or with `any_hit` occlusion within each ray's t_max (`rtcOccluded1`)."""
+               build_repeats, verify_count, any_hit, tmp):
+    """Embree's rates, hits and `build_repeats` timed builds for one ray set
+    (embree_rays.c): closest hits, or with `any_hit` occlusion within each ray's t_max
+    (`rtcOccluded1`)."""
     origins, dirs, t_max = rays
     n = len(dirs)
     out = Path(tmp) / "embree_out.f32"
     cmd = [str(helper), str(lib), str(tri_path), str(ray_path),
-           "any" if any_hit else "closest", str(repeats), str(build_threads), str(out)]
+           "any" if any_hit else "closest", str(repeats), str(build_threads),
+           str(build_repeats), str(out)]
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
         raise SystemExit(f"{' '.join(cmd)} failed ({r.returncode}):\n{r.stderr}")
@@ -345,8 +347,10 @@ def trace_all(args, cmd, name, mt_first, run_mt, tri_path, verts, rays, rays_dir
         got = {}
         for view, r in rays.items():
             say(f"round {i + 1}/{args.rounds}: tracing {view} with embree ...")
+            # The build is the same for every view: timed once a round, with the first.
             got[view] = trace_view(helper, lib, tri_path, rays_dir / f"{name}.{view}.rays.f32",
                                    r, verts, args.repeats, args.embree_build_threads,
+                                   args.repeats if view == VIEWS[0] else 0,
                                    args.verify if i == 0 else 0, view in ANY_HIT_VIEWS, tmp)
         embree_rounds.append(got)
     v0 = embree_rounds[0][VIEWS[0]]["embree_version"]

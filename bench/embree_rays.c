@@ -14,12 +14,14 @@
  *   packet16  packet: what Mitsuba's LLVM variant calls (8 lanes with AVX2, 16 with
  *             AVX-512).
  *
- * Usage: embree_rays LIBEMBREE4 TRIANGLES RAYS closest|any REPEATS BUILD_THREADS OUT
+ * Usage: embree_rays LIBEMBREE4 TRIANGLES RAYS closest|any REPEATS BUILD_THREADS
+ *        BUILD_REPEATS OUT
  * TRIANGLES: float32, 9 a triangle; RAYS: float32, 8 a ray (origin, t_max, unit
  * direction, 0). OUT receives, per ray, the default scene's hit distance (closest; +inf
  * for a miss) or 1/0 (any: occluded or not), float32. Prints one JSON object to stdout:
- * the timed seconds of each mode (after one warm-up), the build seconds, and for each
- * other mode the number of rays whose result differs from the default mode's.
+ * the timed seconds of each mode (after one warm-up), the seconds of BUILD_REPEATS timed
+ * builds (after one warm-up; none for 0), and for each other mode the number of rays whose
+ * result differs from the default mode's.
  */
 #include <dlfcn.h>
 #include <math.h>
@@ -258,17 +260,18 @@ static void timed(const char *name, RTCScene scene, trace_fn f, int repeats, flo
 }
 
 int main(int argc, char **argv) {
-    if (argc != 8)
+    if (argc != 9)
         die("usage: embree_rays LIBEMBREE4 TRIANGLES RAYS closest|any REPEATS "
-            "BUILD_THREADS OUT",
+            "BUILD_THREADS BUILD_REPEATS OUT",
             NULL);
     load_api(argv[1]);
     tris = read_floats(argv[2], 9, &ntris);
     rays = read_floats(argv[3], 8, &nrays);
     if (strcmp(argv[4], "closest") && strcmp(argv[4], "any")) die("query is not closest|any", argv[4]);
     any_hit = !strcmp(argv[4], "any");
-    int repeats = atoi(argv[5]), build_threads = atoi(argv[6]);
+    int repeats = atoi(argv[5]), build_threads = atoi(argv[6]), build_repeats = atoi(argv[7]);
     if (repeats < 1) die("REPEATS must be at least 1", argv[5]);
+    if (build_repeats < 0) die("BUILD_REPEATS must not be negative", argv[7]);
 
     char config[64];
     snprintf(config, sizeof config, "threads=%d", build_threads > 0 ? build_threads : 0);
@@ -281,7 +284,7 @@ int main(int argc, char **argv) {
     printf("{\n  \"embree_version\": %ld,\n  \"rays\": %zu,\n  \"triangles\": %zu,\n", version,
            nrays, ntris);
     printf("  \"build_seconds\": [");
-    for (int r = 0; r <= repeats; r++) { /* the first build is a warm-up */
+    for (int r = 0; build_repeats > 0 && r <= build_repeats; r++) { /* 0: a warm-up */
         double t0 = now();
         RTCScene s = build(RTC_SCENE_FLAG_NONE);
         double dt = now() - t0;
@@ -298,7 +301,7 @@ int main(int argc, char **argv) {
     timed("packet16", scene, trace_packet16, repeats, out, ref, 1);
     printf("  }\n}\n");
 
-    FILE *f = fopen(argv[7], "wb");
-    if (!f || fwrite(ref, 4, nrays, f) != nrays || fclose(f)) die("cannot write", argv[7]);
+    FILE *f = fopen(argv[8], "wb");
+    if (!f || fwrite(ref, 4, nrays, f) != nrays || fclose(f)) die("cannot write", argv[8]);
     return 0;
 }

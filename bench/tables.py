@@ -13,7 +13,8 @@
           --device cpu
   embree  python3 bench/embree_compare.py --json (meshtrace against Embree 4, one thread,
           two views of the bunny, their bounces and shadow rays); skipped with a note
-          where embreex (which bundles Embree 4) or a C compiler is missing
+          where embreex (which bundles Embree 4) is missing, or with the script's error
+          (no C compiler, for one)
   qps     python3 bench/quality_per_second.py --json OUT (CPU quality per second against
           Mitsuba 3 llvm_ad_rgb on three scenes)
 
@@ -39,7 +40,6 @@ import json
 import math
 import os
 import re
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -84,11 +84,11 @@ def cpu_info():
                 info["family"] = int(value)
             elif key == "model" and info["model"] is None:
                 info["model"] = int(value)
-            elif key == "flags" and not info["flags"]:
+            elif key in ("flags", "Features") and not info["flags"]:  # x86, Arm
                 info["flags"] = set(value.split())
     flags = info.pop("flags")
     info["simd"] = ("avx512" if "avx512f" in flags else "avx2" if "avx2" in flags
-                    else "sse")
+                    else "neon" if "asimd" in flags else "baseline")
     info["gfni"] = "gfni" in flags
     return info
 
@@ -181,8 +181,6 @@ def run(args):
         result["embree"] = {"skipped": "--skip embree"}
     elif importlib.util.find_spec("embreex") is None:
         result["embree"] = {"skipped": "embreex is not installed (pip install embreex)"}
-    elif shutil.which(os.environ.get("CC", "cc")) is None:
-        result["embree"] = {"skipped": "no C compiler for bench/embree_rays.c (set CC)"}
     else:
         cmd = [py, "bench/embree_compare.py", "--json", "--binary", binary]
         if args.quick:
@@ -293,7 +291,8 @@ def cpu_detail(host):
     """`(family 25, model 1; AVX2, no AVX-512)`, or a note where the result predates it."""
     if "simd" not in host:
         return " (vector extensions not recorded)"
-    simd = {"avx512": "AVX-512", "avx2": "AVX2, no AVX-512", "sse": "no AVX2"}[host["simd"]]
+    simd = {"avx512": "AVX-512", "avx2": "AVX2, no AVX-512", "neon": "NEON",
+            "baseline": "no AVX2 or NEON"}[host["simd"]]
     return (f" (family {host['family']}, model {host['model']}; {simd}"
             f"{', GFNI' if host['gfni'] else ''})")
 

@@ -77,6 +77,7 @@ import argparse
 import glob
 import math
 import os
+import re
 import sys
 import tempfile
 import time
@@ -90,34 +91,40 @@ import gltf_read as gr  # noqa: E402
 
 # ---------------------------------------------------------------- Mitsuba set-up
 
+def libllvm_versions():
+    """The libLLVM shared libraries in the usual places, each with its major version (None
+    where neither the file name nor an `llvm-N` folder says it)."""
+    found = {}
+    for d in ("/usr/lib/*", "/usr/lib", "/usr/lib64", "/usr/local/lib", "/usr/lib/llvm-*/lib",
+              "/usr/lib64/llvm*/lib", "/opt/homebrew/opt/llvm/lib", "/usr/local/opt/llvm/lib"):
+        for c in glob.glob(d + "/libLLVM*.so*") + glob.glob(d + "/libLLVM*.dylib"):
+            m = (re.search(r"(\d+)", os.path.basename(c))
+                 or re.search(r"llvm-?(\d+)", os.path.dirname(c)))
+            found[c] = int(m.group(1)) if m else None
+    return found
+
+
 def setup_mitsuba(variant=None):
-    """Import mitsuba and pick a variant: llvm_ad_rgb when libLLVM >= 17 is found
-    (DRJIT_LIBLLVM_PATH, else /usr/lib/*/libLLVM-1[7-9]*.so ...), else scalar_rgb.
+    """Import mitsuba and pick a variant: llvm_ad_rgb when a libLLVM >= 17 is found
+    (DRJIT_LIBLLVM_PATH, else the newest of libllvm_versions()), else scalar_rgb.
     Mitsuba 3.9.1's kernels abort the process under libLLVM 15 and 16 ("Cannot select:
-    fminimum"); 19 works (Debian 12: libllvm19)."""
+    fminimum"); 19 works (Debian 12: libllvm19). Where only older ones are found, the LLVM
+    variants are skipped; where none of known version is, Dr.Jit looks for one itself."""
     llvm_found = "DRJIT_LIBLLVM_PATH" in os.environ
     if not llvm_found:
-        cands = []
-        for pat in ("/usr/lib/*/libLLVM-2[0-9]*.so*", "/usr/lib/*/libLLVM-1[7-9]*.so*",
-                    "/usr/lib/*/libLLVM.so.2[0-9]*", "/usr/lib/*/libLLVM.so.1[7-9]*",
-                    "/usr/lib/llvm-*/lib/libLLVM*.so*"):
-            cands += sorted(glob.glob(pat), reverse=True)
-        for c in cands:
-            base = os.path.basename(c)
-            digits = "".join(ch if ch.isdigit() else " " for ch in base).split()
-            if digits and int(digits[0]) >= 17:
-                os.environ["DRJIT_LIBLLVM_PATH"] = c
-                llvm_found = True
-                break
+        found = libllvm_versions()
+        good = sorted((v, c) for c, v in found.items() if v is not None and v >= 17)
+        if good:
+            os.environ["DRJIT_LIBLLVM_PATH"] = good[-1][1]
+        # Dr.Jit would load one of these by itself, and an older one aborts the process.
+        llvm_found = bool(good) or not found or None in found.values()
     import mitsuba as mi
     wanted = [variant] if variant else ["llvm_ad_rgb", "scalar_rgb"]
     err = None
     for v in wanted:
         if v.startswith("llvm") and not llvm_found:
-            # Dr.Jit would fall back to the system's default libLLVM, and an older one
-            # (Debian 12's 14, 15 or 16) aborts the process in its first kernels.
-            err = ("no libLLVM >= 17 found (Debian 12: apt-get install libllvm19, or set "
-                   "DRJIT_LIBLLVM_PATH)")
+            err = ("only libLLVM older than 17 found (Debian 12: apt-get install libllvm19, "
+                   "or set DRJIT_LIBLLVM_PATH)")
             print("mitsuba_render: variant %s unavailable: %s" % (v, err), file=sys.stderr)
             continue
         try:
