@@ -350,6 +350,7 @@ pub fn bench_scene(
         spp: opts.spp,
         max_depth: scene.settings.max_depth,
         seed: 0,
+        caustics: scene.settings.caustics,
     };
     let job = RenderJob::new(settings);
     let samples = opts.width as f64 * opts.height as f64 * opts.spp as f64;

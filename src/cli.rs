@@ -236,6 +236,11 @@ pub struct RenderArgs {
     /// seed; else 0].
     #[arg(long)]
     pub seed: Option<u32>,
+    /// Also trace light subpaths through the scene's specular materials (glass, mirrors),
+    /// for caustics with far less noise; off renders with the path tracer alone [scene's
+    /// [render] caustics; else on].
+    #[arg(long, value_name = "on|off", value_parser = clap::builder::BoolishValueParser::new())]
+    pub caustics: Option<bool>,
     #[command(flatten)]
     pub on: DeviceArgs,
     /// Print nothing but warnings and errors.
@@ -421,6 +426,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     s.spp = args.spp.unwrap_or(s.spp);
     s.max_depth = args.max_depth.unwrap_or(s.max_depth);
     s.seed = args.seed.unwrap_or(s.seed);
+    s.caustics = args.caustics.unwrap_or(s.caustics);
     if let Err((field, message)) = validate_settings(s) {
         bail!("--{}: {message}", field.replace('_', "-"));
     }

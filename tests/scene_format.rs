@@ -127,6 +127,7 @@ fn full_scene_camera_settings_sky() {
             spp: 16,
             max_depth: 5,
             seed: 42,
+            ..RenderSettings::default()
         }
     );
     assert_eq!(
@@ -406,6 +407,7 @@ fn defaults() {
             spp: 64,
             max_depth: 8,
             seed: 0,
+            ..RenderSettings::default()
         }
     );
     assert_eq!(s.settings, RenderSettings::default());

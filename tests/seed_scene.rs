@@ -180,7 +180,8 @@ fn has_the_seed_triangles_materials_and_transforms() {
             height: 512,
             spp: 64,
             max_depth: 50,
-            seed: 0
+            seed: 0,
+            ..RenderSettings::default()
         }
     );
     assert_eq!(scene.sky, Sky::Constant(SKY));

@@ -124,6 +124,7 @@ fn mesh_scene() -> (RenderScene, RenderSettings) {
         spp: 1,
         max_depth: 10,
         seed: 1234,
+        ..RenderSettings::default()
     };
     let sky = Sky::Gradient {
         zenith: Vec3::new(0.3, 0.5, 0.9),
@@ -503,6 +504,7 @@ fn no_ray_escapes_a_closed_mesh() {
         spp: 1,
         max_depth: 2,
         seed: 0,
+        ..RenderSettings::default()
     };
     let sky = Sky::Constant(Vec3::ONE);
     let scene = scene(mesh, mesh_materials(), camera, sky, settings);
@@ -923,6 +925,7 @@ fn camera_ray_matches() {
         spp: 1,
         max_depth: 8,
         seed: 77,
+        ..RenderSettings::default()
     };
     let pinhole = Camera::new(
         Vec3::new(0.3, 0.2, 3.9),
@@ -1009,7 +1012,8 @@ fn replay_paths(
         let rng = Rng::new(y * settings.width + x, sample, settings.seed);
         let cam = CameraRays::new(&rs.camera, settings.width, settings.height);
         let ray = generate_camera_ray(&cam, x, y, &rng);
-        let (l, rays) = trace_path(rs, ray, &rng, settings.max_depth);
+        let ps = trace_path(rs, &cam, ray, &rng, settings.max_depth);
+        let (l, rays) = (ps.radiance, ps.rays);
         let (gl, grays) = (v3(o[0]), f(o[0][3]));
         let close =
             (0..3).all(|i| (l[i] - gl[i]).abs() <= 1e-3 * l[i].abs().max(gl[i].abs()) + 1e-4);
@@ -1335,6 +1339,7 @@ fn first_hit_matches() {
         spp: 1,
         max_depth: 8,
         seed: 0,
+        ..RenderSettings::default()
     };
     let cases: Vec<Case> = (0..settings.height)
         .flat_map(|y| (0..settings.width).map(move |x| [[x, y, 0, 0], [0; 4]]))

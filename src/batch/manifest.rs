@@ -59,6 +59,7 @@ impl SettingsOverride {
             spp: self.spp.unwrap_or(s.spp),
             max_depth: self.max_depth.unwrap_or(s.max_depth),
             seed: self.seed.unwrap_or(s.seed),
+            ..s
         }
     }
 }

@@ -11,7 +11,9 @@ use super::{Checkpoints, RenderJob, RenderScene};
 use crate::film::{Aov, Film};
 use crate::fixed::{Texel, fixed_add, fixed_add3, texel_add, to_fixed, to_fixed3};
 use crate::scene::RenderSettings;
+use glam::Vec3;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicI64, Ordering};
 
 /// Tiles are square, this many pixels on a side.
 pub const TILE: u32 = 16;
@@ -54,6 +56,7 @@ pub fn render(scene: &RenderScene, job: &RenderJob, progress: &(dyn Fn(u64) + Sy
     };
     let mut aovs = vec![AovSums::default(); aov_pixels];
     let mut checkpoints = Checkpoints::new(job);
+    let splats = Splats::new(film.sum.len());
     let mut start = job.samples.start;
     while start < job.samples.end && !job.cancelled() {
         let end = (start + step).min(job.samples.end);
@@ -83,6 +86,7 @@ pub fn render(scene: &RenderScene, job: &RenderJob, progress: &(dyn Fn(u64) + Sy
                             start..end,
                             before[i],
                             aov.as_mut(),
+                            &splats,
                         );
                         sums.push(acc);
                         aov_sums.extend(aov);
@@ -99,6 +103,7 @@ pub fn render(scene: &RenderScene, job: &RenderJob, progress: &(dyn Fn(u64) + Sy
                         );
                         tile.samples = end - job.samples.start;
                         fill(&mut tile, &sums, &aov_sums);
+                        splats.add_region_to(&mut tile, region, w);
                         tile
                     });
                     watch.finished(worker, region, tile.as_ref());
@@ -121,11 +126,47 @@ pub fn render(scene: &RenderScene, job: &RenderJob, progress: &(dyn Fn(u64) + Sy
         start = end;
         if start < job.samples.end && checkpoints.due() {
             fill(&mut film, &pixels, &aovs);
+            splats.add_region_to(&mut film, Region::whole(w, h), w);
             checkpoints.write(&film);
         }
     }
     fill(&mut film, &pixels, &aovs);
+    splats.add_region_to(&mut film, Region::whole(w, h), w);
     film
+}
+
+/// What light subpaths seen through the lens add to the pixels they land in, from every
+/// worker: each splat rounded once to fixed point (as a sample's radiance is) and added
+/// atomically, so that the sums are the same bits in whatever order the workers add them.
+/// mirror: the `splats` buffer of `shaders/render.wgsl`
+pub struct Splats(Vec<[AtomicI64; 3]>);
+
+impl Splats {
+    /// Zero sums for `pixels` pixels.
+    pub fn new(pixels: usize) -> Self {
+        Self((0..pixels).map(|_| Default::default()).collect())
+    }
+
+    /// Adds `value` to pixel `pixel`; a non-finite value is dropped, as a sample's is.
+    pub fn add(&self, pixel: u32, value: Vec3) {
+        if value == Vec3::ZERO || !value.is_finite() {
+            return;
+        }
+        for (sum, v) in self.0[pixel as usize].iter().zip(to_fixed3(value)) {
+            sum.fetch_add(v, Ordering::Relaxed);
+        }
+    }
+
+    /// Adds the sums of the pixels of `region` (of an image `width` pixels wide) to the
+    /// radiance sums of `film`, which covers the region.
+    fn add_region_to(&self, film: &mut Film, region: Region, width: u32) {
+        let rw = region.width();
+        for (i, dst) in film.sum.iter_mut().enumerate() {
+            let (x, y) = (region.x0 + i as u32 % rw, region.y0 + i as u32 / rw);
+            let sums = &self.0[(y * width + x) as usize];
+            *dst = fixed_add3(*dst, sums.each_ref().map(|s| s.load(Ordering::Relaxed)));
+        }
+    }
 }
 
 /// The AOVs `aovs` alone of the first `samples` camera samples of every pixel, no paths
@@ -210,7 +251,8 @@ pub fn set_aov_ids(sums: &mut AovSums, fh: &FirstHit) {
 /// exactly, as the GPU adds them; non-finite radiance samples are dropped (their rays
 /// still count). With AOVs,
 /// `aov` gets each sample's first hit, and with sample 0 the pixel-centre ray's ids; in a
-/// transparent render, a sample whose camera ray misses adds no radiance.
+/// transparent render, a sample whose camera ray misses adds no radiance. The splats of the
+/// samples' light subpaths go to `splats`, whichever pixels they land in.
 /// mirror: shaders/render.wgsl `render`
 #[allow(clippy::too_many_arguments)]
 pub fn render_pixel(
@@ -222,6 +264,7 @@ pub fn render_pixel(
     samples: std::ops::Range<u32>,
     mut acc: PixelSums,
     mut aov: Option<&mut AovSums>,
+    splats: &Splats,
 ) -> PixelSums {
     let s = &job.settings;
     let pixel = y * s.width + x;
@@ -244,10 +287,13 @@ pub fn render_pixel(
                 set_aov_ids(aov, &first_hit(scene, &pixel_centre_ray(cam, x, y)));
             }
         }
-        let (l, rays) = trace_path(scene, ray, &rng, s.max_depth);
-        acc.rays = fixed_add(acc.rays, to_fixed(rays as f32));
-        if l.is_finite() && seen {
-            acc.radiance = fixed_add3(acc.radiance, to_fixed3(l));
+        let ps = trace_path(scene, cam, ray, &rng, s.max_depth);
+        acc.rays = fixed_add(acc.rays, to_fixed(ps.rays as f32));
+        if ps.radiance.is_finite() && seen {
+            acc.radiance = fixed_add3(acc.radiance, to_fixed3(ps.radiance));
+        }
+        for (&pixel, &value) in ps.splat_pixels.iter().zip(&ps.splats) {
+            splats.add(pixel, value);
         }
     }
     acc

@@ -11,6 +11,11 @@ use super::bsdf::{
     bsdf_draws_direction, bsdf_draws_lobe, bsdf_eval, bsdf_is_delta, bsdf_is_two_sided, bsdf_pdf,
     bsdf_sample, bsdf_transmits,
 };
+use super::camera::CameraRays;
+use super::caustics::{
+    LightPath, MAX_CAUSTIC_HOPS, camera_link, camera_pdf, caustic_hit_weight, caustic_link,
+    trace_light_subpath,
+};
 use super::lights::{light_pdf, sample_light, sky_pdf, sky_radiance};
 use super::rng::{self, Rng};
 use super::sampling::power_heuristic;
@@ -20,7 +25,7 @@ use crate::bvh::{Hit, traverse_closest_counted};
 use crate::film::NO_ID;
 use crate::geometry::T_INF;
 use crate::math::{Ray, onb_from_normal};
-use crate::scene::MaterialKind;
+use crate::scene::{Material, MaterialKind};
 use glam::{Vec2, Vec3};
 
 /// Path depth (in bounces) from which Russian roulette may end a path.
@@ -90,6 +95,58 @@ pub fn offset_ray_origin(p: Vec3, ng: Vec3, w: Vec3) -> Vec3 {
     }
 }
 
+/// The frame a BSDF is evaluated in at a hit, for light leaving along `wo_world`: a
+/// two-sided BSDF's is turned towards `wo_world` (the shading normal falling back to the
+/// geometric one where it faces away); a dielectric's keeps the front face's, so that it
+/// knows whether it is entered or left.
+/// mirror: shaders/integrator.wgsl `ShadingFrame` (a mat3x3 and the normal)
+#[derive(Clone, Copy, Debug)]
+pub struct ShadingFrame {
+    /// The geometric normal, turned as the frame is.
+    pub ng: Vec3,
+    pub t: Vec3,
+    pub b: Vec3,
+    pub ns: Vec3,
+}
+
+impl ShadingFrame {
+    #[inline(always)]
+    pub fn to_local(&self, w: Vec3) -> Vec3 {
+        Vec3::new(w.dot(self.t), w.dot(self.b), w.dot(self.ns))
+    }
+
+    #[inline(always)]
+    pub fn to_world(&self, w: Vec3) -> Vec3 {
+        w.x * self.t + w.y * self.b + w.z * self.ns
+    }
+}
+
+/// mirror: shaders/integrator.wgsl `shading_frame`
+#[inline(always)]
+pub fn shading_frame(mat: &Material, si: &SurfaceHit, wo_world: Vec3) -> ShadingFrame {
+    let two_sided = bsdf_is_two_sided(mat);
+    let flip = two_sided && wo_world.dot(si.ng) < 0.0;
+    let (ng, mut ns) = if flip {
+        (-si.ng, -si.ns)
+    } else {
+        (si.ng, si.ns)
+    };
+    if two_sided && ns.dot(wo_world) <= 0.0 {
+        ns = ng;
+    }
+    let (t, b) = onb_from_normal(ns);
+    ShadingFrame { ng, t, b, ns }
+}
+
+/// Whether the geometry agrees with the shading frame about a pair of directions: a
+/// reflection in the frame (`wi.z wo.z > 0`) must stay on `wo`'s side of the triangle, a
+/// transmission must cross it. Paths where they disagree carry no light.
+/// mirror: shaders/integrator.wgsl `geometry_agrees`
+#[inline(always)]
+pub fn geometry_agrees(ng: Vec3, wo_world: Vec3, wi_world: Vec3, wo: Vec3, wi: Vec3) -> bool {
+    (wi_world.dot(ng) * wo_world.dot(ng) > 0.0) == (wi.z * wo.z > 0.0)
+}
+
 /// One path between bounces: the ray it traces next and what it has gathered so far.
 /// mirror: shaders/integrator.wgsl `PathState`
 #[derive(Clone, Copy, Debug)]
@@ -108,19 +165,37 @@ pub struct PathState {
     pub eta_scale: f32,
     /// Vertices already on the path; the camera ray finds vertex 0.
     pub depth: u32,
+    /// BSDF sampling's density of the path since its last direct edge, for weighing it
+    /// against a light subpath that ends there ([`super::caustics`]): the density in area
+    /// of the vertex x(t) that edge reached from the camera or a non-delta vertex, times
+    /// the solid-angle pdf of the direction x(t) left by over its cosine, times, at each
+    /// non-delta vertex reached since through a specular chain, the ratio of its camera to
+    /// its light density (both solid-angle pdfs times the cosine of the direction drawn
+    /// from). Kept through delta vertices; 0 where no light subpath could end the path
+    /// that way, and in scenes without caustic targets.
+    pub caustic_pdf: f32,
+    /// Specular chains completed since x(t).
+    pub caustic_hops: u32,
+    /// The sample's light subpath, whose vertices every non-delta vertex connects to.
+    pub light: LightPath,
 }
 
-/// A path about to trace its camera ray. mirror: shaders/integrator.wgsl `path_start`
-pub fn path_start(ray: Ray) -> PathState {
+/// A path about to trace its camera ray, drawn with solid-angle density `camera_pdf`
+/// (kept in `prev_pdf` for the caustic weights; `prev_delta` keeps other weights off it),
+/// with `light` its light subpath. mirror: shaders/integrator.wgsl `path_start`
+pub fn path_start(ray: Ray, camera_pdf: f32, light: LightPath) -> PathState {
     PathState {
         ray,
         radiance: Vec3::ZERO,
         beta: Vec3::ONE,
         rays: 0,
-        prev_pdf: 0.0,
+        prev_pdf: camera_pdf,
         prev_delta: true,
         eta_scale: 1.0,
         depth: 0,
+        caustic_pdf: 0.0,
+        caustic_hops: 0,
+        light,
     }
 }
 
@@ -160,34 +235,33 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
         base
     };
     if si.front_face && mat.is_emissive() {
-        let w = if st.prev_delta {
-            1.0
-        } else {
-            let cos_l = -st.ray.dir.dot(si.ng);
+        let cos_l = -st.ray.dir.dot(si.ng);
+        let w = if !st.prev_delta {
             power_heuristic(st.prev_pdf, light_pdf(scene, si.tri, hit.t, cos_l))
+        } else if st.caustic_pdf > 0.0 {
+            caustic_hit_weight(scene, si.tri, si.p, st.ray.dir, cos_l, st.caustic_pdf)
+        } else {
+            1.0
         };
         st.radiance += st.beta * w * mat.emission;
     }
+    // The camera's (or BSDF sampling's) density of this vertex in area, where the previous
+    // vertex is the camera (or a non-delta vertex): where a light subpath ending here
+    // could have been connected to the camera path.
+    let caustics = !scene.caustic_targets.is_empty();
+    let area_pdf = if caustics && (st.depth == 0 || !st.prev_delta) {
+        st.prev_pdf * st.ray.dir.dot(si.ng).abs() / (hit.t * hit.t)
+    } else {
+        0.0
+    };
     // Segments so far: depth + 1. Both light sampling and continuing add one more.
     if st.depth + 1 >= max_depth {
         return true;
     }
     let wo_world = -st.ray.dir;
-    // Two-sided BSDFs turn the frame towards the viewer; the others (dielectrics) keep the
-    // front face's frame so that they know whether they are entered or left.
-    let two_sided = bsdf_is_two_sided(mat);
-    let flip = two_sided && wo_world.dot(si.ng) < 0.0;
-    let (ng, mut ns) = if flip {
-        (-si.ng, -si.ns)
-    } else {
-        (si.ng, si.ns)
-    };
-    if two_sided && ns.dot(wo_world) <= 0.0 {
-        ns = ng;
-    }
-    let (t, b) = onb_from_normal(ns);
-    let to_local = |w: Vec3| Vec3::new(w.dot(t), w.dot(b), w.dot(ns));
-    let wo = to_local(wo_world);
+    let frame = shading_frame(mat, &si, wo_world);
+    let ng = frame.ng;
+    let wo = frame.to_local(wo_world);
 
     // The numbers BSDF sampling reads, drawn only where the material reads them, and
     // before next event estimation, whose shadow ray then hides their hashes' latency.
@@ -216,7 +290,7 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
             cos_i > 0.0
         };
         if usable {
-            let wi = to_local(ls.wi);
+            let wi = frame.to_local(ls.wi);
             let f = bsdf_eval(mat, wo, wi);
             if f != Vec3::ZERO {
                 st.rays += 1;
@@ -234,16 +308,61 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
         }
     }
 
+    // Caustic connections: the first hit to each vertex of the sample's light subpath that
+    // leaves the path room for the link and the subpath's segments.
+    if !bsdf_is_delta(mat) {
+        for lv in &st.light.vertices[..st.light.count as usize] {
+            if st.depth + 2 + lv.segments <= max_depth
+                && let Some(link) = caustic_link(scene, &si, mat, &frame, wo_world, wo, lv)
+            {
+                st.rays += 1;
+                if !wide.traverse_any(&link.ray, link.t_max, |t, u, v| alpha_test(scene, t, u, v)) {
+                    st.radiance += st.beta * link.value;
+                }
+            }
+        }
+    }
+
     // BSDF sampling.
     let Some(bs) = bsdf_sample(mat, wo, u_lobe, u) else {
         return true;
     };
-    let wi_world = bs.wi.x * t + bs.wi.y * b + bs.wi.z * ns;
+    let wi_world = frame.to_world(bs.wi);
     // Reject directions that the shading normal allows but the geometry does not:
     // reflection must stay on wo's side of the surface, transmission must cross it.
-    let reflect = bs.wi.z * wo.z > 0.0;
-    if (wi_world.dot(si.ng) * wo_world.dot(si.ng) > 0.0) != reflect {
+    if !geometry_agrees(si.ng, wo_world, wi_world, wo, bs.wi) {
         return true;
+    }
+    if caustics {
+        if bs.delta {
+            // A specular chain goes on through a delta material, and breaks at another
+            // material's delta lobe (a light subpath would not follow it).
+            if !bsdf_is_delta(mat) {
+                st.caustic_pdf = 0.0;
+            }
+        } else if !st.prev_delta || st.depth == 0 {
+            // Reached directly from the previous vertex (or the camera): a new start.
+            let cos = wi_world.dot(si.ng).abs();
+            st.caustic_pdf = if area_pdf > 0.0 && cos > 0.0 {
+                area_pdf * bs.pdf / cos
+            } else {
+                0.0
+            };
+            st.caustic_hops = 0;
+        } else if st.caustic_pdf > 0.0 {
+            // Reached through a specular chain: this vertex would be a light subpath's,
+            // sampled from the chain's side; the ratio of its camera density to its light
+            // density joins the product.
+            let cos_out = wi_world.dot(si.ng).abs();
+            let cos_in = wo_world.dot(si.ng).abs();
+            let back = shading_frame(mat, &si, wi_world);
+            let pdf_light = bsdf_pdf(mat, back.to_local(wi_world), back.to_local(wo_world));
+            st.caustic_pdf *= bs.pdf * cos_in / (pdf_light * cos_out);
+            st.caustic_hops += 1;
+            if !(st.caustic_pdf.is_finite() && st.caustic_hops < MAX_CAUSTIC_HOPS as u32) {
+                st.caustic_pdf = 0.0;
+            }
+        }
     }
     st.beta *= bs.weight;
     st.prev_pdf = bs.pdf;
@@ -264,12 +383,56 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
     false
 }
 
-/// One path's radiance estimate and the number of rays it traced: [`path_step`] until the
+/// What one camera sample adds to the film: its path's radiance estimate and the rays it
+/// traced, and where its light subpath's vertices were seen through the lens: the pixels
+/// and values of those splats (zero values for none).
+/// mirror: shaders/integrator.wgsl `PathSample`
+#[derive(Clone, Copy, Debug)]
+pub struct PathSample {
+    pub radiance: Vec3,
+    pub rays: u32,
+    pub splat_pixels: [u32; MAX_CAUSTIC_HOPS],
+    pub splats: [Vec3; MAX_CAUSTIC_HOPS],
+}
+
+/// One camera sample: its light subpath (where the scene has caustic targets) and the
+/// links of that subpath's vertices to the camera, then [`path_step`] until the camera
 /// path ends. mirror: shaders/integrator.wgsl `trace_path`
-pub fn trace_path(scene: &RenderScene, ray: Ray, rng: &Rng, max_depth: u32) -> (Vec3, u32) {
-    let mut st = path_start(ray);
+pub fn trace_path(
+    scene: &RenderScene,
+    cam: &CameraRays,
+    ray: Ray,
+    rng: &Rng,
+    max_depth: u32,
+) -> PathSample {
+    let mut light = LightPath::NONE;
+    let mut rays = 0;
+    let mut splat_pixels = [0; MAX_CAUSTIC_HOPS];
+    let mut splats = [Vec3::ZERO; MAX_CAUSTIC_HOPS];
+    if !scene.caustic_targets.is_empty() {
+        (light, rays) = trace_light_subpath(scene, rng, max_depth - 1);
+        for (k, lv) in light.vertices[..light.count as usize].iter().enumerate() {
+            let u_lens = rng.rng_2d(lv.segments, rng::DIM_CAUSTIC_LENS_U);
+            if let Some(link) = camera_link(scene, cam, lv, u_lens) {
+                rays += 1;
+                if !scene
+                    .wide
+                    .traverse_any(&link.ray, link.t_max, |t, u, v| alpha_test(scene, t, u, v))
+                {
+                    (splat_pixels[k], splats[k]) = (link.pixel, link.value);
+                }
+            }
+        }
+    }
+    let mut st = path_start(ray, camera_pdf(cam, ray.dir), light);
+    st.rays = rays;
     while !path_step(scene, &mut st, rng, max_depth) {}
-    (st.radiance, st.rays)
+    PathSample {
+        radiance: st.radiance,
+        rays: st.rays,
+        splat_pixels,
+        splats,
+    }
 }
 
 /// What the AOVs read of a camera ray's first hit.

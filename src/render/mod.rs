@@ -7,6 +7,7 @@
 pub mod backend;
 pub mod bsdf;
 pub mod camera;
+pub mod caustics;
 pub mod cpu;
 pub mod digest;
 pub mod environment;
@@ -209,6 +210,10 @@ pub struct RenderScene {
     /// The environment's sampling distribution ([`environment::env_distribution`]); empty
     /// for another sky.
     pub env_cdf: Vec<f32>,
+    /// Spheres around the specular geometry, which caustic light subpaths aim at
+    /// ([`caustics::caustic_targets`]); empty where no material may be delta or the scene's
+    /// settings turn caustics off, and then no light subpath is traced.
+    pub caustic_targets: Vec<caustics::CausticTarget>,
 }
 
 /// An environment map as both renderers read it: its texture record, strength, the cosine
@@ -311,6 +316,12 @@ impl RenderScene {
             .map(srgb8_to_linear)
             .chain((0..=255u8).map(|k| k as f32 / 255.0))
             .collect();
+        let caustic_targets = if scene.settings.caustics {
+            let tri_materials: Vec<u32> = shading.iter().map(|s| s.material).collect();
+            caustics::caustic_targets(&tris, &tri_materials, &scene.materials)
+        } else {
+            Vec::new()
+        };
         let mut rs = Self {
             wide: WideBvh::collapse(&bvh.nodes, &tris),
             bvh,
@@ -332,6 +343,7 @@ impl RenderScene {
             sky: scene.sky,
             env: Environment::default(),
             env_cdf: Vec::new(),
+            caustic_targets,
         };
         if let Sky::Environment {
             texture,

@@ -21,7 +21,9 @@ pub const DIM_PIXEL_X: u32 = 0;
 pub const DIM_PIXEL_Y: u32 = 1;
 pub const DIM_LENS_U: u32 = 2;
 pub const DIM_LENS_V: u32 = 3;
-// 4 is free: the light pick, which had it, comes from the light pair's first number.
+/// Whether the sample traces a light subpath (`render::caustics`), at bounce 0. (The light
+/// pick, which had this dimension once, comes from the light pair's first number.)
+pub const DIM_LIGHT_SUBPATH: u32 = 4;
 /// Dimensions used at each path vertex (bounce b counts from 0 at the first hit).
 pub const DIM_LIGHT_U: u32 = 5;
 pub const DIM_LIGHT_V: u32 = 6;
@@ -29,6 +31,18 @@ pub const DIM_BSDF_LOBE: u32 = 7;
 pub const DIM_BSDF_U: u32 = 8;
 pub const DIM_BSDF_V: u32 = 9;
 pub const DIM_ROULETTE: u32 = 10;
+/// Dimensions of a camera sample's light subpath (`render::caustics`), whose vertex j draws
+/// at bounce j: the light point (bounce 0), the direction leaving vertex j (the emitted one
+/// at bounce 0, the BSDF's at a non-delta vertex) and the lobe there, and the lens point
+/// through which a non-delta vertex is seen (never at bounce 0, where the light point's
+/// pair lies).
+pub const DIM_CAUSTIC_LIGHT_U: u32 = 11;
+pub const DIM_CAUSTIC_LIGHT_V: u32 = 12;
+pub const DIM_CAUSTIC_LENS_U: u32 = 11;
+pub const DIM_CAUSTIC_LENS_V: u32 = 12;
+pub const DIM_CAUSTIC_DIR_U: u32 = 13;
+pub const DIM_CAUSTIC_DIR_V: u32 = 14;
+pub const DIM_CAUSTIC_LOBE: u32 = 15;
 /// Dimensions per bounce; the hash's third key word is `bounce * DIMS_PER_BOUNCE + dim`.
 pub const DIMS_PER_BOUNCE: u32 = 16;
 
@@ -119,12 +133,14 @@ pub fn owen_hash(x: u32, seed: u32) -> u32 {
 }
 
 /// The pair of dimensions `dim` draws from (numbered within a bounce), and which of its
-/// two components it is: the stages' pairs are (pixel x, y), (lens u, v), (light u, v)
-/// and (BSDF u, v); every other dimension is a pair of its own, component 0.
+/// two components it is: the stages' pairs are (pixel x, y), (lens u, v), (light u, v),
+/// (BSDF u, v) and the light subpath's (light u, v) and (direction u, v); every other
+/// dimension is a pair of its own, component 0.
 /// mirror: shaders/rng.wgsl `dim_pair`
 pub fn dim_pair(dim: u32) -> (u32, u32) {
     match dim {
-        DIM_PIXEL_Y | DIM_LENS_V | DIM_LIGHT_V | DIM_BSDF_V => (dim - 1, 1),
+        DIM_PIXEL_Y | DIM_LENS_V | DIM_LIGHT_V | DIM_BSDF_V | DIM_CAUSTIC_LIGHT_V
+        | DIM_CAUSTIC_DIR_V => (dim - 1, 1),
         _ => (dim, 0),
     }
 }
@@ -351,6 +367,8 @@ mod tests {
                 (DIM_LENS_U, DIM_LENS_V),
                 (DIM_LIGHT_U, DIM_LIGHT_V),
                 (DIM_BSDF_U, DIM_BSDF_V),
+                (DIM_CAUSTIC_LIGHT_U, DIM_CAUSTIC_LIGHT_V),
+                (DIM_CAUSTIC_DIR_U, DIM_CAUSTIC_DIR_V),
             ] {
                 for (nx, ny) in [(16, 16), (256, 1), (1, 256)] {
                     let mut cells = vec![0u32; 256];
@@ -366,7 +384,12 @@ mod tests {
                     );
                 }
             }
-            for dim in [DIM_BSDF_LOBE, DIM_ROULETTE] {
+            for dim in [
+                DIM_BSDF_LOBE,
+                DIM_ROULETTE,
+                DIM_LIGHT_SUBPATH,
+                DIM_CAUSTIC_LOBE,
+            ] {
                 let mut cells = vec![0u32; 256];
                 for sample in 0..256 {
                     let x = Rng::new(pixel, sample, seed).rng_1d(bounce, dim);

@@ -74,6 +74,7 @@ pub struct RenderFile {
     pub spp: Option<u32>,
     pub max_depth: Option<u32>,
     pub seed: Option<u32>,
+    pub caustics: Option<bool>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -741,6 +741,7 @@ impl Ctx<'_> {
             spp: r.spp.unwrap_or(d.spp),
             max_depth: r.max_depth.unwrap_or(d.max_depth),
             seed: r.seed.unwrap_or(d.seed),
+            caustics: r.caustics.unwrap_or(d.caustics),
         };
         validate_settings(&s)
             .map_err(|(field, message)| self.invalid(format!("render.{field}"), message))?;

@@ -130,7 +130,14 @@ pub struct RenderSettings {
     /// Longest path in segments from the camera (1 = emitters seen directly).
     pub max_depth: u32,
     pub seed: u32,
+    /// Whether some camera samples also trace light subpaths through the scene's specular
+    /// materials, joined to the camera paths (`render::caustics`): caustics with far less
+    /// noise. Off, the render is the path tracer's alone, as Mitsuba 3's `path` renders.
+    pub caustics: bool,
 }
+
+/// Whether renders trace caustic light subpaths unless told otherwise.
+pub const CAUSTICS_DEFAULT: bool = false;
 
 impl Default for RenderSettings {
     fn default() -> Self {
@@ -140,6 +147,7 @@ impl Default for RenderSettings {
             spp: 64,
             max_depth: 8,
             seed: 0,
+            caustics: CAUSTICS_DEFAULT,
         }
     }
 }

@@ -25,6 +25,7 @@ pub fn square(width: u32, spp: u32, max_depth: u32, seed: u32) -> RenderSettings
         spp,
         max_depth,
         seed,
+        ..RenderSettings::default()
     }
 }
 
@@ -138,6 +139,7 @@ pub fn material_table(materials: Vec<Material>) -> (RenderScene, RenderSettings)
         spp: 1,
         max_depth: 4,
         seed: 0,
+        ..RenderSettings::default()
     };
     let s = scene(mesh, materials, camera, Sky::Constant(Vec3::ONE), settings);
     (
