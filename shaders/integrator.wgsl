@@ -48,6 +48,31 @@ fn max3(v: vec3<f32>) -> f32 {
     return max(max(v.x, v.y), v.z);
 }
 
+// The frame a BSDF is evaluated in at a hit, for light leaving along wo_world: m's columns
+// are the tangent, bitangent and shading normal; ng the geometric normal, turned as the
+// frame is. mirror: src/render/integrator.rs `ShadingFrame`
+struct ShadingFrame {
+    m: mat3x3<f32>,
+    ng: vec3<f32>,
+}
+
+// mirror: src/render/integrator.rs `shading_frame`
+fn shading_frame(mat: Material, si: SurfaceHit, wo_world: vec3<f32>) -> ShadingFrame {
+    let two_sided = bsdf_is_two_sided(mat);
+    let flip = two_sided && dot(wo_world, si.ng) < 0.0;
+    let ng = select(si.ng, -si.ng, flip);
+    var ns = select(si.ns, -si.ns, flip);
+    if two_sided && dot(ns, wo_world) <= 0.0 {
+        ns = ng;
+    }
+    return ShadingFrame(onb_from_normal(ns), ng);
+}
+
+// mirror: src/render/integrator.rs `geometry_agrees`
+fn geometry_agrees(ng: vec3<f32>, wo_world: vec3<f32>, wi_world: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> bool {
+    return (dot(wi_world, ng) * dot(wo_world, ng) > 0.0) == (wi.z * wo.z > 0.0);
+}
+
 // One path between bounces. mirror: src/render/integrator.rs `PathState`
 struct PathState {
     ray: Ray,
@@ -58,11 +83,15 @@ struct PathState {
     prev_delta: bool,
     eta_scale: f32,
     depth: u32,
+    caustic_pdf: f32,
+    caustic_hops: u32,
+    light: LightPath,
 }
 
-// A path about to trace its camera ray. mirror: src/render/integrator.rs `path_start`
-fn path_start(ray: Ray) -> PathState {
-    return PathState(ray, vec3<f32>(0.0), vec3<f32>(1.0), 0u, 0.0, true, 1.0, 0u);
+// A path about to trace its camera ray, drawn with density camera_pdf, with its light
+// subpath. mirror: src/render/integrator.rs `path_start`
+fn path_start(ray: Ray, camera_pdf: f32, light: LightPath) -> PathState {
+    return PathState(ray, vec3<f32>(0.0), vec3<f32>(1.0), 0u, camera_pdf, true, 1.0, 0u, 0.0, 0u, light);
 }
 
 // One bounce; true when the path has ended. mirror: src/render/integrator.rs `path_step`
@@ -86,25 +115,29 @@ fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
     let si = surface_at((*st).ray, hit);
     let mat = material_at(load_material(si.material), si.uv);
     if si.front_face && is_emissive(mat) {
+        let cos_l = -dot((*st).ray.dir, si.ng);
         var w = 1.0;
         if !(*st).prev_delta {
-            let cos_l = -dot((*st).ray.dir, si.ng);
             w = power_heuristic((*st).prev_pdf, light_pdf(si.tri, hit.t, cos_l));
+        } else if (*st).caustic_pdf > 0.0 {
+            w = caustic_hit_weight(si.tri, si.p, (*st).ray.dir, cos_l, (*st).caustic_pdf);
         }
         (*st).radiance += (*st).beta * w * mat.emission;
+    }
+    // The camera's (or BSDF sampling's) density of this vertex in area, where the previous
+    // vertex is the camera (or a non-delta vertex).
+    let caustics = params.num_caustic_targets != 0u;
+    var area_pdf = 0.0;
+    if caustics && ((*st).depth == 0u || !(*st).prev_delta) {
+        area_pdf = (*st).prev_pdf * abs(dot((*st).ray.dir, si.ng)) / (hit.t * hit.t);
     }
     if (*st).depth + 1u >= params.max_depth {
         return true;
     }
     let wo_world = -(*st).ray.dir;
-    let two_sided = bsdf_is_two_sided(mat);
-    let flip = two_sided && dot(wo_world, si.ng) < 0.0;
-    let ng = select(si.ng, -si.ng, flip);
-    var ns = select(si.ns, -si.ns, flip);
-    if two_sided && dot(ns, wo_world) <= 0.0 {
-        ns = ng;
-    }
-    let frame = onb_from_normal(ns);
+    let sf = shading_frame(mat, si, wo_world);
+    let ng = sf.ng;
+    let frame = sf.m;
     let wo = wo_world * frame;
 
     // The numbers BSDF sampling reads, drawn only where the material reads them (before
@@ -139,15 +172,55 @@ fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
         }
     }
 
+    // Caustic connections: to each vertex of the sample's light subpath that leaves the
+    // path room for the link and the subpath's segments.
+    if !bsdf_is_delta(mat) {
+        for (var k = 0u; k < (*st).light.count; k++) {
+            let lv = (*st).light.vertices[k];
+            if (*st).depth + 2u + lv.segments <= params.max_depth {
+                let link = caustic_link(si, mat, sf, wo_world, wo, lv);
+                if link.valid {
+                    (*st).rays += 1u;
+                    if !traverse_any(link.ray, link.t_max) {
+                        (*st).radiance += (*st).beta * link.value;
+                    }
+                }
+            }
+        }
+    }
+
     // BSDF sampling.
     let bs = bsdf_sample(mat, wo, u_lobe, u);
     if !bs.valid {
         return true;
     }
     let wi_world = frame * bs.wi;
-    let reflect = bs.wi.z * wo.z > 0.0;
-    if (dot(wi_world, si.ng) * dot(wo_world, si.ng) > 0.0) != reflect {
+    if !geometry_agrees(si.ng, wo_world, wi_world, wo, bs.wi) {
         return true;
+    }
+    if caustics {
+        if bs.delta {
+            if !bsdf_is_delta(mat) {
+                (*st).caustic_pdf = 0.0;
+            }
+        } else if !(*st).prev_delta || (*st).depth == 0u {
+            let c = abs(dot(wi_world, si.ng));
+            (*st).caustic_pdf = 0.0;
+            if area_pdf > 0.0 && c > 0.0 {
+                (*st).caustic_pdf = area_pdf * bs.pdf / c;
+            }
+            (*st).caustic_hops = 0u;
+        } else if (*st).caustic_pdf > 0.0 {
+            let cos_out = abs(dot(wi_world, si.ng));
+            let cos_in = abs(dot(wo_world, si.ng));
+            let back = shading_frame(mat, si, wi_world);
+            let pdf_light = bsdf_pdf(mat, wi_world * back.m, wo_world * back.m);
+            (*st).caustic_pdf *= bs.pdf * cos_in / (pdf_light * cos_out);
+            (*st).caustic_hops += 1u;
+            if !((*st).caustic_pdf <= T_INF && (*st).caustic_hops < MAX_CAUSTIC_HOPS) {
+                (*st).caustic_pdf = 0.0;
+            }
+        }
     }
     (*st).beta *= bs.weight;
     (*st).prev_pdf = bs.pdf;
@@ -168,16 +241,58 @@ fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
     return false;
 }
 
-// One path's radiance (xyz) and the number of rays it traced (w).
+// mirror: src/render/integrator.rs `LightStart`
+struct LightStart {
+    light: LightPath,
+    rays: u32,
+    splat_pixels: array<u32, MAX_CAUSTIC_HOPS>,
+    splats: array<vec3<f32>, MAX_CAUSTIC_HOPS>,
+}
+
+// mirror: src/render/integrator.rs `start_light`
+fn start_light(rng: Rng) -> LightStart {
+    var out: LightStart;
+    out.light = no_light_path();
+    out.rays = 0u;
+    if params.num_caustic_targets == 0u {
+        return out;
+    }
+    let traced = trace_light_subpath(rng, params.max_depth - 1u);
+    out.light = traced.path;
+    out.rays = traced.rays;
+    for (var k = 0u; k < out.light.count; k++) {
+        let lv = out.light.vertices[k];
+        let link = camera_link(lv, rng_2d(rng, lv.segments, DIM_CAUSTIC_LENS_U));
+        if link.valid {
+            out.rays += 1u;
+            if !traverse_any(link.ray, link.t_max) {
+                out.splat_pixels[k] = link.pixel;
+                out.splats[k] = link.value;
+            }
+        }
+    }
+    return out;
+}
+
+// mirror: src/render/integrator.rs `PathSample`
+struct PathSample {
+    radiance: vec3<f32>,
+    rays: u32,
+    splat_pixels: array<u32, MAX_CAUSTIC_HOPS>,
+    splats: array<vec3<f32>, MAX_CAUSTIC_HOPS>,
+}
+
 // mirror: src/render/integrator.rs `trace_path`
-fn trace_path(ray: Ray, rng: Rng) -> vec4<f32> {
-    var st = path_start(ray);
+fn trace_path(ray: Ray, rng: Rng) -> PathSample {
+    let ls = start_light(rng);
+    var st = path_start(ray, camera_pdf(ray.dir), ls.light);
+    st.rays = ls.rays;
     loop {
         if path_step(&st, rng) {
             break;
         }
     }
-    return vec4<f32>(st.radiance, f32(st.rays));
+    return PathSample(st.radiance, st.rays, ls.splat_pixels, ls.splats);
 }
 
 // What the AOVs read of a camera ray's first hit. mirror: src/render/integrator.rs `FirstHit`

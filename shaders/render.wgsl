@@ -13,6 +13,51 @@
 // `check`); [3]: padding. The host reads them as `Status` (render/gpu/session.rs).
 @group(1) @binding(1) var<storage, read_write> status: array<atomic<u32>, 4>;
 
+// What light subpaths seen through the lens add to the pixels they land in: per pixel and
+// channel a fixed-point sum (fixed.wgsl) as (low, high) words, added atomically from any
+// invocation, so that the sums are the same bits in whatever order they arrive. The host
+// adds them to the film's radiance when it reads it back.
+// mirror: src/render/cpu.rs `Splats`
+@group(1) @binding(2) var<storage, read_write> splats: array<atomic<u32>>;
+
+// Adds a splat to pixel `pixel`; a non-finite one is dropped, as a sample's radiance is. The
+// low word's carry goes to the high word, so the pair adds as one 64-bit integer. Loop-free,
+// so that a driver's loop limit cannot stop it half-way (see `render`).
+// mirror: src/render/cpu.rs `Splats::add`
+fn add_splat(pixel: u32, v: vec3<f32>) {
+    if all(v == vec3<f32>(0.0)) || !is_finite3(v) {
+        return;
+    }
+    let i = 6u * pixel;
+    if SHADER_CHECKS {
+        check(i + 6u <= arrayLength(&splats));
+    }
+    let r = to_fixed(v.x);
+    let g = to_fixed(v.y);
+    let b = to_fixed(v.z);
+    let r_lo = atomicAdd(&splats[i], r.x);
+    atomicAdd(&splats[i + 1u], r.y + select(0u, 1u, r_lo + r.x < r_lo));
+    let g_lo = atomicAdd(&splats[i + 2u], g.x);
+    atomicAdd(&splats[i + 3u], g.y + select(0u, 1u, g_lo + g.x < g_lo));
+    let b_lo = atomicAdd(&splats[i + 4u], b.x);
+    atomicAdd(&splats[i + 5u], b.y + select(0u, 1u, b_lo + b.x < b_lo));
+}
+
+// Whether this invocation's loops still run: a two-round loop that a driver's limit on an
+// invocation's loop iterations would stop after one (status[1] is 0, which the compiler
+// cannot know).
+fn loops_intact() -> bool {
+    var rounds = 0u;
+    let bound = 2u + atomicLoad(&status[1]);
+    loop {
+        rounds += 1u;
+        if rounds >= bound {
+            break;
+        }
+    }
+    return rounds == bound;
+}
+
 // Adds this invocation's failed checks (bindings.wgsl `check`) to status[2].
 fn report_checks() {
     if SHADER_CHECKS && check_failures != 0u {
@@ -56,32 +101,35 @@ fn set_aov_ids(sums: ptr<function, AovSums>, fh: FirstHit) {
     (*sums).t[5] = texel_add(none, vec4<f32>(f32(fh.material & 0xffffu), f32(fh.material >> 16u), 0.0, 1.0));
 }
 
-// A sample's camera ray. With AOVs, also adds its first hit to `sums` (and with sample 0
-// the pixel-centre ray's ids), and returns in `seen` whether its radiance counts: not in a
-// transparent render where it misses.
-fn start_sample(x: u32, y: u32, s: u32, rng: Rng, sums: ptr<function, AovSums>, seen: ptr<function, bool>) -> PathState {
+// A sample's camera ray, its first hits for the AOVs (the pixel-centre ray's with sample
+// 0) and whether its radiance counts (`seen`: not in a transparent render where it
+// misses); then its light subpath, whose splats `ls` keeps until the sample is done.
+fn start_sample(x: u32, y: u32, s: u32, rng: Rng, fh: ptr<function, FirstHit>, centre: ptr<function, FirstHit>, seen: ptr<function, bool>, ls: ptr<function, LightStart>) -> PathState {
     let ray = generate_camera_ray(x, y, rng);
     *seen = true;
     if params.aovs != 0u {
-        let fh = first_hit(ray);
-        add_aov_sample(sums, fh);
-        *seen = fh.hit || params.transparent == 0u;
+        *fh = first_hit(ray);
+        *seen = (*fh).hit || params.transparent == 0u;
         if s == 0u {
-            set_aov_ids(sums, first_hit(pixel_centre_ray(x, y)));
+            *centre = first_hit(pixel_centre_ray(x, y));
         }
     }
-    return path_start(ray);
+    *ls = start_light(rng);
+    var st = path_start(ray, camera_pdf(ray.dir), (*ls).light);
+    st.rays = (*ls).rays;
+    return st;
 }
 
 // mirror: src/render/cpu.rs `render_pixel`
 //
 // A pixel adds its samples of this dispatch's range to the film, from the one after those
-// it already has, or adds nothing at all: Mesa's lavapipe ends every loop of an invocation
-// once their iterations together pass 65535, which would silently cut paths short. An
-// invocation that sees that happen (its sample loop ended early, or a two-round canary
-// loop after it stopped after one) leaves its pixel as it was and counts itself in
-// `status`; the host then dispatches the range again in smaller parts, which such a pixel
-// resumes and a finished one skips.
+// it already has. Mesa's lavapipe ends every loop of an invocation once their iterations
+// together pass 65535, which would silently cut paths short; so a sample counts only once
+// a canary loop after it still runs (`loops_intact`), and is then added at once: radiance,
+// rays, AOVs and its light subpath's splats, none of it in a loop. An invocation cut short
+// keeps the samples it finished, writes them with the index of the next, and counts itself
+// in `status`; the host then dispatches the range again in smaller parts, which such a
+// pixel resumes and a finished one skips.
 @compute @workgroup_size(8, 8, 1)
 fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     let x = gid.x;
@@ -111,34 +159,42 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
     var seen = true;
+    var fh: FirstHit;
+    var centre: FirstHit;
+    var ls: LightStart;
     var rng = Rng(pixel, s, params.seed);
-    var st = start_sample(x, y, s, rng, &sums, &seen);
+    var st = start_sample(x, y, s, rng, &fh, &centre, &seen, &ls);
+    var cut = false;
     loop {
         if path_step(&st, rng) {
+            if !loops_intact() {
+                cut = true;
+                break;
+            }
             if is_finite3(st.radiance) && seen {
                 radiance = texel_add(radiance, vec4<f32>(st.radiance, 0.0));
             }
             rays = texel_add(rays, vec4<f32>(f32(st.rays), 0.0, 0.0, 0.0));
+            if params.aovs != 0u {
+                add_aov_sample(&sums, fh);
+                if s == 0u {
+                    set_aov_ids(&sums, centre);
+                }
+            }
+            // MAX_CAUSTIC_HOPS splats, written out (const_assert below).
+            add_splat(ls.splat_pixels[0], ls.splats[0]);
+            add_splat(ls.splat_pixels[1], ls.splats[1]);
             s += 1u;
             if s >= params.sample_end {
                 break;
             }
             rng = Rng(pixel, s, params.seed);
-            st = start_sample(x, y, s, rng, &sums, &seen);
-        }
-    }
-    var rounds = 0u;
-    let bound = 2u + atomicLoad(&status[1]);
-    loop {
-        rounds += 1u;
-        if rounds >= bound {
-            break;
+            st = start_sample(x, y, s, rng, &fh, &centre, &seen, &ls);
         }
     }
     report_checks();
-    if s < params.sample_end || rounds != bound {
+    if cut || s < params.sample_end {
         atomicAdd(&status[0], 1u);
-        return;
     }
     radiance.zw.z = s;
     film[base] = radiance;
@@ -149,3 +205,5 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
 }
+
+const_assert MAX_CAUSTIC_HOPS == 2u;

@@ -158,15 +158,47 @@ fn test_first_hit(@builtin(global_invocation_id) gid: vec3<u32>) {
     case_out(i, vec4<u32>(select(0u, 1u, fh.hit), fh.cost, fh.material, fh.object), u4(vec4<f32>(fh.normal, depth)));
 }
 
-// in: (x, y, sample, _) | out: (radiance xyz, rays)
+// in: (x, y, sample, _) | out: (radiance xyz, rays), (splat values summed xyz, the
+// pixels of the splats, 16 bits each)
 @compute @workgroup_size(64)
 fn test_trace_path(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = case_index(gid);
     if i >= case_count() { return; }
     let k = case_in(i, 0u);
     let rng = Rng(k.y * params.width + k.x, k.z, params.seed);
-    let l = trace_path(generate_camera_ray(k.x, k.y, rng), rng);
-    case_out(i, u4(l), vec4<u32>(0u));
+    let p = trace_path(generate_camera_ray(k.x, k.y, rng), rng);
+    let splat = p.splats[0] + p.splats[1];
+    let pixels = (p.splat_pixels[0] & 0xffffu) | (p.splat_pixels[1] << 16u);
+    case_out(i, vec4<u32>(u4(vec4<f32>(p.radiance, 0.0)).xyz, p.rays), vec4<u32>(u4(vec4<f32>(splat, 0.0)).xyz, pixels));
+}
+
+// in: (x, y, sample, _) | out: the light subpath's (vertex count, rays of start_light,
+// segments of vertices 0 and 1), (vertex 0's position xyz, its throughput's luminance)
+@compute @workgroup_size(64)
+fn test_light_subpath(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = case_index(gid);
+    if i >= case_count() { return; }
+    let k = case_in(i, 0u);
+    let rng = Rng(k.y * params.width + k.x, k.z, params.seed);
+    let ls = start_light(rng);
+    let v = ls.light.vertices[0];
+    let lum = dot(v.beta, vec3<f32>(0.2126, 0.7152, 0.0722));
+    case_out(i, vec4<u32>(ls.light.count, ls.rays, v.segments, ls.light.vertices[1].segments), u4(vec4<f32>(v.si.p, lum)));
+}
+
+// in: (p xyz, d.z), (u.x, u.y, d.x, d.y) | out: (sample_target(p, u): dir xyz, its pdf),
+// (target_pdf(p, normalize(d)), the first target's cone from p: cos_max, height, _)
+@compute @workgroup_size(64)
+fn test_caustic_targets(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = case_index(gid);
+    if i >= case_count() { return; }
+    let a = f4(case_in(i, 0u));
+    let b = f4(case_in(i, 1u));
+    let p = a.xyz;
+    let st = sample_target(p, b.xy);
+    let dir = normalize(vec3<f32>(b.z, b.w, a.w));
+    let cone = target_cone(load_caustic_target(0u), p);
+    case_out(i, u4(st), u4(vec4<f32>(target_pdf(p, dir), cone.cos_max, cone.height, 0.0)));
 }
 
 // in: (u, v, texture index, material index) | out: texture_lookup(texture, uv),

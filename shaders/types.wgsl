@@ -67,6 +67,13 @@ struct Light {
     _pad1: u32,
 }
 
+// mirror: src/render/caustics.rs `CausticTarget` (16 bytes): a sphere around specular
+// geometry, which light subpaths aim at.
+struct CausticTarget {
+    center: vec3<f32>,
+    radius: f32,
+}
+
 // mirror: src/render/gpu/params.rs `Params` (176 bytes): one dispatch's camera, sky and range.
 struct Params {
     cam_position: vec3<f32>,
@@ -106,8 +113,9 @@ struct Params {
     // (a transparent render); set with the film.
     aovs: u32,
     transparent: u32,
+    // Spheres in the caustic targets table; 0 traces no light subpaths.
+    num_caustic_targets: u32,
     _pad0: u32,
-    _pad1: u32,
 }
 
 

@@ -173,10 +173,10 @@ pub struct TargetCone {
 }
 
 /// mirror: shaders/caustics.wgsl `target_cone`
-pub fn target_cone(target: &CausticTarget, p: Vec3) -> TargetCone {
-    let d = Vec3::from(target.center) - p;
+pub fn target_cone(sphere: &CausticTarget, p: Vec3) -> TargetCone {
+    let d = Vec3::from(sphere.center) - p;
     let dist2 = d.length_squared();
-    let r2 = target.radius * target.radius;
+    let r2 = sphere.radius * sphere.radius;
     if dist2 <= r2 {
         return TargetCone {
             axis: Vec3::Z,
@@ -281,7 +281,7 @@ impl LightVertex {
 
 /// At most this many vertices on a light subpath: its first non-delta vertex, and those
 /// it reaches from there through a further specular chain each.
-pub const MAX_CAUSTIC_HOPS: usize = 3;
+pub const MAX_CAUSTIC_HOPS: usize = 2;
 
 /// A sample's light subpath: its non-delta vertices, in the order the light reaches them.
 /// mirror: shaders/caustics.wgsl `LightPath`
@@ -509,8 +509,8 @@ pub fn caustic_link(
     let pdf_bsdf = bsdf_pdf(mat, wo, wi) * cos_c / dist2 * bsdf_pdf(&mat_l, wo_l, wi_l) / cos_k;
     let w = caustic_weight(pdf_bsdf / lv.pdf);
     let origin = offset_ray_origin(si.p, si.ng, wc);
-    let target = offset_ray_origin(lv.si.p, lv.si.ng, wo_l_world);
-    let to = target - origin;
+    let end = offset_ray_origin(lv.si.p, lv.si.ng, wo_l_world);
+    let to = end - origin;
     let dist = to.length();
     if dist.is_nan() || dist <= 0.0 {
         return None;
@@ -627,8 +627,8 @@ pub fn camera_link(
     let importance = camera_pdf(cam, wc);
     let pdf_bsdf = importance * cos_c / dist2 * bsdf_pdf(&mat_l, wo_l, wi_l) / cos_k;
     let w = caustic_weight(pdf_bsdf / lv.pdf);
-    let target = offset_ray_origin(lv.si.p, lv.si.ng, wo_l_world);
-    let to = target - origin;
+    let end = offset_ray_origin(lv.si.p, lv.si.ng, wo_l_world);
+    let to = end - origin;
     let len = to.length();
     if len.is_nan() || len <= 0.0 {
         return None;

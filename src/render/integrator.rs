@@ -383,10 +383,50 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
     false
 }
 
-/// What one camera sample adds to the film: its path's radiance estimate and the rays it
-/// traced, and where its light subpath's vertices were seen through the lens: the pixels
-/// and values of those splats (zero values for none).
-/// mirror: shaders/integrator.wgsl `PathSample`
+/// A camera sample's light subpath (where the scene has caustic targets), the rays it and
+/// its links to the camera traced, and where those links land: the pixels and values of
+/// the splats (zero values for none).
+/// mirror: shaders/integrator.wgsl `LightStart`
+#[derive(Clone, Copy, Debug)]
+pub struct LightStart {
+    pub light: LightPath,
+    pub rays: u32,
+    pub splat_pixels: [u32; MAX_CAUSTIC_HOPS],
+    pub splats: [Vec3; MAX_CAUSTIC_HOPS],
+}
+
+/// Traces the sample's light subpath and links each of its vertices to the camera, through
+/// the lens point of that vertex's `DIM_CAUSTIC_LENS_U` pair.
+/// mirror: shaders/integrator.wgsl `start_light`
+pub fn start_light(scene: &RenderScene, cam: &CameraRays, rng: &Rng, max_depth: u32) -> LightStart {
+    let mut out = LightStart {
+        light: LightPath::NONE,
+        rays: 0,
+        splat_pixels: [0; MAX_CAUSTIC_HOPS],
+        splats: [Vec3::ZERO; MAX_CAUSTIC_HOPS],
+    };
+    if scene.caustic_targets.is_empty() {
+        return out;
+    }
+    (out.light, out.rays) = trace_light_subpath(scene, rng, max_depth - 1);
+    for k in 0..out.light.count as usize {
+        let lv = &out.light.vertices[k];
+        let u_lens = rng.rng_2d(lv.segments, rng::DIM_CAUSTIC_LENS_U);
+        if let Some(link) = camera_link(scene, cam, lv, u_lens) {
+            out.rays += 1;
+            if !scene
+                .wide
+                .traverse_any(&link.ray, link.t_max, |t, u, v| alpha_test(scene, t, u, v))
+            {
+                (out.splat_pixels[k], out.splats[k]) = (link.pixel, link.value);
+            }
+        }
+    }
+    out
+}
+
+/// What one camera sample adds to the film: its path's radiance estimate, the rays it
+/// traced (its light subpath's included), and its light subpath's splats.
 #[derive(Clone, Copy, Debug)]
 pub struct PathSample {
     pub radiance: Vec3,
@@ -395,9 +435,8 @@ pub struct PathSample {
     pub splats: [Vec3; MAX_CAUSTIC_HOPS],
 }
 
-/// One camera sample: its light subpath (where the scene has caustic targets) and the
-/// links of that subpath's vertices to the camera, then [`path_step`] until the camera
-/// path ends. mirror: shaders/integrator.wgsl `trace_path`
+/// One camera sample: [`start_light`], then [`path_step`] until the camera path ends.
+/// mirror: shaders/integrator.wgsl `trace_path`
 pub fn trace_path(
     scene: &RenderScene,
     cam: &CameraRays,
@@ -405,33 +444,15 @@ pub fn trace_path(
     rng: &Rng,
     max_depth: u32,
 ) -> PathSample {
-    let mut light = LightPath::NONE;
-    let mut rays = 0;
-    let mut splat_pixels = [0; MAX_CAUSTIC_HOPS];
-    let mut splats = [Vec3::ZERO; MAX_CAUSTIC_HOPS];
-    if !scene.caustic_targets.is_empty() {
-        (light, rays) = trace_light_subpath(scene, rng, max_depth - 1);
-        for (k, lv) in light.vertices[..light.count as usize].iter().enumerate() {
-            let u_lens = rng.rng_2d(lv.segments, rng::DIM_CAUSTIC_LENS_U);
-            if let Some(link) = camera_link(scene, cam, lv, u_lens) {
-                rays += 1;
-                if !scene
-                    .wide
-                    .traverse_any(&link.ray, link.t_max, |t, u, v| alpha_test(scene, t, u, v))
-                {
-                    (splat_pixels[k], splats[k]) = (link.pixel, link.value);
-                }
-            }
-        }
-    }
-    let mut st = path_start(ray, camera_pdf(cam, ray.dir), light);
-    st.rays = rays;
+    let ls = start_light(scene, cam, rng, max_depth);
+    let mut st = path_start(ray, camera_pdf(cam, ray.dir), ls.light);
+    st.rays = ls.rays;
     while !path_step(scene, &mut st, rng, max_depth) {}
     PathSample {
         radiance: st.radiance,
         rays: st.rays,
-        splat_pixels,
-        splats,
+        splat_pixels: ls.splat_pixels,
+        splats: ls.splats,
     }
 }
 

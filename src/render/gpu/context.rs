@@ -169,7 +169,7 @@ impl GpuContext {
             super::shader::render_source,
             "render",
             0,
-            2,
+            3,
             self.checks,
         )?);
         *slot = Some(p.clone());

@@ -53,7 +53,10 @@ pub struct Params {
     /// [`transparent`](crate::film::Film::transparent) (1); set with the film.
     pub aovs: u32,
     pub transparent: u32,
-    pub _pad: [u32; 2],
+    /// Spheres in the caustic targets table ([`RenderScene::caustic_targets`]); 0 traces
+    /// no light subpaths.
+    pub num_caustic_targets: u32,
+    pub _pad: [u32; 1],
 }
 
 impl Params {
@@ -88,6 +91,7 @@ impl Params {
             env_cells,
             aovs,
             transparent,
+            num_caustic_targets,
             _pad,
         })
     }
@@ -116,6 +120,7 @@ impl Params {
             env_cells: env.cells,
             num_emitters: scene.emitters.len() as u32,
             sky_pmf: scene.sky_pmf,
+            num_caustic_targets: scene.caustic_targets.len() as u32,
             ..Self::default()
         }
     }

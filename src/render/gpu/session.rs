@@ -6,7 +6,7 @@ use super::pipelines::Pipeline;
 use super::tables::{SceneTables, params_buffer};
 use super::{GpuContext, GpuError};
 use crate::film::{Aov, Film};
-use crate::fixed::from_words;
+use crate::fixed::{fixed_add3, from_words};
 use crate::render::watch::Region;
 use crate::render::{Checkpoints, RenderJob, RenderScene};
 use crate::scene::{Camera, RenderSettings};
@@ -30,6 +30,10 @@ const SOFTWARE_SAMPLES_PER_DISPATCH: u32 = 16;
 /// mirror: shaders/fixed.wgsl `Texel`
 const TEXEL_BYTES: u64 = 32;
 
+/// Bytes of a pixel's splat sums on the device: three fixed-point sums of two 32-bit words.
+/// mirror: shaders/render.wgsl `splats`
+const SPLAT_BYTES: u64 = 24;
+
 /// The render kernel's status words (`status` in shaders/render.wgsl).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
@@ -49,6 +53,9 @@ struct Status {
 struct DeviceFilm {
     template: Film,
     buffer: wgpu::Buffer,
+    /// The splats of light subpaths (`splats` in shaders/render.wgsl): per pixel three
+    /// fixed-point sums of two words each, added to the radiance when the film is read.
+    splats: wgpu::Buffer,
     /// The kernel's [`Status`].
     status: wgpu::Buffer,
     io_group: wgpu::BindGroup,
@@ -172,6 +179,12 @@ impl GpuRenderer {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
+        let splats = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("splats"),
+            size: template.sum.len() as u64 * SPLAT_BYTES,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
         let status = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("status"),
             size: size_of::<Status>() as u64,
@@ -181,11 +194,12 @@ impl GpuRenderer {
             mapped_at_creation: false,
         });
         let render = self.ctx.render_pipeline()?;
-        let io_group = render.io_group(&self.ctx, &[&buffer, &status]);
+        let io_group = render.io_group(&self.ctx, &[&buffer, &status, &splats]);
         self.render = Some(render);
         self.film = Some(DeviceFilm {
             template,
             buffer,
+            splats,
             status,
             io_group,
             first_sample,
@@ -301,11 +315,18 @@ impl GpuRenderer {
         )?;
         let words: &[[u32; 8]] = bytemuck::cast_slice(&data);
         let texel = |w: &[u32; 8]| [0, 1, 2, 3].map(|k| from_words([w[2 * k], w[2 * k + 1]]));
+        let splat_row = template.width as u64 * SPLAT_BYTES;
+        let splat_data = self.ctx.read_buffer_range(
+            &film.splats,
+            rows.start as u64 * splat_row..rows.end as u64 * splat_row,
+        )?;
+        let splats: &[[u32; 6]] = bytemuck::cast_slice(&splat_data);
         let mut out = template;
         out.samples = samples;
-        for (i, pixel) in words.chunks_exact(stride).enumerate() {
+        for (i, (pixel, splat)) in words.chunks_exact(stride).zip(splats).enumerate() {
             let [r, g, b, _next] = texel(&pixel[0]);
-            out.sum[i] = [r, g, b];
+            let splat = [0, 1, 2].map(|k| from_words([splat[2 * k], splat[2 * k + 1]]));
+            out.sum[i] = fixed_add3([r, g, b], splat);
             for (channel, w) in out.channels.iter_mut().zip(&pixel[1..]) {
                 channel.data[i] = texel(w);
             }

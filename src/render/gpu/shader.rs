@@ -13,6 +13,7 @@ use crate::bvh::STACK_SIZE;
 use crate::film::{Aov, NO_ID};
 use crate::fixed::{FIXED_LIMIT, FIXED_ONE};
 use crate::geometry::{GAMMA_2, GAMMA_3, SLAB_SLACK, T_INF};
+use crate::render::caustics::{LIGHT_SUBPATH_RATE, MAX_CAUSTIC_HOPS};
 use crate::render::integrator::RR_DEPTH;
 use crate::render::rng;
 use crate::render::sampling::{ONE_MINUS_EPSILON, UNIFORM_SPHERE_PDF};
@@ -46,6 +47,16 @@ pub fn shared_constants() -> Vec<(String, Value)> {
         ("DIM_BSDF_U", U32(rng::DIM_BSDF_U)),
         ("DIM_BSDF_V", U32(rng::DIM_BSDF_V)),
         ("DIM_ROULETTE", U32(rng::DIM_ROULETTE)),
+        ("DIM_LIGHT_SUBPATH", U32(rng::DIM_LIGHT_SUBPATH)),
+        ("DIM_CAUSTIC_LIGHT_U", U32(rng::DIM_CAUSTIC_LIGHT_U)),
+        ("DIM_CAUSTIC_LIGHT_V", U32(rng::DIM_CAUSTIC_LIGHT_V)),
+        ("DIM_CAUSTIC_LENS_U", U32(rng::DIM_CAUSTIC_LENS_U)),
+        ("DIM_CAUSTIC_LENS_V", U32(rng::DIM_CAUSTIC_LENS_V)),
+        ("DIM_CAUSTIC_DIR_U", U32(rng::DIM_CAUSTIC_DIR_U)),
+        ("DIM_CAUSTIC_DIR_V", U32(rng::DIM_CAUSTIC_DIR_V)),
+        ("DIM_CAUSTIC_LOBE", U32(rng::DIM_CAUSTIC_LOBE)),
+        ("MAX_CAUSTIC_HOPS", U32(MAX_CAUSTIC_HOPS as u32)),
+        ("LIGHT_SUBPATH_RATE", F32(LIGHT_SUBPATH_RATE)),
         ("DIMS_PER_BOUNCE", U32(rng::DIMS_PER_BOUNCE)),
         ("STACK_SIZE", U32(STACK_SIZE as u32)),
         ("RR_DEPTH", U32(RR_DEPTH)),
@@ -149,6 +160,7 @@ const SHADING: &[Source] = &[
     shader!("texture.wgsl"),
     shader!("environment.wgsl"),
     shader!("lights.wgsl"),
+    shader!("caustics.wgsl"),
     shader!("integrator.wgsl"),
 ];
 

@@ -10,6 +10,7 @@ use super::params::Params;
 use super::{GpuContext, GpuError};
 use crate::bvh::BvhNode;
 use crate::geometry::TriVerts;
+use crate::render::caustics::CausticTarget;
 use crate::render::{Light, RenderScene, TriShading, TriTangents, TriUvs};
 use crate::scene::{Material, Texture};
 
@@ -203,6 +204,13 @@ pub const TABLES: &[Table] = &[
         loader: "load_env_cdf",
         element: || Element::F32,
         bytes: |s| bytemuck::cast_slice(&s.env_cdf),
+    },
+    Table {
+        what: "caustic targets",
+        texture: "caustic_targets_tex",
+        loader: "load_caustic_target",
+        element: || Element::Struct(struct_layout!(CausticTarget { center, radius })),
+        bytes: |s| bytemuck::cast_slice(&s.caustic_targets),
     },
 ];
 

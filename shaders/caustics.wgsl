@@ -1,0 +1,355 @@
+// Caustics: light subpaths through the scene's specular geometry, joined to the camera
+// path. mirror: src/render/caustics.rs — every function has a Rust twin of the same name.
+
+// mirror: src/render/caustics.rs `TargetCone`
+struct TargetCone {
+    axis: vec3<f32>,
+    cos_max: f32,
+    height: f32,
+}
+
+// mirror: src/render/caustics.rs `target_cone`
+fn target_cone(sphere: CausticTarget, p: vec3<f32>) -> TargetCone {
+    let d = sphere.center - p;
+    let dist2 = dot(d, d);
+    let r2 = sphere.radius * sphere.radius;
+    if dist2 <= r2 {
+        return TargetCone(vec3<f32>(0.0, 0.0, 1.0), -1.0, 2.0);
+    }
+    let sin2 = r2 / dist2;
+    let cos_max = sqrt(1.0 - sin2);
+    return TargetCone(d * (1.0 / sqrt(dist2)), cos_max, sin2 / (1.0 + cos_max));
+}
+
+// mirror: src/render/caustics.rs `target_pdf`
+fn target_pdf(p: vec3<f32>, dir: vec3<f32>) -> f32 {
+    var total = 0.0;
+    var count = 0.0;
+    for (var k = 0u; k < params.num_caustic_targets; k++) {
+        let cone = target_cone(load_caustic_target(k), p);
+        total += cone.height;
+        if dot(dir, cone.axis) >= cone.cos_max {
+            count += 1.0;
+        }
+    }
+    if total > 0.0 {
+        return count / (2.0 * PI * total);
+    }
+    return 0.0;
+}
+
+// A direction towards the targets and its target_pdf (w).
+// mirror: src/render/caustics.rs `sample_target`
+fn sample_target(p: vec3<f32>, u: vec2<f32>) -> vec4<f32> {
+    var total = 0.0;
+    for (var k = 0u; k < params.num_caustic_targets; k++) {
+        total += target_cone(load_caustic_target(k), p).height;
+    }
+    var x = u.x * total;
+    var cone = target_cone(load_caustic_target(0u), p);
+    for (var k = 0u; k < params.num_caustic_targets; k++) {
+        cone = target_cone(load_caustic_target(k), p);
+        if x < cone.height {
+            break;
+        }
+        x -= cone.height;
+    }
+    let v = clamp(x / cone.height, 0.0, 1.0) * cone.height;
+    let cos_t = 1.0 - v;
+    let sin_t = sqrt(max(v * (2.0 - v), 0.0));
+    let phi = 2.0 * PI * u.y;
+    let frame = onb_from_normal(cone.axis);
+    let dir = (sin_t * cos(phi)) * frame[0] + (sin_t * sin(phi)) * frame[1] + cos_t * cone.axis;
+    return vec4<f32>(dir, target_pdf(p, dir));
+}
+
+// mirror: src/render/caustics.rs `LightVertex`
+struct LightVertex {
+    si: SurfaceHit,
+    wi: vec3<f32>,
+    beta: vec3<f32>,
+    pdf: f32,
+    segments: u32,
+}
+
+// mirror: src/render/caustics.rs `LightPath`
+struct LightPath {
+    vertices: array<LightVertex, MAX_CAUSTIC_HOPS>,
+    count: u32,
+}
+
+fn no_light_vertex() -> LightVertex {
+    let si = SurfaceHit(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, 1.0), 0u, true, 0u, vec2<f32>(0.0));
+    return LightVertex(si, vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0), 0.0, 0u);
+}
+
+fn no_light_path() -> LightPath {
+    var path: LightPath;
+    for (var k = 0u; k < MAX_CAUSTIC_HOPS; k++) {
+        path.vertices[k] = no_light_vertex();
+    }
+    path.count = 0u;
+    return path;
+}
+
+// The light subpath and the rays it traced. mirror: src/render/caustics.rs
+// `trace_light_subpath` (which returns them as a pair)
+struct TracedLight {
+    path: LightPath,
+    rays: u32,
+}
+
+// mirror: src/render/caustics.rs `trace_light_subpath`
+fn trace_light_subpath(rng: Rng, max_segments: u32) -> TracedLight {
+    var path = no_light_path();
+    if params.num_caustic_targets == 0u || params.num_emitters == 0u || max_segments < 2u {
+        return TracedLight(path, 0u);
+    }
+    if rng_1d(rng, 0u, DIM_LIGHT_SUBPATH) >= LIGHT_SUBPATH_RATE {
+        return TracedLight(path, 0u);
+    }
+    let pick = pick_light(rng_2d(rng, 0u, DIM_CAUSTIC_LIGHT_U));
+    let light = load_emitter(pick.index);
+    if light == SKY_EMITTER || (light & LIGHT_EMITTER) != 0u {
+        return TracedLight(path, 0u);
+    }
+    let tri = load_tri(light);
+    let bary = sample_uniform_triangle(pick.u);
+    if tri.v0.w != 0.0 && !alpha_test(light, bary.x, bary.y) {
+        return TracedLight(path, 0u);
+    }
+    let q = (1.0 - bary.x - bary.y) * tri.v0.xyz + bary.x * tri.v1.xyz + bary.y * tri.v2.xyz;
+    let n = geometric_normal(tri);
+    let st = sample_target(q, rng_2d(rng, 0u, DIM_CAUSTIC_DIR_U));
+    let dir = st.xyz;
+    let pdf_dir = st.w;
+    let cos_m = dot(dir, n);
+    if !(cos_m > 0.0 && pdf_dir > 0.0) {
+        return TracedLight(path, 0u);
+    }
+    let le = material_at(load_material(load_shading(light).material), triangle_uv(light, bary.x, bary.y)).emission;
+    let pdf_point = LIGHT_SUBPATH_RATE * pick.pmf / triangle_area(tri);
+    var beta = le * (cos_m / (pdf_point * pdf_dir));
+    var pdf = pdf_point * pdf_dir / cos_m;
+    var ray = Ray(offset_ray_origin(q, n, dir), dir);
+    var rays = 0u;
+    var chain = 0u;
+    for (var segment = 1u; segment <= max_segments; segment++) {
+        rays += 1u;
+        let hit = traverse_closest(ray, T_INF);
+        if hit.tri == NO_HIT {
+            break;
+        }
+        let si = surface_at(ray, hit);
+        let mat = material_at(load_material(si.material), si.uv);
+        let delta = bsdf_is_delta(mat);
+        if !delta && chain == 0u {
+            break;
+        }
+        let wo_world = -ray.dir;
+        if !delta {
+            path.vertices[path.count] = LightVertex(si, wo_world, beta, pdf, segment);
+            path.count += 1u;
+            chain = 0u;
+            if path.count == MAX_CAUSTIC_HOPS {
+                break;
+            }
+        } else {
+            chain += 1u;
+        }
+        if segment == max_segments {
+            break;
+        }
+        let frame = shading_frame(mat, si, wo_world);
+        let wo = wo_world * frame.m;
+        var u_lobe = 0.0;
+        if bsdf_draws_lobe(mat) {
+            u_lobe = rng_1d(rng, segment, DIM_CAUSTIC_LOBE);
+        }
+        var u = vec2<f32>(0.0);
+        if !delta {
+            u = rng_2d(rng, segment, DIM_CAUSTIC_DIR_U);
+        }
+        let bs = bsdf_sample(mat, wo, u_lobe, u);
+        if !bs.valid || bs.delta != delta {
+            break;
+        }
+        let wi_world = frame.m * bs.wi;
+        if !geometry_agrees(si.ng, wo_world, wi_world, wo, bs.wi) {
+            break;
+        }
+        let cos_in = abs(dot(wo_world, si.ng));
+        let cos_out = abs(dot(wi_world, si.ng));
+        let denom = cos_in * abs(dot(wi_world, frame.m[2]));
+        if !(denom > 0.0) {
+            break;
+        }
+        let correction = abs(dot(wo_world, frame.m[2])) * cos_out / denom;
+        beta *= bs.weight * (bs.eta * bs.eta * correction);
+        if !delta {
+            let back = shading_frame(mat, si, wi_world);
+            let pdf_camera = bsdf_pdf(mat, wi_world * back.m, wo_world * back.m);
+            pdf *= bs.pdf * cos_in / (pdf_camera * cos_out);
+            if !(pdf > 0.0 && pdf <= T_INF) {
+                break;
+            }
+        }
+        if all(beta == vec3<f32>(0.0)) {
+            break;
+        }
+        ray = Ray(offset_ray_origin(si.p, si.ng, wi_world), wi_world);
+    }
+    return TracedLight(path, rays);
+}
+
+// mirror: src/render/caustics.rs `caustic_weight`
+fn caustic_weight(ratio: f32) -> f32 {
+    let w = 1.0 / (1.0 + ratio * ratio);
+    // NaN by its bits: a compiler may assume floats are never NaN.
+    if (bitcast<u32>(w) & 0x7fffffffu) > 0x7f800000u {
+        return 0.0;
+    }
+    return w;
+}
+
+// mirror: src/render/caustics.rs `CausticLink` (valid stands for the Option around it)
+struct CausticLink {
+    ray: Ray,
+    t_max: f32,
+    value: vec3<f32>,
+    valid: bool,
+}
+
+fn no_caustic_link() -> CausticLink {
+    return CausticLink(Ray(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0)), 0.0, vec3<f32>(0.0), false);
+}
+
+// mirror: src/render/caustics.rs `caustic_link`
+fn caustic_link(si: SurfaceHit, mat: Material, frame: ShadingFrame, wo_world: vec3<f32>, wo: vec3<f32>, lv: LightVertex) -> CausticLink {
+    let d = lv.si.p - si.p;
+    let dist2 = dot(d, d);
+    if !(dist2 > 0.0) {
+        return no_caustic_link();
+    }
+    let wc = d * (1.0 / sqrt(dist2));
+    let cos_i = dot(wc, frame.ng);
+    let usable = select(cos_i > 0.0, cos_i != 0.0, bsdf_transmits(mat));
+    if !usable {
+        return no_caustic_link();
+    }
+    let wi = wc * frame.m;
+    let f = bsdf_eval(mat, wo, wi);
+    if all(f == vec3<f32>(0.0)) || !geometry_agrees(si.ng, wo_world, wc, wo, wi) {
+        return no_caustic_link();
+    }
+    let mat_l = material_at(load_material(lv.si.material), lv.si.uv);
+    let wo_l_world = -wc;
+    let frame_l = shading_frame(mat_l, lv.si, wo_l_world);
+    let wo_l = wo_l_world * frame_l.m;
+    let wi_l = lv.wi * frame_l.m;
+    let f_l = bsdf_eval(mat_l, wo_l, wi_l);
+    if all(f_l == vec3<f32>(0.0)) || !geometry_agrees(lv.si.ng, wo_l_world, lv.wi, wo_l, wi_l) {
+        return no_caustic_link();
+    }
+    let cos_c = abs(dot(wc, lv.si.ng));
+    let cos_k = abs(dot(lv.wi, lv.si.ng));
+    if !(cos_k > 0.0) {
+        return no_caustic_link();
+    }
+    let pdf_bsdf = bsdf_pdf(mat, wo, wi) * cos_c / dist2 * bsdf_pdf(mat_l, wo_l, wi_l) / cos_k;
+    let w = caustic_weight(pdf_bsdf / lv.pdf);
+    let origin = offset_ray_origin(si.p, si.ng, wc);
+    let end = offset_ray_origin(lv.si.p, lv.si.ng, wo_l_world);
+    let to = end - origin;
+    let dist = length(to);
+    if !(dist > 0.0) {
+        return no_caustic_link();
+    }
+    return CausticLink(Ray(origin, to * (1.0 / dist)), dist * (1.0 - 1e-4), f * f_l * lv.beta * (w * cos_c / (cos_k * dist2)), true);
+}
+
+// mirror: src/render/caustics.rs `caustic_hit_weight`
+fn caustic_hit_weight(tri: u32, p: vec3<f32>, dir: vec3<f32>, cos_l: f32, pdf_bsdf: f32) -> f32 {
+    let pmf = load_shading(tri).emitter_pmf;
+    if pmf == 0.0 || !(cos_l > 0.0) {
+        return 1.0;
+    }
+    let area = triangle_area(load_tri(tri));
+    let pdf_light = LIGHT_SUBPATH_RATE * pmf / area * target_pdf(p, -dir) / cos_l;
+    return caustic_weight(pdf_light / pdf_bsdf);
+}
+
+// mirror: src/render/caustics.rs `camera_pdf`
+fn camera_pdf(dir: vec3<f32>) -> f32 {
+    let c = dot(dir, params.cam_forward);
+    if !(c > 0.0) {
+        return 0.0;
+    }
+    let area = 4.0 * params.tan_half_vfov * params.tan_half_vfov * params.aspect;
+    return 1.0 / (area * c * c * c);
+}
+
+// mirror: src/render/caustics.rs `CameraLink` (valid stands for the Option around it)
+struct CameraLink {
+    pixel: u32,
+    ray: Ray,
+    t_max: f32,
+    value: vec3<f32>,
+    valid: bool,
+}
+
+fn no_camera_link() -> CameraLink {
+    return CameraLink(0u, Ray(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0)), 0.0, vec3<f32>(0.0), false);
+}
+
+// mirror: src/render/caustics.rs `camera_link`
+fn camera_link(lv: LightVertex, u_lens: vec2<f32>) -> CameraLink {
+    var lens = vec3<f32>(0.0);
+    if params.aperture > 0.0 {
+        let d = 0.5 * params.aperture * sample_concentric_disk(u_lens);
+        lens = d.x * params.cam_right + d.y * params.cam_up;
+    }
+    let origin = params.cam_position + lens;
+    let d = lv.si.p - origin;
+    let depth = dot(d, params.cam_forward);
+    if !(depth > 0.0) {
+        return no_camera_link();
+    }
+    var s = d * (1.0 / depth);
+    if params.aperture > 0.0 {
+        s = lens * (1.0 / params.focus_distance) + d * (1.0 / depth);
+    }
+    let x = (dot(s, params.cam_right) / (params.tan_half_vfov * params.aspect) + 1.0) * 0.5 * f32(params.width);
+    let y = (1.0 - dot(s, params.cam_up) / params.tan_half_vfov) * 0.5 * f32(params.height);
+    if !(x >= 0.0 && x < f32(params.width) && y >= 0.0 && y < f32(params.height)) {
+        return no_camera_link();
+    }
+    let dist2 = dot(d, d);
+    let dist = sqrt(dist2);
+    let wc = d * (1.0 / dist);
+    let mat_l = material_at(load_material(lv.si.material), lv.si.uv);
+    let wo_l_world = -wc;
+    let frame_l = shading_frame(mat_l, lv.si, wo_l_world);
+    let wo_l = wo_l_world * frame_l.m;
+    let wi_l = lv.wi * frame_l.m;
+    let f_l = bsdf_eval(mat_l, wo_l, wi_l);
+    if all(f_l == vec3<f32>(0.0)) || !geometry_agrees(lv.si.ng, wo_l_world, lv.wi, wo_l, wi_l) {
+        return no_camera_link();
+    }
+    let cos_c = abs(dot(wc, lv.si.ng));
+    let cos_k = abs(dot(lv.wi, lv.si.ng));
+    if !(cos_k > 0.0) {
+        return no_camera_link();
+    }
+    let importance = camera_pdf(wc);
+    let pdf_bsdf = importance * cos_c / dist2 * bsdf_pdf(mat_l, wo_l, wi_l) / cos_k;
+    let w = caustic_weight(pdf_bsdf / lv.pdf);
+    let end = offset_ray_origin(lv.si.p, lv.si.ng, wo_l_world);
+    let to = end - origin;
+    let len = length(to);
+    if !(len > 0.0) {
+        return no_camera_link();
+    }
+    let pixel = u32(y) * params.width + u32(x);
+    return CameraLink(pixel, Ray(origin, to * (1.0 / len)), len * (1.0 - 1e-4), f_l * lv.beta * (importance * w * cos_c / (cos_k * dist2)), true);
+}
