@@ -1,6 +1,12 @@
 // Caustics: light subpaths through the scene's specular geometry, joined to the camera
 // path. mirror: src/render/caustics.rs — every function has a Rust twin of the same name.
 
+// Whether the kernel has the code of caustic light subpaths: a pipeline constant, false for
+// scenes without caustic targets, so that the driver drops that code and the registers it
+// would hold (render/gpu/context.rs `render_pipeline`). Where true, params.num_caustic_targets
+// still decides.
+override CAUSTICS: bool = true;
+
 // mirror: src/render/caustics.rs `TargetCone`
 struct TargetCone {
     axis: vec3<f32>,
@@ -83,13 +89,11 @@ fn no_light_vertex() -> LightVertex {
     return LightVertex(si, vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0), 0.0, 0u);
 }
 
+// The vertices are indexed by constants only (MAX_CAUSTIC_HOPS is 2, render.wgsl asserts
+// it), so that a compiler can keep them in registers rather than in indexed memory.
 fn no_light_path() -> LightPath {
-    var path: LightPath;
-    for (var k = 0u; k < MAX_CAUSTIC_HOPS; k++) {
-        path.vertices[k] = no_light_vertex();
-    }
-    path.count = 0u;
-    return path;
+    let none = no_light_vertex();
+    return LightPath(array<LightVertex, MAX_CAUSTIC_HOPS>(none, none), 0u);
 }
 
 // The light subpath and the rays it traced. mirror: src/render/caustics.rs
@@ -102,7 +106,7 @@ struct TracedLight {
 // mirror: src/render/caustics.rs `trace_light_subpath`
 fn trace_light_subpath(rng: Rng, max_segments: u32) -> TracedLight {
     var path = no_light_path();
-    if params.num_caustic_targets == 0u || params.num_emitters == 0u || max_segments < 2u {
+    if !CAUSTICS || params.num_caustic_targets == 0u || params.num_emitters == 0u || max_segments < 2u {
         return TracedLight(path, 0u);
     }
     if rng_1d(rng, 0u, DIM_LIGHT_SUBPATH) >= LIGHT_SUBPATH_RATE {
@@ -148,7 +152,12 @@ fn trace_light_subpath(rng: Rng, max_segments: u32) -> TracedLight {
         }
         let wo_world = -ray.dir;
         if !delta {
-            path.vertices[path.count] = LightVertex(si, wo_world, beta, pdf, segment);
+            let v = LightVertex(si, wo_world, beta, pdf, segment);
+            if path.count == 0u {
+                path.vertices[0] = v;
+            } else {
+                path.vertices[1] = v;
+            }
             path.count += 1u;
             chain = 0u;
             if path.count == MAX_CAUSTIC_HOPS {

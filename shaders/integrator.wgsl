@@ -94,6 +94,21 @@ fn path_start(ray: Ray, camera_pdf: f32, light: LightPath) -> PathState {
     return PathState(ray, vec3<f32>(0.0), vec3<f32>(1.0), 0u, camera_pdf, true, 1.0, 0u, 0.0, 0u, light);
 }
 
+// path_step's caustic connection to one light vertex (written out per vertex, so that the
+// light path is indexed by constants only; the CPU's is a loop).
+fn connect_light_vertex(st: ptr<function, PathState>, si: SurfaceHit, mat: Material, sf: ShadingFrame, wo_world: vec3<f32>, wo: vec3<f32>, lv: LightVertex) {
+    if (*st).depth + 2u + lv.segments > params.max_depth {
+        return;
+    }
+    let link = caustic_link(si, mat, sf, wo_world, wo, lv);
+    if link.valid {
+        (*st).rays += 1u;
+        if !traverse_any(link.ray, link.t_max) {
+            (*st).radiance += (*st).beta * link.value;
+        }
+    }
+}
+
 // One bounce; true when the path has ended. mirror: src/render/integrator.rs `path_step`
 fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
     // The light pair, drawn before the traversal (as on the CPU, where that hides its
@@ -119,14 +134,14 @@ fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
         var w = 1.0;
         if !(*st).prev_delta {
             w = power_heuristic((*st).prev_pdf, light_pdf(si.tri, hit.t, cos_l));
-        } else if (*st).caustic_pdf > 0.0 {
+        } else if CAUSTICS && (*st).caustic_pdf > 0.0 {
             w = caustic_hit_weight(si.tri, si.p, (*st).ray.dir, cos_l, (*st).caustic_pdf);
         }
         (*st).radiance += (*st).beta * w * mat.emission;
     }
     // The camera's (or BSDF sampling's) density of this vertex in area, where the previous
     // vertex is the camera (or a non-delta vertex).
-    let caustics = params.num_caustic_targets != 0u;
+    let caustics = CAUSTICS && params.num_caustic_targets != 0u;
     var area_pdf = 0.0;
     if caustics && ((*st).depth == 0u || !(*st).prev_delta) {
         area_pdf = (*st).prev_pdf * abs(dot((*st).ray.dir, si.ng)) / (hit.t * hit.t);
@@ -174,18 +189,12 @@ fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
 
     // Caustic connections: to each vertex of the sample's light subpath that leaves the
     // path room for the link and the subpath's segments.
-    if !bsdf_is_delta(mat) {
-        for (var k = 0u; k < (*st).light.count; k++) {
-            let lv = (*st).light.vertices[k];
-            if (*st).depth + 2u + lv.segments <= params.max_depth {
-                let link = caustic_link(si, mat, sf, wo_world, wo, lv);
-                if link.valid {
-                    (*st).rays += 1u;
-                    if !traverse_any(link.ray, link.t_max) {
-                        (*st).radiance += (*st).beta * link.value;
-                    }
-                }
-            }
+    if caustics && !bsdf_is_delta(mat) {
+        if (*st).light.count > 0u {
+            connect_light_vertex(st, si, mat, sf, wo_world, wo, (*st).light.vertices[0]);
+        }
+        if (*st).light.count > 1u {
+            connect_light_vertex(st, si, mat, sf, wo_world, wo, (*st).light.vertices[1]);
         }
     }
 
@@ -254,21 +263,44 @@ fn start_light(rng: Rng) -> LightStart {
     var out: LightStart;
     out.light = no_light_path();
     out.rays = 0u;
-    if params.num_caustic_targets == 0u {
+    if !CAUSTICS || params.num_caustic_targets == 0u {
         return out;
     }
     let traced = trace_light_subpath(rng, params.max_depth - 1u);
     out.light = traced.path;
     out.rays = traced.rays;
-    for (var k = 0u; k < out.light.count; k++) {
-        let lv = out.light.vertices[k];
-        let link = camera_link(lv, rng_2d(rng, lv.segments, DIM_CAUSTIC_LENS_U));
-        if link.valid {
-            out.rays += 1u;
-            if !traverse_any(link.ray, link.t_max) {
-                out.splat_pixels[k] = link.pixel;
-                out.splats[k] = link.value;
-            }
+    if out.light.count > 0u {
+        let link = seen_camera_link(out.light.vertices[0], rng);
+        out.rays += link.rays;
+        out.splat_pixels[0] = link.pixel;
+        out.splats[0] = link.value;
+    }
+    if out.light.count > 1u {
+        let link = seen_camera_link(out.light.vertices[1], rng);
+        out.rays += link.rays;
+        out.splat_pixels[1] = link.pixel;
+        out.splats[1] = link.value;
+    }
+    return out;
+}
+
+// start_light's link of one light vertex to the camera (written out per vertex, so that
+// the light path is indexed by constants only; the CPU's is a loop): the rays it traced
+// and, where the vertex is seen, its splat (a zero value otherwise).
+struct SeenLink {
+    rays: u32,
+    pixel: u32,
+    value: vec3<f32>,
+}
+
+fn seen_camera_link(lv: LightVertex, rng: Rng) -> SeenLink {
+    var out = SeenLink(0u, 0u, vec3<f32>(0.0));
+    let link = camera_link(lv, rng_2d(rng, lv.segments, DIM_CAUSTIC_LENS_U));
+    if link.valid {
+        out.rays = 1u;
+        if !traverse_any(link.ray, link.t_max) {
+            out.pixel = link.pixel;
+            out.value = link.value;
         }
     }
     return out;

@@ -182,8 +182,10 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
                 }
             }
             // MAX_CAUSTIC_HOPS splats, written out (const_assert below).
-            add_splat(ls.splat_pixels[0], ls.splats[0]);
-            add_splat(ls.splat_pixels[1], ls.splats[1]);
+            if CAUSTICS {
+                add_splat(ls.splat_pixels[0], ls.splats[0]);
+                add_splat(ls.splat_pixels[1], ls.splats[1]);
+            }
             s += 1u;
             if s >= params.sample_end {
                 break;

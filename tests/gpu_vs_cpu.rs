@@ -87,6 +87,34 @@ fn gpu_replays_the_cpu_paths() {
     assert!(same >= 0.99, "only {same} of pixels traced the same rays");
 }
 
+/// The same seed with caustic light subpaths (tests/scenes/box_area.toml: an area light,
+/// glass and mirror spheres): the GPU replays the CPU's paths and light subpaths, whose
+/// splats land in other pixels, so whole images agree to float rounding.
+#[test]
+fn gpu_replays_the_cpu_paths_with_caustics() {
+    let Some(ctx) = common::gpu("gpu_replays_the_cpu_paths_with_caustics") else {
+        return;
+    };
+    let mut scene =
+        meshtrace::scene::load_scene(&common::fs::root().join("tests/scenes/box_area.toml"))
+            .expect("box_area");
+    scene.settings.caustics = true;
+    let rs = meshtrace::render::RenderScene::new(&scene, &meshtrace::bvh::BuildParams::default())
+        .expect("BVH");
+    assert!(!rs.caustic_targets.is_empty());
+    let job = RenderJob::new(RenderSettings {
+        spp: 16,
+        ..scene.settings
+    });
+    let (gpu_film, cpu_film) = (gpu_render(&ctx, &rs, &job), cpu_render(&rs, &job));
+    let frac = fraction_close(&channels(&gpu_film), &channels(&cpu_film));
+    eprintln!("{:.4}% of pixel channels agree to 1e-3", 100.0 * frac);
+    assert!(frac >= 0.99, "only {frac} of pixel channels agree");
+    let same = same_rays(&gpu_film, &cpu_film);
+    eprintln!("{:.4}% of pixels traced the same rays", 100.0 * same);
+    assert!(same >= 0.99, "only {same} of pixels traced the same rays");
+}
+
 /// Two GPU renders with the same seed on the same adapter are bit-identical.
 #[test]
 fn gpu_renders_are_deterministic() {
@@ -100,6 +128,19 @@ fn gpu_renders_are_deterministic() {
     let b = gpu_render(&ctx, &rs, &job);
     assert_eq!(bits(&a), bits(&b));
     assert_eq!(a.channels, b.channels, "ray counts");
+    // With caustics, whose splats the kernel adds atomically in whatever order they come.
+    let mut scene =
+        meshtrace::scene::load_scene(&common::fs::root().join("tests/scenes/box_area.toml"))
+            .expect("box_area");
+    scene.settings.caustics = true;
+    let rs = meshtrace::render::RenderScene::new(&scene, &meshtrace::bvh::BuildParams::default())
+        .expect("BVH");
+    let job = RenderJob::new(RenderSettings {
+        spp: 8,
+        ..scene.settings
+    });
+    let (a, b) = (gpu_render(&ctx, &rs, &job), gpu_render(&ctx, &rs, &job));
+    assert_eq!(bits(&a), bits(&b), "renders with caustics");
 }
 
 /// One renderer session renders job after job without uploading or compiling again: a

@@ -23,9 +23,10 @@ use meshtrace::geometry::{ShearedRay, T_INF, intersect_aabb, intersect_triangle,
 use meshtrace::math::Ray;
 use meshtrace::render::bsdf::{bsdf_eval, bsdf_pdf, bsdf_sample, fresnel_dielectric};
 use meshtrace::render::camera::{CameraRays, generate_camera_ray, pixel_centre_ray};
+use meshtrace::render::caustics::{sample_target, target_cone, target_pdf};
 use meshtrace::render::environment::{env_pdf, env_radiance, sample_env};
 use meshtrace::render::gpu::GpuContext;
-use meshtrace::render::integrator::{first_hit, trace_path};
+use meshtrace::render::integrator::{first_hit, start_light, trace_path};
 use meshtrace::render::lights::pick_light;
 use meshtrace::render::rng::{DIMS_PER_BOUNCE, Rng, dim_pair, pcg4d};
 use meshtrace::render::sampling::{
@@ -37,7 +38,7 @@ use meshtrace::render::texture::{
 };
 use meshtrace::render::{RenderScene, TRI_SMOOTH, TRI_TANGENT};
 use meshtrace::scene::{
-    Camera, Material, MaterialKind, Mesh, NO_NORMAL, RenderSettings, Sky, Triangle,
+    Camera, Material, MaterialKind, Mesh, NO_NORMAL, RenderSettings, Sky, Triangle, load_scene,
 };
 use std::time::Instant;
 
@@ -980,8 +981,9 @@ fn camera_ray_matches() {
     }
 }
 
-/// Replays (pixel, sample) paths on both devices; returns the fraction whose radiance
-/// agrees (relative 1e-3 per channel, plus abs 1e-4) and the fraction with equal ray counts.
+/// Replays (pixel, sample) paths on both devices; returns the fraction whose radiance and
+/// splats agree (relative 1e-3 per channel, plus abs 1e-4, and the splats' pixels) and the
+/// fraction with equal ray counts.
 fn replay_paths(
     ctx: &GpuContext,
     name: &str,
@@ -1007,6 +1009,7 @@ fn replay_paths(
     let mut nonzero = 0;
     let mut examples = Vec::new();
     let mut max_rays = 0;
+    let mut splats = 0;
     for (c, o) in cases.iter().zip(&out) {
         let [x, y, sample, _] = c[0];
         let rng = Rng::new(y * settings.width + x, sample, settings.seed);
@@ -1014,9 +1017,28 @@ fn replay_paths(
         let ray = generate_camera_ray(&cam, x, y, &rng);
         let ps = trace_path(rs, &cam, ray, &rng, settings.max_depth);
         let (l, rays) = (ps.radiance, ps.rays);
-        let (gl, grays) = (v3(o[0]), f(o[0][3]));
-        let close =
-            (0..3).all(|i| (l[i] - gl[i]).abs() <= 1e-3 * l[i].abs().max(gl[i].abs()) + 1e-4);
+        let (gl, grays) = (v3(o[0]), o[0][3] as f32);
+        let near = |a: Vec3, b: Vec3| {
+            (0..3).all(|i| (a[i] - b[i]).abs() <= 1e-3 * a[i].abs().max(b[i].abs()) + 1e-4)
+        };
+        // The light subpath's splats: their values summed, and their pixels where they land.
+        let splat = ps.splats.iter().sum::<Vec3>();
+        let pixels = (0..2)
+            .map(|k| {
+                if ps.splats[k] == Vec3::ZERO {
+                    0
+                } else {
+                    ps.splat_pixels[k]
+                }
+            })
+            .collect::<Vec<u32>>();
+        let gpu_pixels = [o[1][3] & 0xffff, o[1][3] >> 16]
+            .iter()
+            .zip(&ps.splats)
+            .map(|(&p, v)| if *v == Vec3::ZERO { 0 } else { p })
+            .collect::<Vec<u32>>();
+        splats += (splat != Vec3::ZERO) as usize;
+        let close = near(l, gl) && near(splat, v3(o[1])) && pixels == gpu_pixels;
         radiance_ok += close as usize;
         rays_ok += (grays == rays as f32) as usize;
         nonzero += (l != Vec3::ZERO) as usize;
@@ -1029,7 +1051,7 @@ fn replay_paths(
     }
     let (a, rr) = (radiance_ok as f64 / n as f64, rays_ok as f64 / n as f64);
     eprintln!(
-        "test_trace_path ({name}): {n} paths ({nonzero} nonzero, up to {max_rays} rays; CPU {:.2} s): radiance agrees on {:.3}%, ray counts on {:.3}%",
+        "test_trace_path ({name}): {n} paths ({nonzero} nonzero, {splats} with splats, up to {max_rays} rays; CPU {:.2} s): radiance and splats agree on {:.3}%, ray counts on {:.3}%",
         start.elapsed().as_secs_f64(),
         100.0 * a,
         100.0 * rr
@@ -1062,6 +1084,129 @@ fn trace_path_matches_on_mesh_scene() {
     let (radiance, rays) = replay_paths(&ctx, "mesh", &rs, &settings, 10_000, 11);
     assert!(radiance >= 0.99, "radiance agrees on only {radiance}");
     assert!(rays >= 0.99, "ray counts agree on only {rays}");
+}
+
+/// The box of tests/scenes/box_area.toml (an area light, glass and mirror spheres) with
+/// caustic light subpaths.
+fn caustics_scene() -> (RenderScene, RenderSettings) {
+    let mut scene = load_scene(&common::fs::root().join("tests/scenes/box_area.toml")).unwrap();
+    scene.settings.caustics = true;
+    let rs = RenderScene::new(&scene, &BuildParams::default()).expect("BVH");
+    assert!(!rs.caustic_targets.is_empty());
+    (rs, scene.settings)
+}
+
+#[test]
+fn trace_path_matches_with_caustics() {
+    let Some(ctx) = common::gpu("trace_path_matches_with_caustics") else {
+        return;
+    };
+    let (rs, settings) = caustics_scene();
+    let (radiance, rays) = replay_paths(&ctx, "caustics", &rs, &settings, 10_000, 12);
+    assert!(
+        radiance >= 0.99,
+        "radiance and splats agree on only {radiance}"
+    );
+    assert!(rays >= 0.99, "ray counts agree on only {rays}");
+}
+
+/// `start_light` (the light subpath and its links to the camera) against its Rust twin
+/// over 20,000 camera samples of the caustics scene: the vertices' count, segments, first
+/// position and throughput, and the rays traced.
+#[test]
+fn light_subpath_matches() {
+    let Some(ctx) = common::gpu("light_subpath_matches") else {
+        return;
+    };
+    let (rs, settings) = caustics_scene();
+    let mut r = SplitMix::new(13);
+    let cases: Vec<Case> = (0..20_000)
+        .map(|_| {
+            let (x, y) = (
+                r.below(settings.width as usize) as u32,
+                r.below(settings.height as usize) as u32,
+            );
+            [[x, y, r.u32() % 4096, 0], [0; 4]]
+        })
+        .collect();
+    let out = run(&ctx, &rs, &settings, "test_light_subpath", &cases);
+    let cam = CameraRays::new(&rs.camera, settings.width, settings.height);
+    let mut counts = Tally::new("vertex count, rays and segments differ", 0.01);
+    let mut position = Worst::new("first vertex position (abs)", 1e-4);
+    let mut throughput = Worst::new("first vertex throughput luminance (rel)", 1e-3);
+    let mut traced = 0;
+    for (c, o) in cases.iter().zip(&out) {
+        let [x, y, sample, _] = c[0];
+        let rng = Rng::new(y * settings.width + x, sample, settings.seed);
+        let ls = start_light(&rs, &cam, &rng, settings.max_depth);
+        let v = &ls.light.vertices[0];
+        let cpu = [
+            ls.light.count,
+            ls.rays,
+            v.segments,
+            ls.light.vertices[1].segments,
+        ];
+        let show = || format!("({x}, {y}) sample {sample}: CPU {cpu:?}, GPU {:?}", o[0]);
+        if cpu != o[0] {
+            counts.add(show);
+        }
+        traced += (ls.light.count > 0) as usize;
+        if ls.light.count > 0 && cpu == o[0] {
+            position.add((v3(o[1]) - v.si.p).abs().max_element() as f64, show);
+            let lum = v.beta.dot(Vec3::new(0.2126, 0.7152, 0.0722));
+            throughput.add(rel(lum, f(o[1][3]), 1e-6), show);
+        }
+    }
+    eprintln!(
+        "test_light_subpath: {} cases, {traced} with a light vertex",
+        cases.len()
+    );
+    assert!(traced > 500, "too few light subpaths to test: {traced}");
+    counts.check("test_light_subpath", cases.len());
+    position.check("test_light_subpath");
+    throughput.check("test_light_subpath");
+}
+
+/// `sample_target`, `target_pdf` and `target_cone` against their Rust twins over 20,000
+/// random points (inside and outside the targets) and numbers.
+#[test]
+fn caustic_targets_match() {
+    let Some(ctx) = common::gpu("caustic_targets_match") else {
+        return;
+    };
+    let (rs, settings) = caustics_scene();
+    let mut r = SplitMix::new(14);
+    let cases: Vec<Case> = (0..20_000)
+        .map(|_| {
+            let p = r.vec3(-1.6, 2.2);
+            let d = r.vec3(-1.0, 1.0);
+            let u = [r.range(0.0, 1.0), r.range(0.0, 1.0)];
+            [word(p, b(d.z)), [b(u[0]), b(u[1]), b(d.x), b(d.y)]]
+        })
+        .collect();
+    let out = run(&ctx, &rs, &settings, "test_caustic_targets", &cases);
+    let mut dir = Worst::new("sample_target direction (abs)", 1e-5);
+    let mut pdf = Worst::new("sample_target and target_pdf pdfs (rel)", 1e-4);
+    let mut cone = Worst::new("target_cone cos_max and height (abs)", 1e-6);
+    for (c, o) in cases.iter().zip(&out) {
+        let p = v3(c[0]);
+        let u = Vec2::new(f(c[1][0]), f(c[1][1]));
+        let d = Vec3::new(f(c[1][2]), f(c[1][3]), f(c[0][3])).normalize();
+        let (sd, spdf) = sample_target(&rs, p, u);
+        let tc = target_cone(&rs.caustic_targets[0], p);
+        let show = || format!("p {p}, u {u}, d {d}: CPU {sd} {spdf}, GPU {:?}", o[0]);
+        dir.add((v3(o[0]) - sd).abs().max_element() as f64, show);
+        pdf.add(rel(spdf, f(o[0][3]), 1e-6), show);
+        pdf.add(rel(target_pdf(&rs, p, d), f(o[1][0]), 1e-6), show);
+        cone.add(
+            ((tc.cos_max - f(o[1][1])).abs()).max((tc.height - f(o[1][2])).abs()) as f64,
+            show,
+        );
+    }
+    eprintln!("test_caustic_targets: {} cases", cases.len());
+    dir.check("test_caustic_targets");
+    pdf.check("test_caustic_targets");
+    cone.check("test_caustic_targets");
 }
 
 /// `texture_lookup` and `material_at` against their Rust twins over 12,000 random texture

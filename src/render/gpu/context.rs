@@ -78,7 +78,8 @@ pub struct GpuContext {
     checks: ShaderChecks,
     /// The render kernel, compiled by the first render on this device and kept for every
     /// later scene (a batch's meshes), since its source and layouts do not depend on them.
-    render: Arc<Mutex<Option<Arc<Pipeline>>>>,
+    /// The render kernel without and with the caustics code (`CAUSTICS`).
+    render: Arc<Mutex<[Option<Arc<Pipeline>>; 2]>>,
     fault: Arc<Mutex<Option<String>>>,
 }
 
@@ -142,7 +143,7 @@ impl GpuContext {
             ray_query,
             scene_layout,
             checks: ShaderChecks::Trusted,
-            render: Arc::new(Mutex::new(None)),
+            render: Default::default(),
             fault,
         })
     }
@@ -153,13 +154,17 @@ impl GpuContext {
     /// For tests, and for telling a kernel's fault from a driver's.
     pub fn with_shader_checks(mut self) -> Self {
         self.checks = ShaderChecks::Checked;
-        self.render = Arc::new(Mutex::new(None));
+        self.render = Default::default();
         self
     }
 
-    /// The render kernel (`shaders/render.wgsl`), compiled on first use.
-    pub fn render_pipeline(&self) -> Result<Arc<Pipeline>, GpuError> {
-        let mut slot = self.render.lock().unwrap_or_else(|p| p.into_inner());
+    /// The render kernel (`shaders/render.wgsl`), compiled on first use: with the code of
+    /// caustic light subpaths (the pipeline constant `CAUSTICS`) for scenes that have caustic
+    /// targets, or without it, which the driver then drops: a kernel that keeps registers
+    /// for light subpaths it never traces would run fewer threads at once.
+    pub fn render_pipeline(&self, caustics: bool) -> Result<Arc<Pipeline>, GpuError> {
+        let mut slots = self.render.lock().unwrap_or_else(|p| p.into_inner());
+        let slot = &mut slots[caustics as usize];
         if let Some(p) = slot.as_ref() {
             return Ok(p.clone());
         }
@@ -168,8 +173,8 @@ impl GpuContext {
             &self.scene_layout,
             super::shader::render_source,
             "render",
-            0,
-            3,
+            (0, 3),
+            &[("CAUSTICS", if caustics { 1.0 } else { 0.0 })],
             self.checks,
         )?);
         *slot = Some(p.clone());

@@ -193,7 +193,9 @@ impl GpuRenderer {
                 | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let render = self.ctx.render_pipeline()?;
+        let render = self
+            .ctx
+            .render_pipeline(self.base.num_caustic_targets > 0)?;
         let io_group = render.io_group(&self.ctx, &[&buffer, &status, &splats]);
         self.render = Some(render);
         self.film = Some(DeviceFilm {

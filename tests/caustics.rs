@@ -1,0 +1,507 @@
+//! Caustic light subpaths (`render::caustics`) must change an image's noise, never its
+//! expected value. Two checks, each on the CPU and the GPU:
+//!
+//! - **A mirror's caustic is the light's mirror image.** A floor lit only through a ceiling
+//!   mirror (the light faces the mirror, its black back towards the floor) is lit exactly as
+//!   the doubled scene without the mirror lights it (everything reflected in the mirror's
+//!   plane added), by the method of images. There the path tracer finds the light by next
+//!   event estimation alone, with little noise; in the mirror scene all the light comes by
+//!   specular paths: `L S D E` (light tracing), `L S D D E` and longer (connections), and
+//!   BSDF sampling, weighed against both.
+//! - **Glass and mirror spheres under a large light**, with caustics and without: the path
+//!   tracer alone finds the caustics of a large light often enough to converge, so the two
+//!   renders estimate one image. The glass sphere's caustic on the floor, seen by the back
+//!   wall through the sphere, is a two-hop light subpath `L S S D S S D`.
+//!
+//! - **An emissive enclosure holding glass and mirrors** (the dielectric furnace): walls
+//!   that emit Le and reflect albedo a fill the enclosure with radiance Le / (1 - a), which
+//!   lossless glass, a perfect mirror and a white block inside the glass leave unchanged,
+//!   so every pixel sees exactly that. Light subpaths there end on the white block inside
+//!   the glass, where the camera path meets them from inside too: the adjoint throughput's
+//!   refraction (no squared index ratio) is right only if the image is.
+//!
+//! The first two compare the image means of several seeds of both renders in blocks of pixels, as z
+//! scores against the seeds' spread: a wrong weight or throughput anywhere along the
+//! caustic paths moves whole regions by far more than their noise.
+
+mod common;
+
+use common::scenes::{add_box, add_sphere, scene, square};
+use common::stats::assert_mean;
+use glam::Vec3;
+use meshtrace::bvh::BuildParams;
+use meshtrace::film::Film;
+use meshtrace::render::{RenderJob, RenderScene};
+use meshtrace::scene::{
+    Camera, Material, MaterialKind, Mesh, NO_NORMAL, NO_UV, RenderSettings, Sky, Triangle,
+};
+
+/// Appends the quad a, b, c, d (a parallelogram, counter-clockwise seen from its front).
+fn quad(mesh: &mut Mesh, [a, b, c, d]: [Vec3; 4], material: u32) {
+    let base = mesh.positions.len() as u32;
+    mesh.positions.extend([a, b, c, d]);
+    for p in [[0, 1, 2], [0, 2, 3]] {
+        mesh.triangles.push(Triangle {
+            p: p.map(|k| base + k),
+            n: [NO_NORMAL; 3],
+            t: [NO_UV; 3],
+            material,
+        });
+    }
+}
+
+/// A horizontal square of half-size `h` centred on `c`, facing up or down.
+fn horizontal(c: Vec3, h: f32, up: bool) -> [Vec3; 4] {
+    let [a, b, cc, d] = [
+        c + Vec3::new(-h, 0.0, -h),
+        c + Vec3::new(-h, 0.0, h),
+        c + Vec3::new(h, 0.0, h),
+        c + Vec3::new(h, 0.0, -h),
+    ];
+    if up { [a, b, cc, d] } else { [a, d, cc, b] }
+}
+
+const FLOOR: u32 = 0;
+const LIGHT: u32 = 1;
+const MIRROR: u32 = 2;
+const GLASS: u32 = 3;
+
+/// A glossy floor (y = 0) and back wall, and a light at y = 1 facing up, under a mirror at
+/// y = 2 facing down; or, `doubled`, the same without the mirror but with the floor, wall
+/// and light reflected in its plane. The camera, below the light, sees the floor, the wall
+/// and the light's black back only. Both are one scene for the points below y = 2: the
+/// mirror reflects every ray that would reach the reflected objects (it covers every
+/// crossing of its plane by a line between them and the floor or wall). A path through the
+/// mirror has one segment more than its twin in the doubled scene, so the renders let paths
+/// run long (64 segments) for neither to cut off light the other keeps.
+fn mirror_scene(doubled: bool, settings: RenderSettings) -> RenderScene {
+    let mut mesh = Mesh::default();
+    // A wall at the back, facing the camera (+z), from the floor to y = 1.9, or in the
+    // mirror's image from y = 2.1 to 4.
+    let wall = |y0: f32, y1: f32| {
+        [
+            Vec3::new(-1.0, y0, -1.0),
+            Vec3::new(1.0, y0, -1.0),
+            Vec3::new(1.0, y1, -1.0),
+            Vec3::new(-1.0, y1, -1.0),
+        ]
+    };
+    quad(&mut mesh, horizontal(Vec3::ZERO, 1.0, true), FLOOR);
+    quad(&mut mesh, wall(0.0, 1.9), FLOOR);
+    quad(&mut mesh, horizontal(Vec3::Y, 0.25, true), LIGHT);
+    if doubled {
+        quad(&mut mesh, horizontal(4.0 * Vec3::Y, 1.0, false), FLOOR);
+        let [a, b, c, d] = wall(2.1, 4.0);
+        quad(&mut mesh, [b, a, d, c], FLOOR);
+        quad(&mut mesh, horizontal(3.0 * Vec3::Y, 0.25, false), LIGHT);
+    } else {
+        quad(&mut mesh, horizontal(2.0 * Vec3::Y, 1.5, false), MIRROR);
+    }
+    let light = Material {
+        emission: Vec3::new(12.0, 10.0, 8.0),
+        ..Material::diffuse(Vec3::ZERO)
+    };
+    let mirror = Material {
+        albedo: Vec3::ONE,
+        ..Material::new(MaterialKind::CONDUCTOR)
+    };
+    // A glossy floor: at a non-delta vertex reached through the mirror, the ratio of
+    // its camera and light sampling densities (`PathState::caustic_pdf`) is not 1, as it
+    // is for a Lambertian one.
+    let floor = Material {
+        albedo: Vec3::new(0.9, 0.8, 0.7),
+        roughness: 0.5,
+        ..Material::new(MaterialKind::ROUGH_CONDUCTOR)
+    };
+    let materials = vec![floor, light, mirror];
+    let camera = Camera::new(
+        Vec3::new(0.0, 0.8, 1.6),
+        Vec3::new(0.0, 0.4, -1.0),
+        Vec3::Y,
+        50.0,
+        0.0,
+        None,
+    )
+    .unwrap();
+    let s = scene(mesh, materials, camera, Sky::Constant(Vec3::ZERO), settings);
+    RenderScene::new(&s, &BuildParams::default()).unwrap()
+}
+
+/// Glass and mirror spheres on a floor before a back wall, and a glass block holding two
+/// diffuse blocks (a light subpath ends inside a dielectric and the camera path meets it
+/// there), under a large light.
+fn spheres_scene(settings: RenderSettings) -> RenderScene {
+    let mut mesh = Mesh::default();
+    quad(&mut mesh, horizontal(Vec3::ZERO, 1.5, true), FLOOR);
+    quad(
+        &mut mesh,
+        [
+            Vec3::new(-1.5, 0.0, -1.0),
+            Vec3::new(1.5, 0.0, -1.0),
+            Vec3::new(1.5, 2.5, -1.0),
+            Vec3::new(-1.5, 2.5, -1.0),
+        ],
+        FLOOR,
+    );
+    quad(
+        &mut mesh,
+        horizontal(Vec3::new(0.0, 2.5, 0.2), 0.8, false),
+        LIGHT,
+    );
+    add_sphere(&mut mesh, Vec3::new(0.35, 0.45, 0.0), 0.45, 3, GLASS);
+    add_sphere(&mut mesh, Vec3::new(-0.6, 0.35, -0.3), 0.35, 3, MIRROR);
+    // A glass block holding two diffuse blocks that light each other inside it.
+    add_box(
+        &mut mesh,
+        Vec3::new(-1.4, 0.01, 0.3),
+        Vec3::new(-0.5, 0.6, 0.9),
+        GLASS,
+        false,
+    );
+    add_box(
+        &mut mesh,
+        Vec3::new(-1.3, 0.05, 0.4),
+        Vec3::new(-1.0, 0.3, 0.8),
+        FLOOR,
+        false,
+    );
+    add_box(
+        &mut mesh,
+        Vec3::new(-0.9, 0.05, 0.4),
+        Vec3::new(-0.6, 0.45, 0.8),
+        FLOOR,
+        false,
+    );
+    let light = Material {
+        emission: Vec3::splat(3.0),
+        ..Material::diffuse(Vec3::ZERO)
+    };
+    let mirror = Material {
+        albedo: Vec3::splat(0.9),
+        ..Material::new(MaterialKind::CONDUCTOR)
+    };
+    let glass = Material::new(MaterialKind::DIELECTRIC);
+    let materials = vec![Material::diffuse(Vec3::splat(0.7)), light, mirror, glass];
+    let camera = Camera::new(
+        Vec3::new(0.0, 1.4, 2.8),
+        Vec3::new(0.0, 0.5, 0.0),
+        Vec3::Y,
+        45.0,
+        0.0,
+        None,
+    )
+    .unwrap();
+    let s = scene(mesh, materials, camera, Sky::Constant(Vec3::ZERO), settings);
+    RenderScene::new(&s, &BuildParams::default()).unwrap()
+}
+
+/// A camera under water: inside a box of water (dielectric, IOR 1.33), looking at its
+/// floor, which a small light above the water lights through the surface. Light subpaths
+/// end on that floor inside the water and are seen from there: their throughput's
+/// refraction (the adjoint's, without the radiance's squared index ratio) decides the
+/// image.
+fn pool_scene(settings: RenderSettings) -> RenderScene {
+    let mut mesh = Mesh::default();
+    add_box(
+        &mut mesh,
+        Vec3::new(-1.5, 0.0, -1.5),
+        Vec3::new(1.5, 1.2, 1.5),
+        GLASS,
+        false,
+    );
+    quad(
+        &mut mesh,
+        horizontal(Vec3::new(0.0, 0.05, 0.0), 1.4, true),
+        FLOOR,
+    );
+    quad(
+        &mut mesh,
+        horizontal(Vec3::new(0.3, 2.5, -0.2), 0.3, false),
+        LIGHT,
+    );
+    let light = Material {
+        emission: Vec3::splat(20.0),
+        ..Material::diffuse(Vec3::ZERO)
+    };
+    let water = Material {
+        ior: 1.33,
+        ..Material::new(MaterialKind::DIELECTRIC)
+    };
+    let materials = vec![
+        Material::diffuse(Vec3::new(0.8, 0.7, 0.6)),
+        light,
+        Material::diffuse(Vec3::ZERO),
+        water,
+    ];
+    let camera = Camera::new(
+        Vec3::new(0.0, 0.8, 1.2),
+        Vec3::new(0.0, 0.0, -0.3),
+        Vec3::Y,
+        60.0,
+        0.0,
+        None,
+    )
+    .unwrap();
+    let s = scene(mesh, materials, camera, Sky::Constant(Vec3::ZERO), settings);
+    RenderScene::new(&s, &BuildParams::default()).unwrap()
+}
+
+/// The largest |z| a block may show: the seeds' spread is itself estimated from 8 or 16
+/// renders (Student's t with 7 or 15 degrees of freedom), over 16 blocks.
+const Z_MAX: f64 = 6.0;
+
+/// Renders seeds `seeds` of `settings` on the CPU or, with `gpu`, the GPU.
+fn renders(
+    rs: &RenderScene,
+    settings: RenderSettings,
+    seeds: std::ops::Range<u32>,
+    gpu: Option<&meshtrace::render::gpu::GpuContext>,
+) -> Vec<Film> {
+    seeds
+        .map(|seed| {
+            let job = RenderJob::new(RenderSettings { seed, ..settings });
+            match gpu {
+                Some(ctx) => common::gpu_render(ctx, rs, &job),
+                None => common::cpu_render(rs, &job),
+            }
+        })
+        .collect()
+}
+
+/// Each render's mean of r + g + b over every block of `block` × `block` pixels, with a
+/// last entry for the whole image; then per entry the mean over the renders and its
+/// standard error.
+fn block_means(films: &[Film], block: u32) -> Vec<(f64, f64)> {
+    let (w, h) = (films[0].width, films[0].height);
+    let (bw, bh) = (w / block, h / block);
+    let per_film: Vec<Vec<f64>> = films
+        .iter()
+        .map(|f| {
+            let mean = f.mean();
+            let mut sums = vec![0.0f64; (bw * bh) as usize];
+            for y in 0..bh * block {
+                for x in 0..bw * block {
+                    let v = mean[(y * w + x) as usize];
+                    sums[((y / block) * bw + x / block) as usize] += (v.x + v.y + v.z) as f64;
+                }
+            }
+            let mut means: Vec<f64> = sums.iter().map(|s| s / (block * block) as f64).collect();
+            means.push(means.iter().sum::<f64>() / means.len() as f64);
+            means
+        })
+        .collect();
+    (0..per_film[0].len())
+        .map(|b| {
+            let values: Vec<f64> = per_film.iter().map(|v| v[b]).collect();
+            common::stats::mean_and_stderr(&values)
+        })
+        .collect()
+}
+
+/// Fails where a block's mean, or the whole image's, differs between `test` and
+/// `reference` by more than `Z_MAX` standard errors of the difference.
+fn assert_same_image(what: &str, test: &[Film], reference: &[Film], block: u32) {
+    let (a, b) = (block_means(test, block), block_means(reference, block));
+    let z: Vec<f64> = a
+        .iter()
+        .zip(&b)
+        .map(|((ma, sa), (mb, sb))| (ma - mb) / (sa * sa + sb * sb).sqrt().max(1e-9))
+        .collect();
+    let (whole, blocks) = z.split_last().unwrap();
+    let (worst, at) = blocks
+        .iter()
+        .enumerate()
+        .map(|(k, &z)| (z, k))
+        .fold(
+            (0.0f64, 0),
+            |m, c| if c.0.abs() > m.0.abs() { c } else { m },
+        );
+    let ((ta, _), (tb, _)) = (a[a.len() - 1], b[b.len() - 1]);
+    eprintln!(
+        "{what}: {} blocks, worst z {worst:.2} (block {at}); whole image {ta:.5} against {tb:.5} ({:+.2}%, z {whole:.2})",
+        blocks.len(),
+        100.0 * (ta - tb) / tb,
+    );
+    assert!(tb > 0.0, "{what}: a black reference proves nothing");
+    assert!(
+        worst.abs() <= Z_MAX,
+        "{what}: block {at} differs by {worst:.2} standard errors"
+    );
+    assert!(
+        whole.abs() <= Z_MAX,
+        "{what}: the whole image differs by {whole:.2} standard errors"
+    );
+}
+
+fn mirror_check(gpu: Option<&meshtrace::render::gpu::GpuContext>) {
+    let s = RenderSettings {
+        caustics: true,
+        ..square(32, if gpu.is_some() { 32 } else { 64 }, 64, 0)
+    };
+    let mirror = mirror_scene(false, s);
+    assert!(
+        !mirror.caustic_targets.is_empty(),
+        "the mirror must be a caustic target"
+    );
+    let doubled = mirror_scene(true, s);
+    assert!(doubled.caustic_targets.is_empty());
+    let test = renders(&mirror, s, 0..16, gpu);
+    let reference = renders(&doubled, RenderSettings { spp: 512, ..s }, 100..108, None);
+    let device = if gpu.is_some() { "GPU" } else { "CPU" };
+    assert_same_image(
+        &format!("mirror ({device}) against its doubled scene"),
+        &test,
+        &reference,
+        8,
+    );
+}
+
+#[test]
+fn a_mirrors_caustic_is_the_lights_mirror_image() {
+    mirror_check(None);
+}
+
+#[test]
+fn a_mirrors_caustic_is_the_lights_mirror_image_on_the_gpu() {
+    let Some(ctx) = common::gpu("a_mirrors_caustic_is_the_lights_mirror_image_on_the_gpu") else {
+        return;
+    };
+    mirror_check(Some(&ctx));
+}
+
+/// The path tracer alone, with the same scene: no targets, no light subpaths.
+fn without_caustics(s: RenderSettings) -> RenderScene {
+    spheres_scene(RenderSettings {
+        caustics: false,
+        ..s
+    })
+}
+
+#[test]
+fn caustics_keep_the_expected_image_of_glass_and_mirror_spheres() {
+    let s = RenderSettings {
+        caustics: true,
+        ..square(32, 64, 8, 0)
+    };
+    let with = spheres_scene(s);
+    assert!(
+        !with.caustic_targets.is_empty(),
+        "the spheres are caustic targets"
+    );
+    let test = renders(&with, s, 0..6, None);
+    let reference = renders(
+        &without_caustics(s),
+        RenderSettings { spp: 1024, ..s },
+        20..26,
+        None,
+    );
+    assert_same_image("glass and mirror spheres (CPU)", &test, &reference, 8);
+}
+
+#[test]
+fn caustics_keep_the_expected_image_of_glass_and_mirror_spheres_on_the_gpu() {
+    let Some(ctx) =
+        common::gpu("caustics_keep_the_expected_image_of_glass_and_mirror_spheres_on_the_gpu")
+    else {
+        return;
+    };
+    let s = RenderSettings {
+        caustics: true,
+        ..square(32, 64, 8, 0)
+    };
+    let test = renders(&spheres_scene(s), s, 0..4, Some(&ctx));
+    let reference = renders(
+        &without_caustics(s),
+        RenderSettings { spp: 1024, ..s },
+        20..26,
+        None,
+    );
+    assert_same_image("glass and mirror spheres (GPU)", &test, &reference, 8);
+}
+
+/// The dielectric furnace (see the top of the file): flat glass and mirror blocks, and a
+/// white block inside a glass one, in an enclosure of emissive walls. Flat faces, so that
+/// no shading normal loses energy; paths up to 256 segments, which Russian roulette ends
+/// long before.
+#[test]
+fn an_emissive_enclosure_holding_glass_and_mirrors_keeps_its_radiance() {
+    let mut mesh = Mesh::default();
+    add_box(&mut mesh, Vec3::splat(-1.0), Vec3::splat(1.0), 0, true);
+    add_box(
+        &mut mesh,
+        Vec3::new(-0.8, -0.95, -0.7),
+        Vec3::new(-0.1, -0.2, 0.0),
+        1,
+        false,
+    );
+    add_box(
+        &mut mesh,
+        Vec3::new(-0.6, -0.8, -0.5),
+        Vec3::new(-0.3, -0.5, -0.2),
+        3,
+        false,
+    );
+    add_box(
+        &mut mesh,
+        Vec3::new(0.1, -0.95, -0.6),
+        Vec3::new(0.6, -0.4, -0.1),
+        2,
+        false,
+    );
+    add_box(
+        &mut mesh,
+        Vec3::new(-0.3, 0.2, -0.8),
+        Vec3::new(0.4, 0.7, -0.4),
+        1,
+        false,
+    );
+    let wall = Material {
+        emission: Vec3::new(0.5, 0.75, 0.25),
+        ..Material::diffuse(Vec3::new(0.5, 0.25, 0.75))
+    };
+    let expect = wall.emission / (Vec3::ONE - wall.albedo);
+    let glass = Material::new(MaterialKind::DIELECTRIC);
+    let mirror = Material {
+        albedo: Vec3::ONE,
+        ..Material::new(MaterialKind::CONDUCTOR)
+    };
+    let camera = Camera::new(
+        Vec3::new(0.6, 0.5, 0.9),
+        Vec3::new(-0.2, -0.4, -0.6),
+        Vec3::Y,
+        70.0,
+        0.0,
+        None,
+    )
+    .unwrap();
+    let settings = RenderSettings {
+        caustics: true,
+        ..square(48, 64, 256, 7)
+    };
+    let materials = vec![wall, glass, mirror, Material::diffuse(Vec3::ONE)];
+    let s = scene(mesh, materials, camera, Sky::Constant(Vec3::ZERO), settings);
+    for (device, film) in common::render_both("glass_furnace", &s) {
+        assert_mean(
+            "glass and mirrors in an emissive enclosure",
+            device,
+            &film,
+            expect,
+        );
+    }
+}
+
+#[test]
+fn caustics_keep_the_expected_image_seen_from_under_water() {
+    let s = RenderSettings {
+        caustics: true,
+        ..square(32, 64, 8, 0)
+    };
+    let test = renders(&pool_scene(s), s, 0..16, None);
+    let off = RenderSettings {
+        caustics: false,
+        spp: 512,
+        ..s
+    };
+    let reference = renders(&pool_scene(off), off, 100..108, None);
+    assert_same_image("under water (CPU)", &test, &reference, 8);
+}
