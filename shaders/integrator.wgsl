@@ -85,13 +85,12 @@ struct PathState {
     depth: u32,
     caustic_pdf: f32,
     caustic_hops: u32,
-    light: LightPath,
 }
 
-// A path about to trace its camera ray, drawn with density camera_pdf, with its light
-// subpath. mirror: src/render/integrator.rs `path_start`
-fn path_start(ray: Ray, camera_pdf: f32, light: LightPath) -> PathState {
-    return PathState(ray, vec3<f32>(0.0), vec3<f32>(1.0), 0u, camera_pdf, true, 1.0, 0u, 0.0, 0u, light);
+// A path about to trace its camera ray, drawn with density camera_pdf.
+// mirror: src/render/integrator.rs `path_start`
+fn path_start(ray: Ray, camera_pdf: f32) -> PathState {
+    return PathState(ray, vec3<f32>(0.0), vec3<f32>(1.0), 0u, camera_pdf, true, 1.0, 0u, 0.0, 0u);
 }
 
 // path_step's caustic connection to one light vertex (written out per vertex, so that the
@@ -110,7 +109,7 @@ fn connect_light_vertex(st: ptr<function, PathState>, si: SurfaceHit, mat: Mater
 }
 
 // One bounce; true when the path has ended. mirror: src/render/integrator.rs `path_step`
-fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
+fn path_step(st: ptr<function, PathState>, light: ptr<function, LightPath>, rng: Rng) -> bool {
     // The light pair, drawn before the traversal (as on the CPU, where that hides its
     // latency; on a miss, a delta material or the last segment it goes unused).
     var u_light = vec2<f32>(0.0);
@@ -190,11 +189,11 @@ fn path_step(st: ptr<function, PathState>, rng: Rng) -> bool {
     // Caustic connections: to each vertex of the sample's light subpath that leaves the
     // path room for the link and the subpath's segments.
     if caustics && !bsdf_is_delta(mat) {
-        if (*st).light.count > 0u {
-            connect_light_vertex(st, si, mat, sf, wo_world, wo, (*st).light.vertices[0]);
+        if (*light).count > 0u {
+            connect_light_vertex(st, si, mat, sf, wo_world, wo, (*light).vertices[0]);
         }
-        if (*st).light.count > 1u {
-            connect_light_vertex(st, si, mat, sf, wo_world, wo, (*st).light.vertices[1]);
+        if (*light).count > 1u {
+            connect_light_vertex(st, si, mat, sf, wo_world, wo, (*light).vertices[1]);
         }
     }
 
@@ -295,7 +294,7 @@ struct SeenLink {
 
 fn seen_camera_link(lv: LightVertex, rng: Rng) -> SeenLink {
     var out = SeenLink(0u, 0u, vec3<f32>(0.0));
-    let link = camera_link(lv, rng_2d(rng, lv.segments, DIM_CAUSTIC_LENS_U));
+    let link = camera_link(lv, rng_2d(rng, lv.segments, DIM_LENS_U));
     if link.valid {
         out.rays = 1u;
         if !traverse_any(link.ray, link.t_max) {
@@ -317,10 +316,11 @@ struct PathSample {
 // mirror: src/render/integrator.rs `trace_path`
 fn trace_path(ray: Ray, rng: Rng) -> PathSample {
     let ls = start_light(rng);
-    var st = path_start(ray, camera_pdf(ray.dir), ls.light);
+    var light = ls.light;
+    var st = path_start(ray, camera_pdf(ray.dir));
     st.rays = ls.rays;
     loop {
-        if path_step(&st, rng) {
+        if path_step(&st, &light, rng) {
             break;
         }
     }

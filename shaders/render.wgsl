@@ -21,8 +21,7 @@
 @group(1) @binding(2) var<storage, read_write> splats: array<atomic<u32>>;
 
 // Adds a splat to pixel `pixel`; a non-finite one is dropped, as a sample's radiance is. The
-// low word's carry goes to the high word, so the pair adds as one 64-bit integer. Loop-free,
-// so that a driver's loop limit cannot stop it half-way (see `render`).
+// low word's carry goes to the high word, so the pair adds as one 64-bit integer.
 // mirror: src/render/cpu.rs `Splats::add`
 fn add_splat(pixel: u32, v: vec3<f32>) {
     if all(v == vec3<f32>(0.0)) || !is_finite3(v) {
@@ -41,21 +40,6 @@ fn add_splat(pixel: u32, v: vec3<f32>) {
     atomicAdd(&splats[i + 3u], g.y + select(0u, 1u, g_lo + g.x < g_lo));
     let b_lo = atomicAdd(&splats[i + 4u], b.x);
     atomicAdd(&splats[i + 5u], b.y + select(0u, 1u, b_lo + b.x < b_lo));
-}
-
-// Whether this invocation's loops still run: a two-round loop that a driver's limit on an
-// invocation's loop iterations would stop after one (status[1] is 0, which the compiler
-// cannot know).
-fn loops_intact() -> bool {
-    var rounds = 0u;
-    let bound = 2u + atomicLoad(&status[1]);
-    loop {
-        rounds += 1u;
-        if rounds >= bound {
-            break;
-        }
-    }
-    return rounds == bound;
 }
 
 // Adds this invocation's failed checks (bindings.wgsl `check`) to status[2].
@@ -101,21 +85,23 @@ fn set_aov_ids(sums: ptr<function, AovSums>, fh: FirstHit) {
     (*sums).t[5] = texel_add(none, vec4<f32>(f32(fh.material & 0xffffu), f32(fh.material >> 16u), 0.0, 1.0));
 }
 
-// A sample's camera ray, its first hits for the AOVs (the pixel-centre ray's with sample
-// 0) and whether its radiance counts (`seen`: not in a transparent render where it
-// misses); then its light subpath, whose splats `ls` keeps until the sample is done.
-fn start_sample(x: u32, y: u32, s: u32, rng: Rng, fh: ptr<function, FirstHit>, centre: ptr<function, FirstHit>, seen: ptr<function, bool>, ls: ptr<function, LightStart>) -> PathState {
+// A sample's camera ray and its light subpath (`ls`, whose splats wait for the sample's
+// end). With AOVs, also adds its first hit to `sums` (and with sample 0 the pixel-centre
+// ray's ids), and returns in `seen` whether its radiance counts: not in a transparent
+// render where it misses.
+fn start_sample(x: u32, y: u32, s: u32, rng: Rng, sums: ptr<function, AovSums>, seen: ptr<function, bool>, ls: ptr<function, LightStart>) -> PathState {
     let ray = generate_camera_ray(x, y, rng);
     *seen = true;
     if params.aovs != 0u {
-        *fh = first_hit(ray);
-        *seen = (*fh).hit || params.transparent == 0u;
+        let fh = first_hit(ray);
+        add_aov_sample(sums, fh);
+        *seen = fh.hit || params.transparent == 0u;
         if s == 0u {
-            *centre = first_hit(pixel_centre_ray(x, y));
+            set_aov_ids(sums, first_hit(pixel_centre_ray(x, y)));
         }
     }
     *ls = start_light(rng);
-    var st = path_start(ray, camera_pdf(ray.dir), (*ls).light);
+    var st = path_start(ray, camera_pdf(ray.dir));
     st.rays = (*ls).rays;
     return st;
 }
@@ -123,13 +109,15 @@ fn start_sample(x: u32, y: u32, s: u32, rng: Rng, fh: ptr<function, FirstHit>, c
 // mirror: src/render/cpu.rs `render_pixel`
 //
 // A pixel adds its samples of this dispatch's range to the film, from the one after those
-// it already has. Mesa's lavapipe ends every loop of an invocation once their iterations
-// together pass 65535, which would silently cut paths short; so a sample counts only once
-// a canary loop after it still runs (`loops_intact`), and is then added at once: radiance,
-// rays, AOVs and its light subpath's splats, none of it in a loop. An invocation cut short
-// keeps the samples it finished, writes them with the index of the next, and counts itself
-// in `status`; the host then dispatches the range again in smaller parts, which such a
-// pixel resumes and a finished one skips.
+// it already has, or adds nothing at all: Mesa's lavapipe ends every loop of an invocation
+// once their iterations together pass 65535, which would silently cut paths short. An
+// invocation that sees that happen (its sample loop ended early, or a two-round canary
+// loop after it stopped after one) leaves its pixel as it was and counts itself in
+// `status`; the host then dispatches the range again in smaller parts, which such a
+// pixel resumes and a finished one skips. The splats its light subpaths made are in
+// `splats` already: in a render with caustics the host takes the film and the splats back
+// to what they held before the dispatch (render/gpu/session.rs `run_kernel`), so that no
+// splat is added twice.
 @compute @workgroup_size(8, 8, 1)
 fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     let x = gid.x;
@@ -159,44 +147,43 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
     var seen = true;
-    var fh: FirstHit;
-    var centre: FirstHit;
     var ls: LightStart;
     var rng = Rng(pixel, s, params.seed);
-    var st = start_sample(x, y, s, rng, &fh, &centre, &seen, &ls);
-    var cut = false;
+    var st = start_sample(x, y, s, rng, &sums, &seen, &ls);
+    // (A variable of its own: a pointer argument must point at a whole variable.)
+    var light = ls.light;
     loop {
-        if path_step(&st, rng) {
-            if !loops_intact() {
-                cut = true;
-                break;
-            }
+        if path_step(&st, &light, rng) {
             if is_finite3(st.radiance) && seen {
                 radiance = texel_add(radiance, vec4<f32>(st.radiance, 0.0));
             }
             rays = texel_add(rays, vec4<f32>(f32(st.rays), 0.0, 0.0, 0.0));
-            if params.aovs != 0u {
-                add_aov_sample(&sums, fh);
-                if s == 0u {
-                    set_aov_ids(&sums, centre);
-                }
-            }
-            // MAX_CAUSTIC_HOPS splats, written out (const_assert below).
             if CAUSTICS {
-                add_splat(ls.splat_pixels[0], ls.splats[0]);
-                add_splat(ls.splat_pixels[1], ls.splats[1]);
+                for (var k = 0u; k < MAX_CAUSTIC_HOPS; k++) {
+                    add_splat(ls.splat_pixels[k], ls.splats[k]);
+                }
             }
             s += 1u;
             if s >= params.sample_end {
                 break;
             }
             rng = Rng(pixel, s, params.seed);
-            st = start_sample(x, y, s, rng, &fh, &centre, &seen, &ls);
+            st = start_sample(x, y, s, rng, &sums, &seen, &ls);
+            light = ls.light;
+        }
+    }
+    var rounds = 0u;
+    let bound = 2u + atomicLoad(&status[1]);
+    loop {
+        rounds += 1u;
+        if rounds >= bound {
+            break;
         }
     }
     report_checks();
-    if cut || s < params.sample_end {
+    if s < params.sample_end || rounds != bound {
         atomicAdd(&status[0], 1u);
+        return;
     }
     radiance.zw.z = s;
     film[base] = radiance;
@@ -207,5 +194,3 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
 }
-
-const_assert MAX_CAUSTIC_HOPS == 2u;

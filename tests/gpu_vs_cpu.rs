@@ -228,6 +228,48 @@ fn long_dispatches_replay_the_cpu_paths() {
     );
 }
 
+/// Long dispatches of a render with caustics: a dispatch that the driver cuts short is
+/// undone, splats included (their pixels may lie anywhere), and sent again in halves, so
+/// the image still replays the CPU's paths and no splat counts twice.
+#[test]
+fn long_dispatches_with_caustics_replay_the_cpu_paths() {
+    let Some(ctx) = common::gpu("long_dispatches_with_caustics_replay_the_cpu_paths") else {
+        return;
+    };
+    let mut scene =
+        meshtrace::scene::load_scene(&common::fs::root().join("tests/scenes/box_area.toml"))
+            .expect("box_area");
+    scene.settings.caustics = true;
+    let rs = meshtrace::render::RenderScene::new(&scene, &meshtrace::bvh::BuildParams::default())
+        .expect("BVH");
+    let s = RenderSettings {
+        width: 24,
+        height: 18,
+        spp: 512,
+        ..scene.settings
+    };
+    let job = RenderJob::new(s);
+    let mut session = GpuRenderer::new(&ctx, &rs).unwrap();
+    session.set_max_samples_per_dispatch(u32::MAX);
+    let gpu = session.render(&job, &|_| {}).unwrap();
+    let cpu = cpu_render(&rs, &job);
+    let (g, c) = (channels(&gpu), channels(&cpu));
+    let frac = fraction_close(&g, &c);
+    let (gm, cm) = (
+        g.iter().sum::<f64>() / g.len() as f64,
+        c.iter().sum::<f64>() / c.len() as f64,
+    );
+    eprintln!(
+        "{:.4}% of pixel channels agree to 1e-3; mean GPU {gm}, CPU {cm}",
+        100.0 * frac
+    );
+    assert!(frac >= 0.99, "only {frac} of pixel channels agree");
+    assert!(
+        (gm - cm).abs() <= 1e-3 * cm,
+        "mean GPU {gm} against CPU {cm}"
+    );
+}
+
 /// Renders of disjoint sample ranges merge into the full render, bit for bit, on the CPU
 /// and on the GPU, AOVs included.
 #[test]

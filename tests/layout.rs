@@ -168,6 +168,7 @@ fn structs_match_their_rust_twins() {
             "TriTangents",
             "Texture",
             "Light",
+            "CausticTarget",
             "Params"
         ]
     );
@@ -292,11 +293,11 @@ fn constants_match_rust() {
             Value::F32(_) => panic!("a float DIM"),
         })
         .collect();
-    assert_eq!(dims.len(), 10);
+    assert_eq!(dims.len(), 16);
     assert!(dims.iter().all(|&d| d < rng::DIMS_PER_BOUNCE));
     dims.sort();
     dims.dedup();
-    assert_eq!(dims.len(), 10, "DIM_* values collide");
+    assert_eq!(dims.len(), 16, "DIM_* values collide");
     assert!(list.contains(&(
         "MAT_DIELECTRIC".into(),
         Value::U32(MaterialKind::DIELECTRIC.0)
@@ -435,6 +436,7 @@ fn wgsl_defines(text: &str, name: &str) -> bool {
         .iter()
         .any(|kw| defines_after(text, &format!("{kw}{name}")))
         || text.contains(&format!("var<storage, read> {name}:"))
+        || text.contains(&format!("var<storage, read_write> {name}:"))
         || text.contains(&format!("var<uniform> {name}:"))
 }
 

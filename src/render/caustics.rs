@@ -572,7 +572,7 @@ pub struct CameraLink {
 }
 
 /// The connection of light vertex `lv` to the camera, through the lens point that the
-/// pair `u_lens` picks (`DIM_CAUSTIC_LENS_U` of bounce 1), weighed against BSDF sampling
+/// pair `u_lens` picks (`DIM_LENS_U` of the vertex's bounce), weighed against BSDF sampling
 /// from a camera ray's first hit by [`caustic_weight`] with [`camera_pdf`] as the camera's
 /// density. `None` where the vertex is outside the image or no light passes.
 /// mirror: shaders/caustics.wgsl `camera_link`

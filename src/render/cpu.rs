@@ -138,7 +138,7 @@ pub fn render(scene: &RenderScene, job: &RenderJob, progress: &(dyn Fn(u64) + Sy
 /// What light subpaths seen through the lens add to the pixels they land in, from every
 /// worker: each splat rounded once to fixed point (as a sample's radiance is) and added
 /// atomically, so that the sums are the same bits in whatever order the workers add them.
-/// mirror: the `splats` buffer of `shaders/render.wgsl`
+/// mirror: shaders/render.wgsl `splats`
 pub struct Splats(Vec<[AtomicI64; 3]>);
 
 impl Splats {
@@ -292,8 +292,10 @@ pub fn render_pixel(
         if ps.radiance.is_finite() && seen {
             acc.radiance = fixed_add3(acc.radiance, to_fixed3(ps.radiance));
         }
-        for (&pixel, &value) in ps.splat_pixels.iter().zip(&ps.splats) {
-            splats.add(pixel, value);
+        if !scene.caustic_targets.is_empty() {
+            for (&pixel, &value) in ps.splat_pixels.iter().zip(&ps.splats) {
+                splats.add(pixel, value);
+            }
         }
     }
     acc

@@ -176,14 +176,12 @@ pub struct PathState {
     pub caustic_pdf: f32,
     /// Specular chains completed since x(t).
     pub caustic_hops: u32,
-    /// The sample's light subpath, whose vertices every non-delta vertex connects to.
-    pub light: LightPath,
 }
 
 /// A path about to trace its camera ray, drawn with solid-angle density `camera_pdf`
-/// (kept in `prev_pdf` for the caustic weights; `prev_delta` keeps other weights off it),
-/// with `light` its light subpath. mirror: shaders/integrator.wgsl `path_start`
-pub fn path_start(ray: Ray, camera_pdf: f32, light: LightPath) -> PathState {
+/// (kept in `prev_pdf` for the caustic weights; `prev_delta` keeps other weights off it).
+/// mirror: shaders/integrator.wgsl `path_start`
+pub fn path_start(ray: Ray, camera_pdf: f32) -> PathState {
     PathState {
         ray,
         radiance: Vec3::ZERO,
@@ -195,15 +193,21 @@ pub fn path_start(ray: Ray, camera_pdf: f32, light: LightPath) -> PathState {
         depth: 0,
         caustic_pdf: 0.0,
         caustic_hops: 0,
-        light,
     }
 }
 
-/// One bounce: traces `st.ray`, adds the emission it finds and next event estimation at
-/// the hit, then samples the BSDF for the next ray. Returns true when the path has ended.
+/// One bounce: traces `st.ray`, adds the emission it finds, next event estimation and the
+/// connections to the vertices of the sample's light subpath `light` at the hit, then
+/// samples the BSDF for the next ray. Returns true when the path has ended.
 /// mirror: shaders/integrator.wgsl `path_step`
-#[inline]
-pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: u32) -> bool {
+#[inline(always)]
+pub fn path_step<const CAUSTICS: bool>(
+    scene: &RenderScene,
+    st: &mut PathState,
+    light: &LightPath,
+    rng: &Rng,
+    max_depth: u32,
+) -> bool {
     // The CPU traverses the wide tree, which finds the hits the GPU's binary tree finds.
     let wide = &scene.wide;
     // The light pair, drawn before the traversal so that its hashes run in the traversal's
@@ -238,7 +242,7 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
         let cos_l = -st.ray.dir.dot(si.ng);
         let w = if !st.prev_delta {
             power_heuristic(st.prev_pdf, light_pdf(scene, si.tri, hit.t, cos_l))
-        } else if st.caustic_pdf > 0.0 {
+        } else if CAUSTICS && st.caustic_pdf > 0.0 {
             caustic_hit_weight(scene, si.tri, si.p, st.ray.dir, cos_l, st.caustic_pdf)
         } else {
             1.0
@@ -248,7 +252,7 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
     // The camera's (or BSDF sampling's) density of this vertex in area, where the previous
     // vertex is the camera (or a non-delta vertex): where a light subpath ending here
     // could have been connected to the camera path.
-    let caustics = !scene.caustic_targets.is_empty();
+    let caustics = CAUSTICS;
     let area_pdf = if caustics && (st.depth == 0 || !st.prev_delta) {
         st.prev_pdf * st.ray.dir.dot(si.ng).abs() / (hit.t * hit.t)
     } else {
@@ -310,8 +314,8 @@ pub fn path_step(scene: &RenderScene, st: &mut PathState, rng: &Rng, max_depth: 
 
     // Caustic connections: the first hit to each vertex of the sample's light subpath that
     // leaves the path room for the link and the subpath's segments.
-    if !bsdf_is_delta(mat) {
-        for lv in &st.light.vertices[..st.light.count as usize] {
+    if caustics && !bsdf_is_delta(mat) {
+        for lv in &light.vertices[..light.count as usize] {
             if st.depth + 2 + lv.segments <= max_depth
                 && let Some(link) = caustic_link(scene, &si, mat, &frame, wo_world, wo, lv)
             {
@@ -396,7 +400,7 @@ pub struct LightStart {
 }
 
 /// Traces the sample's light subpath and links each of its vertices to the camera, through
-/// the lens point of that vertex's `DIM_CAUSTIC_LENS_U` pair.
+/// the lens point of that vertex's `DIM_LENS_U` pair.
 /// mirror: shaders/integrator.wgsl `start_light`
 pub fn start_light(scene: &RenderScene, cam: &CameraRays, rng: &Rng, max_depth: u32) -> LightStart {
     let mut out = LightStart {
@@ -411,7 +415,7 @@ pub fn start_light(scene: &RenderScene, cam: &CameraRays, rng: &Rng, max_depth: 
     (out.light, out.rays) = trace_light_subpath(scene, rng, max_depth - 1);
     for k in 0..out.light.count as usize {
         let lv = &out.light.vertices[k];
-        let u_lens = rng.rng_2d(lv.segments, rng::DIM_CAUSTIC_LENS_U);
+        let u_lens = rng.rng_2d(lv.segments, rng::DIM_LENS_U);
         if let Some(link) = camera_link(scene, cam, lv, u_lens) {
             out.rays += 1;
             if !scene
@@ -435,7 +439,8 @@ pub struct PathSample {
     pub splats: [Vec3; MAX_CAUSTIC_HOPS],
 }
 
-/// One camera sample: [`start_light`], then [`path_step`] until the camera path ends.
+/// One camera sample: [`start_light`], then [`path_step`] until the camera path ends (in a
+/// scene without caustic targets, the path alone).
 /// mirror: shaders/integrator.wgsl `trace_path`
 pub fn trace_path(
     scene: &RenderScene,
@@ -444,10 +449,22 @@ pub fn trace_path(
     rng: &Rng,
     max_depth: u32,
 ) -> PathSample {
+    // A scene without caustic targets skips the light subpath and its bookkeeping (a loop
+    // of its own, where the compiler knows that there is no light vertex to connect to).
+    if scene.caustic_targets.is_empty() {
+        let mut st = path_start(ray, 0.0);
+        while !path_step::<false>(scene, &mut st, &LightPath::NONE, rng, max_depth) {}
+        return PathSample {
+            radiance: st.radiance,
+            rays: st.rays,
+            splat_pixels: [0; MAX_CAUSTIC_HOPS],
+            splats: [Vec3::ZERO; MAX_CAUSTIC_HOPS],
+        };
+    }
     let ls = start_light(scene, cam, rng, max_depth);
-    let mut st = path_start(ray, camera_pdf(cam, ray.dir), ls.light);
+    let mut st = path_start(ray, camera_pdf(cam, ray.dir));
     st.rays = ls.rays;
-    while !path_step(scene, &mut st, rng, max_depth) {}
+    while !path_step::<true>(scene, &mut st, &ls.light, rng, max_depth) {}
     PathSample {
         radiance: st.radiance,
         rays: st.rays,

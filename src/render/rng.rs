@@ -33,13 +33,11 @@ pub const DIM_BSDF_V: u32 = 9;
 pub const DIM_ROULETTE: u32 = 10;
 /// Dimensions of a camera sample's light subpath (`render::caustics`), whose vertex j draws
 /// at bounce j: the light point (bounce 0), the direction leaving vertex j (the emitted one
-/// at bounce 0, the BSDF's at a non-delta vertex) and the lobe there, and the lens point
-/// through which a non-delta vertex is seen (never at bounce 0, where the light point's
-/// pair lies).
+/// at bounce 0, the BSDF's at a non-delta vertex) and the lobe there. The lens point
+/// through which non-delta vertex j is seen is the pair `DIM_LENS_U` of bounce j (at least
+/// 2; the camera's own is bounce 0's).
 pub const DIM_CAUSTIC_LIGHT_U: u32 = 11;
 pub const DIM_CAUSTIC_LIGHT_V: u32 = 12;
-pub const DIM_CAUSTIC_LENS_U: u32 = 11;
-pub const DIM_CAUSTIC_LENS_V: u32 = 12;
 pub const DIM_CAUSTIC_DIR_U: u32 = 13;
 pub const DIM_CAUSTIC_DIR_V: u32 = 14;
 pub const DIM_CAUSTIC_LOBE: u32 = 15;

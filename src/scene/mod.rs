@@ -137,7 +137,7 @@ pub struct RenderSettings {
 }
 
 /// Whether renders trace caustic light subpaths unless told otherwise.
-pub const CAUSTICS_DEFAULT: bool = false;
+pub const CAUSTICS_DEFAULT: bool = true;
 
 impl Default for RenderSettings {
     fn default() -> Self {

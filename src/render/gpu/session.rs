@@ -56,6 +56,10 @@ struct DeviceFilm {
     /// The splats of light subpaths (`splats` in shaders/render.wgsl): per pixel three
     /// fixed-point sums of two words each, added to the radiance when the film is read.
     splats: wgpu::Buffer,
+    /// In a render with caustics, copies of `buffer` and `splats` from before the last
+    /// dispatch: a dispatch that the driver cut short is undone from them, since its
+    /// finished samples' splats, unlike their pixels' sums, cannot be told from the rest.
+    backup: Option<(wgpu::Buffer, wgpu::Buffer)>,
     /// The kernel's [`Status`].
     status: wgpu::Buffer,
     io_group: wgpu::BindGroup,
@@ -173,17 +177,28 @@ impl GpuRenderer {
             transparent: template.transparent as u32,
             ..self.params_for(settings)
         };
-        let buffer = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("film"),
-            size: bytes,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        let splats = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("splats"),
-            size: template.sum.len() as u64 * SPLAT_BYTES,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
+        let buffer_of = |label: &'static str, size: u64, storage: bool| {
+            let usage = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+            self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: if storage {
+                    usage | wgpu::BufferUsages::STORAGE
+                } else {
+                    usage
+                },
+                mapped_at_creation: false,
+            })
+        };
+        let splat_bytes = template.sum.len() as u64 * SPLAT_BYTES;
+        let buffer = buffer_of("film", bytes, true);
+        let splats = buffer_of("splats", splat_bytes, true);
+        let caustics = self.base.num_caustic_targets > 0;
+        let backup = caustics.then(|| {
+            (
+                buffer_of("film backup", bytes, false),
+                buffer_of("splats backup", splat_bytes, false),
+            )
         });
         let status = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("status"),
@@ -193,15 +208,14 @@ impl GpuRenderer {
                 | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let render = self
-            .ctx
-            .render_pipeline(self.base.num_caustic_targets > 0)?;
+        let render = self.ctx.render_pipeline(caustics)?;
         let io_group = render.io_group(&self.ctx, &[&buffer, &status, &splats]);
         self.render = Some(render);
         self.film = Some(DeviceFilm {
             template,
             buffer,
             splats,
+            backup,
             status,
             io_group,
             first_sample,
@@ -250,7 +264,8 @@ impl GpuRenderer {
     }
 
     /// Runs the render kernel once over `samples` of `rows`, waits for it and returns how
-    /// many invocations were cut short (their pixels keep what they had).
+    /// many invocations were cut short (their pixels keep what they had; in a render with
+    /// caustics the whole dispatch is undone, splats included).
     fn run_kernel(&mut self, samples: Range<u32>, rows: Range<u32>) -> Result<u32, GpuError> {
         let (Some(film), Some(render)) = (&self.film, &self.render) else {
             return Err(GpuError::Fault("dispatch before begin".into()));
@@ -269,6 +284,10 @@ impl GpuRenderer {
             .queue
             .write_buffer(&film.status, 0, bytemuck::bytes_of(&Status::default()));
         let mut enc = self.ctx.device.create_command_encoder(&Default::default());
+        if let Some((film_copy, splats_copy)) = &film.backup {
+            enc.copy_buffer_to_buffer(&film.buffer, 0, film_copy, 0, None);
+            enc.copy_buffer_to_buffer(&film.splats, 0, splats_copy, 0, None);
+        }
         {
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("render"),
@@ -291,6 +310,14 @@ impl GpuRenderer {
                 "the checked render kernel indexed out of range or divided by zero {} times",
                 status.check_failures
             )));
+        }
+        if status.cut > 0
+            && let Some((film_copy, splats_copy)) = &film.backup
+        {
+            let mut enc = self.ctx.device.create_command_encoder(&Default::default());
+            enc.copy_buffer_to_buffer(film_copy, 0, &film.buffer, 0, None);
+            enc.copy_buffer_to_buffer(splats_copy, 0, &film.splats, 0, None);
+            self.ctx.queue.submit([enc.finish()]);
         }
         Ok(status.cut)
     }

@@ -50,8 +50,6 @@ pub fn shared_constants() -> Vec<(String, Value)> {
         ("DIM_LIGHT_SUBPATH", U32(rng::DIM_LIGHT_SUBPATH)),
         ("DIM_CAUSTIC_LIGHT_U", U32(rng::DIM_CAUSTIC_LIGHT_U)),
         ("DIM_CAUSTIC_LIGHT_V", U32(rng::DIM_CAUSTIC_LIGHT_V)),
-        ("DIM_CAUSTIC_LENS_U", U32(rng::DIM_CAUSTIC_LENS_U)),
-        ("DIM_CAUSTIC_LENS_V", U32(rng::DIM_CAUSTIC_LENS_V)),
         ("DIM_CAUSTIC_DIR_U", U32(rng::DIM_CAUSTIC_DIR_U)),
         ("DIM_CAUSTIC_DIR_V", U32(rng::DIM_CAUSTIC_DIR_V)),
         ("DIM_CAUSTIC_LOBE", U32(rng::DIM_CAUSTIC_LOBE)),
