@@ -242,8 +242,8 @@ pub fn sample_target(scene: &RenderScene, p: Vec3, u: Vec2) -> (Vec3, f32) {
     (dir, target_pdf(scene, p, dir))
 }
 
-/// The end of a light subpath `L S+ D`: its first non-delta vertex, where the camera path
-/// connects to it. `segments` is 0 where the subpath found none.
+/// A non-delta vertex of a light subpath, reached through a specular chain, which the
+/// camera path connects to. `segments` is 0 for none.
 /// mirror: shaders/caustics.wgsl `LightVertex`
 #[derive(Clone, Copy, Debug)]
 pub struct LightVertex {
@@ -253,8 +253,11 @@ pub struct LightVertex {
     /// Throughput: emitted radiance times the emitted cosine over the light point's and
     /// direction's pdfs, times the adjoint weights of the delta bounces.
     pub beta: Vec3,
-    /// The light strategy's density for [`caustic_weight`]: area pdf of the light point
-    /// times the solid-angle pdf of the emitted direction, over that direction's cosine.
+    /// The light strategy's density for [`caustic_weight`]: the light subpath rate times
+    /// the area pdf of the light point times the solid-angle pdf of the emitted direction,
+    /// over that direction's cosine; times, at each earlier non-delta vertex of the
+    /// subpath, the ratio of its light to its camera sampling density (solid-angle pdfs
+    /// times the cosine of the direction drawn from).
     pub pdf: f32,
     /// Segments from the light to the vertex (at least 2), or 0 for none.
     pub segments: u32,
