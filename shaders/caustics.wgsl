@@ -1,11 +1,10 @@
 // Caustics: light subpaths through the scene's specular geometry, joined to the camera
 // path. mirror: src/render/caustics.rs — every function has a Rust twin of the same name.
 
-// Whether the kernel has the code of caustic light subpaths: a pipeline constant, false for
-// scenes without caustic targets, so that the driver drops that code and the registers it
-// would hold (render/gpu/context.rs `render_pipeline`). Where true, params.num_caustic_targets
-// still decides.
-override CAUSTICS: bool = true;
+// Whether the module has the code of caustic light subpaths (no_caustics.wgsl, which takes
+// this file's place in the render kernel of a scene without caustic targets, says false).
+// Where true, params.num_caustic_targets still decides.
+const CAUSTICS: bool = true;
 
 // mirror: src/render/caustics.rs `TargetCone`
 struct TargetCone {
@@ -89,8 +88,6 @@ fn no_light_vertex() -> LightVertex {
     return LightVertex(si, vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0), 0.0, 0u);
 }
 
-// The vertices are indexed by constants only (MAX_CAUSTIC_HOPS is 2, render.wgsl asserts
-// it), so that a compiler can keep them in registers rather than in indexed memory.
 fn no_light_path() -> LightPath {
     let none = no_light_vertex();
     return LightPath(array<LightVertex, MAX_CAUSTIC_HOPS>(none, none), 0u);
@@ -152,12 +149,7 @@ fn trace_light_subpath(rng: Rng, max_segments: u32) -> TracedLight {
         }
         let wo_world = -ray.dir;
         if !delta {
-            let v = LightVertex(si, wo_world, beta, pdf, segment);
-            if path.count == 0u {
-                path.vertices[0] = v;
-            } else {
-                path.vertices[1] = v;
-            }
+            path.vertices[path.count] = LightVertex(si, wo_world, beta, pdf, segment);
             path.count += 1u;
             chain = 0u;
             if path.count == MAX_CAUSTIC_HOPS {

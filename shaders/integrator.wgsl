@@ -93,8 +93,7 @@ fn path_start(ray: Ray, camera_pdf: f32) -> PathState {
     return PathState(ray, vec3<f32>(0.0), vec3<f32>(1.0), 0u, camera_pdf, true, 1.0, 0u, 0.0, 0u);
 }
 
-// path_step's caustic connection to one light vertex (written out per vertex, so that the
-// light path is indexed by constants only; the CPU's is a loop).
+// path_step's caustic connection to one light vertex.
 fn connect_light_vertex(st: ptr<function, PathState>, si: SurfaceHit, mat: Material, sf: ShadingFrame, wo_world: vec3<f32>, wo: vec3<f32>, lv: LightVertex) {
     if (*st).depth + 2u + lv.segments > params.max_depth {
         return;
@@ -189,11 +188,8 @@ fn path_step(st: ptr<function, PathState>, light: ptr<function, LightPath>, rng:
     // Caustic connections: to each vertex of the sample's light subpath that leaves the
     // path room for the link and the subpath's segments.
     if caustics && !bsdf_is_delta(mat) {
-        if (*light).count > 0u {
-            connect_light_vertex(st, si, mat, sf, wo_world, wo, (*light).vertices[0]);
-        }
-        if (*light).count > 1u {
-            connect_light_vertex(st, si, mat, sf, wo_world, wo, (*light).vertices[1]);
+        for (var k = 0u; k < (*light).count; k++) {
+            connect_light_vertex(st, si, mat, sf, wo_world, wo, (*light).vertices[k]);
         }
     }
 
@@ -268,24 +264,17 @@ fn start_light(rng: Rng) -> LightStart {
     let traced = trace_light_subpath(rng, params.max_depth - 1u);
     out.light = traced.path;
     out.rays = traced.rays;
-    if out.light.count > 0u {
-        let link = seen_camera_link(out.light.vertices[0], rng);
+    for (var k = 0u; k < out.light.count; k++) {
+        let link = seen_camera_link(out.light.vertices[k], rng);
         out.rays += link.rays;
-        out.splat_pixels[0] = link.pixel;
-        out.splats[0] = link.value;
-    }
-    if out.light.count > 1u {
-        let link = seen_camera_link(out.light.vertices[1], rng);
-        out.rays += link.rays;
-        out.splat_pixels[1] = link.pixel;
-        out.splats[1] = link.value;
+        out.splat_pixels[k] = link.pixel;
+        out.splats[k] = link.value;
     }
     return out;
 }
 
-// start_light's link of one light vertex to the camera (written out per vertex, so that
-// the light path is indexed by constants only; the CPU's is a loop): the rays it traced
-// and, where the vertex is seen, its splat (a zero value otherwise).
+// start_light's link of one light vertex to the camera: the rays it traced and, where the
+// vertex is seen, its splat (a zero value otherwise).
 struct SeenLink {
     rays: u32,
     pixel: u32,

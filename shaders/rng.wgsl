@@ -60,7 +60,8 @@ fn owen_hash(x_in: u32, seed: u32) -> u32 {
 
 // mirror: src/render/rng.rs `dim_pair`
 fn dim_pair(dim: u32) -> vec2<u32> {
-    if dim == DIM_PIXEL_Y || dim == DIM_LENS_V || dim == DIM_LIGHT_V || dim == DIM_BSDF_V {
+    if dim == DIM_PIXEL_Y || dim == DIM_LENS_V || dim == DIM_LIGHT_V || dim == DIM_BSDF_V
+        || dim == DIM_CAUSTIC_LIGHT_V || dim == DIM_CAUSTIC_DIR_V {
         return vec2<u32>(dim - 1u, 1u);
     }
     return vec2<u32>(dim, 0u);

@@ -24,9 +24,13 @@ fn parse_and_validate(what: &str, source: &str) -> naga::Module {
 /// BVH, then hardware ray queries) and checks; the test module with the software BVH,
 /// trusted, first.
 fn modules() -> Vec<(String, naga::Module)> {
-    let sources: [(&str, shader::Module); 3] = [
+    let sources: [(&str, shader::Module); 4] = [
         ("test_source", shader::test_source),
         ("render_source", shader::render_source),
+        (
+            "render_source_without_caustics",
+            shader::render_source_without_caustics,
+        ),
         ("bench_source", shader::bench_source),
     ];
     let mut out = Vec::new();

@@ -89,6 +89,50 @@ fn parts_merge_into_the_bytes_of_one_render() {
     }
 }
 
+/// Parts of a render with caustics (tests/scenes/box_area.toml: glass and mirror spheres
+/// under an area light), whose light subpaths splat into pixels anywhere in the image, merge
+/// into the bytes of one render too, and `--caustics off` is another render's setting.
+#[test]
+fn parts_with_caustics_merge_into_the_bytes_of_one_render() {
+    let scene = common::fs::root().join("tests/scenes/box_area.toml");
+    let scene = scene.to_str().unwrap();
+    for device in devices("parts_with_caustics_merge_into_the_bytes_of_one_render (GPU)") {
+        let dir = TempDir::new(&format!("parts-caustics-{device}"));
+        let args = [scene, "--device", device, "--spp", "6", "-q"];
+        ok(
+            &dir,
+            &[&["render"], &args[..], &["-o", "full.exr"]].concat(),
+        );
+        for k in 0..3 {
+            let (part, name) = (format!("{k}/3"), format!("p{k}.exr"));
+            ok(
+                &dir,
+                &[&["render"], &args[..], &["--part", &part, "-o", &name]].concat(),
+            );
+        }
+        ok(
+            &dir,
+            &["merge", "-o", "merged.exr", "p2.exr", "p0.exr", "p1.exr"],
+        );
+        assert!(
+            bytes(&dir, "merged.exr") == bytes(&dir, "full.exr"),
+            "{device}: parts with caustics merged differ from one render"
+        );
+        let off = [
+            &["render"],
+            &args[..],
+            &["--caustics", "off", "--part", "1/3", "-o", "p1.exr"],
+        ]
+        .concat();
+        ok(&dir, &off);
+        assert_fails(
+            &dir,
+            &["merge", "-o", "mixed.exr", "p0.exr", "p1.exr", "p2.exr"],
+            &["parts of different scenes or settings"],
+        );
+    }
+}
+
 #[test]
 fn merges_that_are_not_one_render_are_refused() {
     let dir = TempDir::new("parts-refused");

@@ -159,9 +159,9 @@ impl GpuContext {
     }
 
     /// The render kernel (`shaders/render.wgsl`), compiled on first use: with the code of
-    /// caustic light subpaths (the pipeline constant `CAUSTICS`) for scenes that have caustic
-    /// targets, or without it, which the driver then drops: a kernel that keeps registers
-    /// for light subpaths it never traces would run fewer threads at once.
+    /// caustic light subpaths for scenes that have caustic targets, or without it
+    /// ([`super::shader::render_source_without_caustics`]), which compiles in less than
+    /// half the time and holds no registers for light subpaths that it never traces.
     pub fn render_pipeline(&self, caustics: bool) -> Result<Arc<Pipeline>, GpuError> {
         let mut slots = self.render.lock().unwrap_or_else(|p| p.into_inner());
         let slot = &mut slots[caustics as usize];
@@ -171,10 +171,13 @@ impl GpuContext {
         let p = Arc::new(Pipeline::new(
             self,
             &self.scene_layout,
-            super::shader::render_source,
+            if caustics {
+                super::shader::render_source
+            } else {
+                super::shader::render_source_without_caustics
+            },
             "render",
             (0, 3),
-            &[("CAUSTICS", if caustics { 1.0 } else { 0.0 })],
             self.checks,
         )?);
         *slot = Some(p.clone());

@@ -12,17 +12,14 @@ pub struct Pipeline {
 
 impl Pipeline {
     /// Compiles `entry` of `module` (a function of [`super::shader`]), generated for the
-    /// device's traversal and compiled as `checks` says, with the pipeline-overridable
-    /// `constants` given (the others keep their defaults), over `scene_layout` plus one
-    /// group of storage buffers: `inputs` read-only ones, then `outputs` read-write ones
-    /// (`buffers` = (inputs, outputs)).
+    /// device's traversal and compiled as `checks` says, over `scene_layout` plus one group
+    /// of storage buffers: `inputs` read-only ones, then `outputs` read-write ones.
     pub fn new(
         ctx: &GpuContext,
         scene_layout: &wgpu::BindGroupLayout,
         module: Module,
         entry: &str,
         (inputs, outputs): (u32, u32),
-        constants: &[(&str, f64)],
         checks: ShaderChecks,
     ) -> Result<Self, GpuError> {
         let io_entries: Vec<_> = (0..inputs + outputs)
@@ -80,10 +77,7 @@ impl Pipeline {
                 layout: Some(&layout),
                 module: &module,
                 entry_point: Some(entry),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants,
-                    ..Default::default()
-                },
+                compilation_options: Default::default(),
                 cache: None,
             });
         ctx.check()?;

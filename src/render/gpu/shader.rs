@@ -151,16 +151,23 @@ const LIBRARY: &[Source] = &[
     shader!("geometry.wgsl"),
 ];
 
-/// The rest of the library, which calls the traversal.
+/// The rest of the library, which calls the traversal: these, then the caustics
+/// ([`CAUSTICS`] or [`NO_CAUSTICS`]), then the integrator.
 const SHADING: &[Source] = &[
     shader!("bsdf.wgsl"),
     shader!("camera.wgsl"),
     shader!("texture.wgsl"),
     shader!("environment.wgsl"),
     shader!("lights.wgsl"),
-    shader!("caustics.wgsl"),
-    shader!("integrator.wgsl"),
 ];
+
+/// Light subpaths for caustics.
+const CAUSTICS: Source = shader!("caustics.wgsl");
+/// Their replacement in the render kernel of a scene without caustic targets, and in the
+/// ray-throughput kernels, which trace none: the names the integrator uses, doing nothing.
+const NO_CAUSTICS: Source = shader!("no_caustics.wgsl");
+
+const INTEGRATOR: Source = shader!("integrator.wgsl");
 
 /// The software BVH walk.
 const TRAVERSE: Source = shader!("traverse.wgsl");
@@ -194,10 +201,11 @@ pub enum ShaderChecks {
 }
 
 /// A module's source for a traversal (`ray_query`) and [`ShaderChecks`]: one of
-/// [`render_source`], [`test_source`] and [`bench_source`].
+/// [`render_source`], [`render_source_without_caustics`], [`test_source`] and
+/// [`bench_source`].
 pub type Module = fn(bool, ShaderChecks) -> String;
 
-fn join(entry_points: Source, ray_query: bool, checks: ShaderChecks) -> String {
+fn join(entry_points: Source, ray_query: bool, checks: ShaderChecks, caustics: bool) -> String {
     let mut src = String::new();
     if ray_query {
         src += "enable wgpu_ray_query;\n\n";
@@ -215,12 +223,12 @@ fn join(entry_points: Source, ray_query: bool, checks: ShaderChecks) -> String {
         src += &wgsl_tlas();
     }
     let traversal = if ray_query { RAY_QUERY } else { TRAVERSE };
-    for (name, text) in LIBRARY
-        .iter()
-        .chain([&traversal])
-        .chain(SHADING)
-        .chain([&entry_points])
-    {
+    let caustics = if caustics { CAUSTICS } else { NO_CAUSTICS };
+    for (name, text) in LIBRARY.iter().chain([&traversal]).chain(SHADING).chain([
+        &caustics,
+        &INTEGRATOR,
+        &entry_points,
+    ]) {
         src.push_str(&format!("\n// ---- {name}\n{text}"));
     }
     src
@@ -229,16 +237,22 @@ fn join(entry_points: Source, ray_query: bool, checks: ShaderChecks) -> String {
 /// The module with the `render` entry point; with `ray_query`, traversing by hardware ray
 /// queries; `checks` as [`ShaderChecks`] says.
 pub fn render_source(ray_query: bool, checks: ShaderChecks) -> String {
-    join(RENDER, ray_query, checks)
+    join(RENDER, ray_query, checks, true)
+}
+
+/// [`render_source`] for a scene without caustic targets: `no_caustics.wgsl` in place of
+/// `caustics.wgsl`.
+pub fn render_source_without_caustics(ray_query: bool, checks: ShaderChecks) -> String {
+    join(RENDER, ray_query, checks, false)
 }
 
 /// The module with the `test_*` entry points; arguments as [`render_source`].
 pub fn test_source(ray_query: bool, checks: ShaderChecks) -> String {
-    join(TESTS, ray_query, checks)
+    join(TESTS, ray_query, checks, true)
 }
 
-/// The module with the `bench_*` ray-throughput entry points; arguments as
-/// [`render_source`].
+/// The module with the `bench_*` ray-throughput entry points, which trace no light
+/// subpaths; arguments as [`render_source`].
 pub fn bench_source(ray_query: bool, checks: ShaderChecks) -> String {
-    join(BENCH, ray_query, checks)
+    join(BENCH, ray_query, checks, false)
 }
