@@ -34,6 +34,7 @@ use common::fs::root;
 use glam::Vec3;
 use meshtrace::bvh::BuildParams;
 use meshtrace::film::{Film, read_linear};
+use meshtrace::render::gpu::GpuRenderer;
 use meshtrace::render::{RenderJob, RenderScene};
 use meshtrace::scene::load_scene;
 
@@ -78,7 +79,10 @@ fn relmse(film: &Film, reference: &[Vec3]) -> f64 {
     sum / (3 * reference.len()) as f64
 }
 
-fn check(scene_name: &str, device: &str, render: &dyn Fn(&RenderScene, &RenderJob) -> Film) {
+/// Renders the scene's samples 0..16 and 16..64 (one renderer for both, `render` given the
+/// jobs) and checks the first and the two merged: samples are pure functions of their
+/// index, so the merge is the 64-spp render, bit for bit, for 64 samples' work instead of 80.
+fn check(scene_name: &str, device: &str, render: &dyn Fn(&RenderScene, &[RenderJob]) -> Vec<Film>) {
     let file = match scene_name {
         "cornell" => "assets/cornell/cornell.toml".to_string(),
         "gltf_room_bare" => "tests/scenes/gltf_room/room.gltf".to_string(),
@@ -102,10 +106,20 @@ fn check(scene_name: &str, device: &str, render: &dyn Fn(&RenderScene, &RenderJo
     );
     let rs = RenderScene::new(&scene, &BuildParams::default()).unwrap();
     let mut failures = Vec::new();
+    let mut settings = scene.settings;
+    settings.spp = 64;
+    let jobs = [0..16, 16..64].map(|samples| RenderJob {
+        samples,
+        ..RenderJob::new(settings)
+    });
+    let mut films = render(&rs, &jobs).into_iter();
+    let (Some(mut film), Some(rest)) = (films.next(), films.next()) else {
+        panic!("{scene_name} on the {device}: two films expected");
+    };
     for spp in [16, 64] {
-        let mut settings = scene.settings;
-        settings.spp = spp;
-        let film = render(&rs, &RenderJob::new(settings));
+        if spp == 64 {
+            film.merge(&rest);
+        }
         let ours = relmse(&film, &reference);
         let theirs = mitsuba_relmse(&json, spp);
         let ratio = ours / theirs;
@@ -124,14 +138,21 @@ fn check(scene_name: &str, device: &str, render: &dyn Fn(&RenderScene, &RenderJo
 }
 
 fn check_cpu(scene: &str) {
-    check(scene, "cpu", &common::cpu_render);
+    check(scene, "cpu", &|rs, jobs| {
+        jobs.iter().map(|job| common::cpu_render(rs, job)).collect()
+    });
 }
 
 fn check_gpu(scene: &str) {
     let Some(ctx) = common::gpu(&format!("{scene} on the gpu")) else {
         return;
     };
-    check(scene, "gpu", &|rs, job| common::gpu_render(&ctx, rs, job));
+    check(scene, "gpu", &|rs, jobs| {
+        let mut renderer = GpuRenderer::new(&ctx, rs).expect("GPU renderer");
+        jobs.iter()
+            .map(|job| renderer.render(job, &|_| {}).expect("GPU render"))
+            .collect()
+    });
 }
 
 #[test]
