@@ -243,6 +243,32 @@ fn caustic_link(si: SurfaceHit, mat: Material, frame: ShadingFrame, wo_world: ve
     if all(f == vec3<f32>(0.0)) || !geometry_agrees(si.ng, wo_world, wc, wo, wi) {
         return no_caustic_link();
     }
+    let seen = light_vertex_seen(lv, wc);
+    if !seen.valid {
+        return no_caustic_link();
+    }
+    let pdf_bsdf = bsdf_pdf(mat, wo, wi) / dist2 * seen.pdf;
+    let w = caustic_weight(pdf_bsdf / lv.pdf);
+    let origin = offset_ray_origin(si.p, si.ng, wc);
+    let to = seen.end - origin;
+    let dist = length(to);
+    if !(dist > 0.0) {
+        return no_caustic_link();
+    }
+    return CausticLink(Ray(origin, to * (1.0 / dist)), dist * (1.0 - 1e-4), f * seen.value * (w / dist2), true);
+}
+
+// mirror: src/render/caustics.rs `SeenLightVertex` (valid stands for the Option around it)
+struct SeenLightVertex {
+    value: vec3<f32>,
+    pdf: f32,
+    end: vec3<f32>,
+    valid: bool,
+}
+
+// mirror: src/render/caustics.rs `light_vertex_seen`
+fn light_vertex_seen(lv: LightVertex, wc: vec3<f32>) -> SeenLightVertex {
+    let none = SeenLightVertex(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), false);
     let mat_l = material_at(load_material(lv.si.material), lv.si.uv);
     let wo_l_world = -wc;
     let frame_l = shading_frame(mat_l, lv.si, wo_l_world);
@@ -250,23 +276,15 @@ fn caustic_link(si: SurfaceHit, mat: Material, frame: ShadingFrame, wo_world: ve
     let wi_l = lv.wi * frame_l.m;
     let f_l = bsdf_eval(mat_l, wo_l, wi_l);
     if all(f_l == vec3<f32>(0.0)) || !geometry_agrees(lv.si.ng, wo_l_world, lv.wi, wo_l, wi_l) {
-        return no_caustic_link();
+        return none;
     }
     let cos_c = abs(dot(wc, lv.si.ng));
     let cos_k = abs(dot(lv.wi, lv.si.ng));
     if !(cos_k > 0.0) {
-        return no_caustic_link();
+        return none;
     }
-    let pdf_bsdf = bsdf_pdf(mat, wo, wi) * cos_c / dist2 * bsdf_pdf(mat_l, wo_l, wi_l) / cos_k;
-    let w = caustic_weight(pdf_bsdf / lv.pdf);
-    let origin = offset_ray_origin(si.p, si.ng, wc);
-    let end = offset_ray_origin(lv.si.p, lv.si.ng, wo_l_world);
-    let to = end - origin;
-    let dist = length(to);
-    if !(dist > 0.0) {
-        return no_caustic_link();
-    }
-    return CausticLink(Ray(origin, to * (1.0 / dist)), dist * (1.0 - 1e-4), f * f_l * lv.beta * (w * cos_c / (cos_k * dist2)), true);
+    let ratio = cos_c / cos_k;
+    return SeenLightVertex(f_l * lv.beta * ratio, bsdf_pdf(mat_l, wo_l, wi_l) * ratio, offset_ray_origin(lv.si.p, lv.si.ng, wo_l_world), true);
 }
 
 // mirror: src/render/caustics.rs `caustic_hit_weight`
@@ -328,29 +346,18 @@ fn camera_link(lv: LightVertex, u_lens: vec2<f32>) -> CameraLink {
     let dist2 = dot(d, d);
     let dist = sqrt(dist2);
     let wc = d * (1.0 / dist);
-    let mat_l = material_at(load_material(lv.si.material), lv.si.uv);
-    let wo_l_world = -wc;
-    let frame_l = shading_frame(mat_l, lv.si, wo_l_world);
-    let wo_l = wo_l_world * frame_l.m;
-    let wi_l = lv.wi * frame_l.m;
-    let f_l = bsdf_eval(mat_l, wo_l, wi_l);
-    if all(f_l == vec3<f32>(0.0)) || !geometry_agrees(lv.si.ng, wo_l_world, lv.wi, wo_l, wi_l) {
-        return no_camera_link();
-    }
-    let cos_c = abs(dot(wc, lv.si.ng));
-    let cos_k = abs(dot(lv.wi, lv.si.ng));
-    if !(cos_k > 0.0) {
+    let seen = light_vertex_seen(lv, wc);
+    if !seen.valid {
         return no_camera_link();
     }
     let importance = camera_pdf(wc);
-    let pdf_bsdf = importance * cos_c / dist2 * bsdf_pdf(mat_l, wo_l, wi_l) / cos_k;
+    let pdf_bsdf = importance / dist2 * seen.pdf;
     let w = caustic_weight(pdf_bsdf / lv.pdf);
-    let end = offset_ray_origin(lv.si.p, lv.si.ng, wo_l_world);
-    let to = end - origin;
+    let to = seen.end - origin;
     let len = length(to);
     if !(len > 0.0) {
         return no_camera_link();
     }
     let pixel = u32(y) * params.width + u32(x);
-    return CameraLink(pixel, Ray(origin, to * (1.0 / len)), len * (1.0 - 1e-4), f_l * lv.beta * (importance * w * cos_c / (cos_k * dist2)), true);
+    return CameraLink(pixel, Ray(origin, to * (1.0 / len)), len * (1.0 - 1e-4), seen.value * (importance * w / dist2), true);
 }

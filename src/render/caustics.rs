@@ -492,7 +492,48 @@ pub fn caustic_link(
     if f == Vec3::ZERO || !geometry_agrees(si.ng, wo_world, wc, wo, wi) {
         return None;
     }
-    // The light vertex, seen from the camera vertex.
+    let seen = light_vertex_seen(scene, lv, wc)?;
+    // BSDF sampling's density for this path, in the measure of `LightVertex::pdf`.
+    let pdf_bsdf = bsdf_pdf(mat, wo, wi) / dist2 * seen.pdf;
+    let w = caustic_weight(pdf_bsdf / lv.pdf);
+    let origin = offset_ray_origin(si.p, si.ng, wc);
+    let to = seen.end - origin;
+    let dist = to.length();
+    if dist.is_nan() || dist <= 0.0 {
+        return None;
+    }
+    Some(CausticLink {
+        ray: Ray::new(origin, to * (1.0 / dist)),
+        t_max: dist * (1.0 - 1e-4),
+        value: f * seen.value * (w / dist2),
+    })
+}
+
+/// A light vertex as a connection along unit `wc` (towards the vertex) sees it, the part
+/// that [`caustic_link`] and [`camera_link`] share.
+/// mirror: shaders/caustics.wgsl `SeenLightVertex` (whose field valid stands for the Option)
+#[derive(Clone, Copy, Debug)]
+pub struct SeenLightVertex {
+    /// The light the vertex sends back along `wc`, over the squared distance still to
+    /// divide by: its BSDF times its throughput times cos(wc) over cos(its light's
+    /// direction).
+    pub value: Vec3,
+    /// The adjoint of that density: the vertex's BSDF-sampling pdf of its light's
+    /// direction, seen from `wc`, times cos(wc) over cos(that direction); times the
+    /// connecting side's own pdf over the squared distance, the density with which BSDF
+    /// sampling makes the path, in the measure of [`LightVertex::pdf`].
+    pub pdf: f32,
+    /// Where the shadow ray ends: the vertex moved off its surface towards the connection.
+    pub end: Vec3,
+}
+
+/// The light vertex `lv` seen along unit `wc`; `None` where it sends no light that way.
+/// mirror: shaders/caustics.wgsl `light_vertex_seen`
+pub fn light_vertex_seen(
+    scene: &RenderScene,
+    lv: &LightVertex,
+    wc: Vec3,
+) -> Option<SeenLightVertex> {
     let base = &scene.materials[lv.si.material as usize];
     let mat_l = material_at(scene, base, lv.si.uv);
     let wo_l_world = -wc;
@@ -508,20 +549,11 @@ pub fn caustic_link(
     if cos_k.is_nan() || cos_k <= 0.0 {
         return None;
     }
-    // BSDF sampling's density for this path, in the measure of `LightVertex::pdf`.
-    let pdf_bsdf = bsdf_pdf(mat, wo, wi) * cos_c / dist2 * bsdf_pdf(&mat_l, wo_l, wi_l) / cos_k;
-    let w = caustic_weight(pdf_bsdf / lv.pdf);
-    let origin = offset_ray_origin(si.p, si.ng, wc);
-    let end = offset_ray_origin(lv.si.p, lv.si.ng, wo_l_world);
-    let to = end - origin;
-    let dist = to.length();
-    if dist.is_nan() || dist <= 0.0 {
-        return None;
-    }
-    Some(CausticLink {
-        ray: Ray::new(origin, to * (1.0 / dist)),
-        t_max: dist * (1.0 - 1e-4),
-        value: f * f_l * lv.beta * (w * cos_c / (cos_k * dist2)),
+    let ratio = cos_c / cos_k;
+    Some(SeenLightVertex {
+        value: f_l * lv.beta * ratio,
+        pdf: bsdf_pdf(&mat_l, wo_l, wi_l) * ratio,
+        end: offset_ray_origin(lv.si.p, lv.si.ng, wo_l_world),
     })
 }
 
@@ -612,26 +644,11 @@ pub fn camera_link(
     let dist2 = d.length_squared();
     let dist = dist2.sqrt();
     let wc = d * (1.0 / dist);
-    let base = &scene.materials[lv.si.material as usize];
-    let mat_l = material_at(scene, base, lv.si.uv);
-    let wo_l_world = -wc;
-    let frame_l = shading_frame(&mat_l, &lv.si, wo_l_world);
-    let wo_l = frame_l.to_local(wo_l_world);
-    let wi_l = frame_l.to_local(lv.wi);
-    let f_l = bsdf_eval(&mat_l, wo_l, wi_l);
-    if f_l == Vec3::ZERO || !geometry_agrees(lv.si.ng, wo_l_world, lv.wi, wo_l, wi_l) {
-        return None;
-    }
-    let cos_c = wc.dot(lv.si.ng).abs();
-    let cos_k = lv.wi.dot(lv.si.ng).abs();
-    if cos_k.is_nan() || cos_k <= 0.0 {
-        return None;
-    }
+    let seen = light_vertex_seen(scene, lv, wc)?;
     let importance = camera_pdf(cam, wc);
-    let pdf_bsdf = importance * cos_c / dist2 * bsdf_pdf(&mat_l, wo_l, wi_l) / cos_k;
+    let pdf_bsdf = importance / dist2 * seen.pdf;
     let w = caustic_weight(pdf_bsdf / lv.pdf);
-    let end = offset_ray_origin(lv.si.p, lv.si.ng, wo_l_world);
-    let to = end - origin;
+    let to = seen.end - origin;
     let len = to.length();
     if len.is_nan() || len <= 0.0 {
         return None;
@@ -640,6 +657,6 @@ pub fn camera_link(
         pixel: y as u32 * cam.width + x as u32,
         ray: Ray::new(origin, to * (1.0 / len)),
         t_max: len * (1.0 - 1e-4),
-        value: f_l * lv.beta * (importance * w * cos_c / (cos_k * dist2)),
+        value: seen.value * (importance * w / dist2),
     })
 }
