@@ -192,6 +192,26 @@ fn a_renderer_session_renders_many_jobs() {
     );
 }
 
+/// A GPU film that replays the CPU's paths: 99% of pixel channels within 1e-3 of the
+/// CPU's, and the two means within 1e-3 of each other.
+fn assert_replays(gpu: &Film, cpu: &Film) {
+    let (g, c) = (channels(gpu), channels(cpu));
+    let frac = fraction_close(&g, &c);
+    let (gm, cm) = (
+        g.iter().sum::<f64>() / g.len() as f64,
+        c.iter().sum::<f64>() / c.len() as f64,
+    );
+    eprintln!(
+        "{:.4}% of pixel channels agree to 1e-3; mean GPU {gm}, CPU {cm}",
+        100.0 * frac
+    );
+    assert!(frac >= 0.99, "only {frac} of pixel channels agree");
+    assert!(
+        (gm - cm).abs() <= 1e-3 * cm,
+        "mean GPU {gm} against CPU {cm}"
+    );
+}
+
 /// Long dispatches are not cut short. Mesa's lavapipe ends an invocation's loops once
 /// they have run 65535 iterations in all, which 512 paths of a Cornell-box pixel pass: the
 /// kernel detects the cut and leaves the pixel as it was, and the renderer sends the range
@@ -211,21 +231,7 @@ fn long_dispatches_replay_the_cpu_paths() {
     let gpu = session.render(&job, &|_| {}).unwrap();
     let cpu = cpu_render(&rs, &job);
     assert_eq!(gpu.samples, 512);
-    let (g, c) = (channels(&gpu), channels(&cpu));
-    let frac = fraction_close(&g, &c);
-    let (gm, cm) = (
-        g.iter().sum::<f64>() / g.len() as f64,
-        c.iter().sum::<f64>() / c.len() as f64,
-    );
-    eprintln!(
-        "{:.4}% of pixel channels agree to 1e-3; mean GPU {gm}, CPU {cm}",
-        100.0 * frac
-    );
-    assert!(frac >= 0.99, "only {frac} of pixel channels agree");
-    assert!(
-        (gm - cm).abs() <= 1e-3 * cm,
-        "mean GPU {gm} against CPU {cm}"
-    );
+    assert_replays(&gpu, &cpu);
 }
 
 /// Long dispatches of a render with caustics: a dispatch that the driver cuts short is
@@ -253,21 +259,7 @@ fn long_dispatches_with_caustics_replay_the_cpu_paths() {
     session.set_max_samples_per_dispatch(u32::MAX);
     let gpu = session.render(&job, &|_| {}).unwrap();
     let cpu = cpu_render(&rs, &job);
-    let (g, c) = (channels(&gpu), channels(&cpu));
-    let frac = fraction_close(&g, &c);
-    let (gm, cm) = (
-        g.iter().sum::<f64>() / g.len() as f64,
-        c.iter().sum::<f64>() / c.len() as f64,
-    );
-    eprintln!(
-        "{:.4}% of pixel channels agree to 1e-3; mean GPU {gm}, CPU {cm}",
-        100.0 * frac
-    );
-    assert!(frac >= 0.99, "only {frac} of pixel channels agree");
-    assert!(
-        (gm - cm).abs() <= 1e-3 * cm,
-        "mean GPU {gm} against CPU {cm}"
-    );
+    assert_replays(&gpu, &cpu);
 }
 
 /// Renders of disjoint sample ranges merge into the full render, bit for bit, on the CPU
