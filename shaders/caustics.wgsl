@@ -46,11 +46,7 @@ fn target_pdf(p: vec3<f32>, dir: vec3<f32>) -> f32 {
 // A direction towards the targets and its target_pdf (w).
 // mirror: src/render/caustics.rs `sample_target`
 fn sample_target(p: vec3<f32>, u: vec2<f32>) -> vec4<f32> {
-    var total = 0.0;
-    for (var k = 0u; k < params.num_caustic_targets; k++) {
-        total += target_cone(load_caustic_target(k), p).height;
-    }
-    var x = u.x * total;
+    var x = u.x * targets_height(p);
     var cone = target_cone(load_caustic_target(0u), p);
     for (var k = 0u; k < params.num_caustic_targets; k++) {
         cone = target_cone(load_caustic_target(k), p);
@@ -60,12 +56,26 @@ fn sample_target(p: vec3<f32>, u: vec2<f32>) -> vec4<f32> {
         x -= cone.height;
     }
     let v = clamp(x / cone.height, 0.0, 1.0) * cone.height;
+    let dir = sample_cone(cone, v, u.y);
+    return vec4<f32>(dir, target_pdf(p, dir));
+}
+
+// mirror: src/render/caustics.rs `targets_height`
+fn targets_height(p: vec3<f32>) -> f32 {
+    var total = 0.0;
+    for (var k = 0u; k < params.num_caustic_targets; k++) {
+        total += target_cone(load_caustic_target(k), p).height;
+    }
+    return total;
+}
+
+// mirror: src/render/caustics.rs `sample_cone`
+fn sample_cone(cone: TargetCone, v: f32, turn: f32) -> vec3<f32> {
     let cos_t = 1.0 - v;
     let sin_t = sqrt(max(v * (2.0 - v), 0.0));
-    let phi = 2.0 * PI * u.y;
+    let phi = 2.0 * PI * turn;
     let frame = onb_from_normal(cone.axis);
-    let dir = (sin_t * cos(phi)) * frame[0] + (sin_t * sin(phi)) * frame[1] + cos_t * cone.axis;
-    return vec4<f32>(dir, target_pdf(p, dir));
+    return (sin_t * cos(phi)) * frame[0] + (sin_t * sin(phi)) * frame[1] + cos_t * cone.axis;
 }
 
 // mirror: src/render/caustics.rs `LightVertex`
@@ -100,6 +110,108 @@ struct TracedLight {
     rays: u32,
 }
 
+// mirror: src/render/caustics.rs `LightSubpathStart` (valid stands for the Option around it)
+struct LightSubpathStart {
+    ray: Ray,
+    beta: vec3<f32>,
+    pdf: f32,
+    valid: bool,
+}
+
+fn no_light_subpath_start() -> LightSubpathStart {
+    return LightSubpathStart(Ray(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0)), vec3<f32>(0.0), 0.0, false);
+}
+
+// mirror: src/render/caustics.rs `start_at_triangle`
+fn start_at_triangle(light: u32, pick: LightPick, rng: Rng) -> LightSubpathStart {
+    let tri = load_tri(light);
+    let bary = sample_uniform_triangle(pick.u);
+    if tri.v0.w != 0.0 && !alpha_test(light, bary.x, bary.y) {
+        return no_light_subpath_start();
+    }
+    let q = (1.0 - bary.x - bary.y) * tri.v0.xyz + bary.x * tri.v1.xyz + bary.y * tri.v2.xyz;
+    let n = geometric_normal(tri);
+    let st = sample_target(q, rng_2d(rng, 0u, DIM_CAUSTIC_DIR_U));
+    let dir = st.xyz;
+    let pdf_dir = st.w;
+    let cos_m = dot(dir, n);
+    if !(cos_m > 0.0 && pdf_dir > 0.0) {
+        return no_light_subpath_start();
+    }
+    let le = material_at(load_material(load_shading(light).material), triangle_uv(light, bary.x, bary.y)).emission;
+    let pdf_point = LIGHT_SUBPATH_RATE * pick.pmf / triangle_area(tri);
+    let pdf = pdf_point * pdf_dir / cos_m;
+    if !(pdf > 0.0) {
+        return no_light_subpath_start();
+    }
+    return LightSubpathStart(Ray(offset_ray_origin(q, n, dir), dir), le * (cos_m / (pdf_point * pdf_dir)), pdf, true);
+}
+
+// mirror: src/render/caustics.rs `start_at_directional`
+fn start_at_directional(l: Light, pmf: f32, rng: Rng) -> LightSubpathStart {
+    let d = l.direction;
+    let u = rng_2d(rng, 0u, DIM_CAUSTIC_DIR_U);
+    var total = 0.0;
+    for (var k = 0u; k < params.num_caustic_targets; k++) {
+        let t = load_caustic_target(k);
+        total += t.radius * t.radius;
+    }
+    var x = u.x * total;
+    var picked = load_caustic_target(0u);
+    for (var k = 0u; k < params.num_caustic_targets; k++) {
+        picked = load_caustic_target(k);
+        if x < picked.radius * picked.radius {
+            break;
+        }
+        x -= picked.radius * picked.radius;
+    }
+    let r2 = picked.radius * picked.radius;
+    let disk = sample_concentric_disk(vec2<f32>(clamp(x / r2, 0.0, ONE_MINUS_EPSILON), u.y));
+    let frame = onb_from_normal(d);
+    let s = picked.center + picked.radius * (disk.x * frame[0] + disk.y * frame[1]);
+    var count = 0.0;
+    for (var k = 0u; k < params.num_caustic_targets; k++) {
+        let c = load_caustic_target(k);
+        let off = s - c.center;
+        let across = off - dot(off, d) * d;
+        if dot(across, across) <= c.radius * c.radius {
+            count += 1.0;
+        }
+    }
+    let pdf_line = LIGHT_SUBPATH_RATE * pmf * count / (PI * total);
+    if !(pdf_line > 0.0) {
+        return no_light_subpath_start();
+    }
+    let back = length(s - params.scene_center) + params.scene_radius;
+    return LightSubpathStart(Ray(s - back * d, d), l.intensity * (1.0 / pdf_line), 0.0, true);
+}
+
+// mirror: src/render/caustics.rs `start_at_punctual`
+fn start_at_punctual(index: u32, pmf: f32, rng: Rng) -> LightSubpathStart {
+    let l = load_light(index);
+    if l.kind == LIGHT_DIRECTIONAL {
+        return start_at_directional(l, pmf, rng);
+    }
+    let u = rng_2d(rng, 0u, DIM_CAUSTIC_DIR_U);
+    let spot = TargetCone(l.direction, l.cos_cutoff, 1.0 - l.cos_cutoff);
+    var st: vec4<f32>;
+    if l.kind == LIGHT_SPOT && spot.height < targets_height(l.position) {
+        st = vec4<f32>(sample_cone(spot, u.x * spot.height, u.y), 1.0 / (2.0 * PI * spot.height));
+    } else {
+        st = sample_target(l.position, u);
+    }
+    let dir = st.xyz;
+    var intensity = l.intensity;
+    if l.kind == LIGHT_SPOT {
+        intensity *= spot_falloff(l, dir);
+    }
+    let pdf_dir = LIGHT_SUBPATH_RATE * pmf * st.w;
+    if !(pdf_dir > 0.0) || all(intensity == vec3<f32>(0.0)) {
+        return no_light_subpath_start();
+    }
+    return LightSubpathStart(Ray(l.position, dir), intensity * (1.0 / pdf_dir), 0.0, true);
+}
+
 // mirror: src/render/caustics.rs `trace_light_subpath`
 fn trace_light_subpath(rng: Rng, max_segments: u32) -> TracedLight {
     var path = no_light_path();
@@ -111,28 +223,21 @@ fn trace_light_subpath(rng: Rng, max_segments: u32) -> TracedLight {
     }
     let pick = pick_light(rng_2d(rng, 0u, DIM_CAUSTIC_LIGHT_U));
     let light = load_emitter(pick.index);
-    if light == SKY_EMITTER || (light & LIGHT_EMITTER) != 0u {
+    if light == SKY_EMITTER {
         return TracedLight(path, 0u);
     }
-    let tri = load_tri(light);
-    let bary = sample_uniform_triangle(pick.u);
-    if tri.v0.w != 0.0 && !alpha_test(light, bary.x, bary.y) {
+    var start: LightSubpathStart;
+    if (light & LIGHT_EMITTER) != 0u {
+        start = start_at_punctual(light & ~LIGHT_EMITTER, pick.pmf, rng);
+    } else {
+        start = start_at_triangle(light, pick, rng);
+    }
+    if !start.valid {
         return TracedLight(path, 0u);
     }
-    let q = (1.0 - bary.x - bary.y) * tri.v0.xyz + bary.x * tri.v1.xyz + bary.y * tri.v2.xyz;
-    let n = geometric_normal(tri);
-    let st = sample_target(q, rng_2d(rng, 0u, DIM_CAUSTIC_DIR_U));
-    let dir = st.xyz;
-    let pdf_dir = st.w;
-    let cos_m = dot(dir, n);
-    if !(cos_m > 0.0 && pdf_dir > 0.0) {
-        return TracedLight(path, 0u);
-    }
-    let le = material_at(load_material(load_shading(light).material), triangle_uv(light, bary.x, bary.y)).emission;
-    let pdf_point = LIGHT_SUBPATH_RATE * pick.pmf / triangle_area(tri);
-    var beta = le * (cos_m / (pdf_point * pdf_dir));
-    var pdf = pdf_point * pdf_dir / cos_m;
-    var ray = Ray(offset_ray_origin(q, n, dir), dir);
+    var beta = start.beta;
+    var pdf = start.pdf;
+    var ray = start.ray;
     var rays = 0u;
     var chain = 0u;
     for (var segment = 1u; segment <= max_segments; segment++) {
@@ -187,7 +292,7 @@ fn trace_light_subpath(rng: Rng, max_segments: u32) -> TracedLight {
         }
         let correction = abs(dot(wo_world, frame.m[2])) * cos_out / denom;
         beta *= bs.weight * (bs.eta * bs.eta * correction);
-        if !delta {
+        if !delta && pdf > 0.0 {
             let back = shading_frame(mat, si, wi_world);
             let pdf_camera = bsdf_pdf(mat, wi_world * back.m, wo_world * back.m);
             pdf *= bs.pdf * cos_in / (pdf_camera * cos_out);
@@ -211,6 +316,14 @@ fn caustic_weight(ratio: f32) -> f32 {
         return 0.0;
     }
     return w;
+}
+
+// mirror: src/render/caustics.rs `link_weight`
+fn link_weight(pdf_bsdf: f32, lv: LightVertex) -> f32 {
+    if lv.pdf > 0.0 {
+        return caustic_weight(pdf_bsdf / lv.pdf);
+    }
+    return 1.0;
 }
 
 // mirror: src/render/caustics.rs `CausticLink` (valid stands for the Option around it)
@@ -248,7 +361,7 @@ fn caustic_link(si: SurfaceHit, mat: Material, frame: ShadingFrame, wo_world: ve
         return no_caustic_link();
     }
     let pdf_bsdf = bsdf_pdf(mat, wo, wi) / dist2 * seen.pdf;
-    let w = caustic_weight(pdf_bsdf / lv.pdf);
+    let w = link_weight(pdf_bsdf, lv);
     let origin = offset_ray_origin(si.p, si.ng, wc);
     let to = seen.end - origin;
     let dist = length(to);
@@ -352,7 +465,7 @@ fn camera_link(lv: LightVertex, u_lens: vec2<f32>) -> CameraLink {
     }
     let importance = camera_pdf(wc);
     let pdf_bsdf = importance / dist2 * seen.pdf;
-    let w = caustic_weight(pdf_bsdf / lv.pdf);
+    let w = link_weight(pdf_bsdf, lv);
     let to = seen.end - origin;
     let len = length(to);
     if !(len > 0.0) {

@@ -74,7 +74,7 @@ struct CausticTarget {
     radius: f32,
 }
 
-// mirror: src/render/gpu/params.rs `Params` (176 bytes): one dispatch's camera, sky and range.
+// mirror: src/render/gpu/params.rs `Params` (192 bytes): one dispatch's camera, sky and range.
 struct Params {
     cam_position: vec3<f32>,
     width: u32,
@@ -116,6 +116,10 @@ struct Params {
     // Spheres in the caustic targets table; 0 traces no light subpaths.
     num_caustic_targets: u32,
     _pad0: u32,
+    // A sphere around every triangle, outside which a directional light's light subpaths
+    // start.
+    scene_center: vec3<f32>,
+    scene_radius: f32,
 }
 
 

@@ -1,5 +1,5 @@
 //! Caustic light subpaths (`render::caustics`) must change an image's noise, never its
-//! expected value. Two checks, each on the CPU and the GPU:
+//! expected value. These checks, each on the CPU and the GPU:
 //!
 //! - **A mirror's caustic is the light's mirror image.** A floor lit only through a ceiling
 //!   mirror (the light faces the mirror, its black back towards the floor) is lit exactly as
@@ -7,12 +7,17 @@
 //!   plane added), by the method of images. There the path tracer finds the light by next
 //!   event estimation alone, with little noise; in the mirror scene all the light comes by
 //!   specular paths: `L S D E` (light tracing), `L S D D E` and longer (connections), and
-//!   BSDF sampling, weighed against both.
+//!   BSDF sampling, weighed against both. The same with a point light and a spot beside the
+//!   area light: the path tracer never finds them through the mirror, so their light there
+//!   comes from light subpaths alone, at weight 1.
+//! - **Sunlight off a mirror is its mirror image.** A wall lit by a directional light and,
+//!   through a mirror in a black floor, by its reflection, against the mirror's place as a
+//!   hole with the light's image shining up through it: a directional light's subpaths
+//!   start outside the scene, along lines through a disk across the mirror's target.
 //! - **Glass and mirror spheres under a large light**, with caustics and without: the path
 //!   tracer alone finds the caustics of a large light often enough to converge, so the two
 //!   renders estimate one image. The glass sphere's caustic on the floor, seen by the back
 //!   wall through the sphere, is a two-hop light subpath `L S S D S S D`.
-//!
 //! - **An emissive enclosure holding glass and mirrors** (the dielectric furnace): walls
 //!   that emit Le and reflect albedo a fill the enclosure with radiance Le / (1 - a), which
 //!   lossless glass, a perfect mirror and a white block inside the glass leave unchanged,
@@ -20,9 +25,10 @@
 //!   the glass, where the camera path meets them from inside too: the adjoint throughput's
 //!   refraction (no squared index ratio) is right only if the image is.
 //!
-//! The first two compare the image means of several seeds of both renders in blocks of pixels, as z
-//! scores against the seeds' spread: a wrong weight or throughput anywhere along the
-//! caustic paths moves whole regions by far more than their noise.
+//! The first three compare the image means of several seeds of both renders in blocks of
+//! pixels, as z scores against the seeds' spread: a wrong weight or throughput anywhere along the
+//! caustic paths moves whole regions by far more than their noise (a spot's falloff left
+//! out: z 14.6; a directional light's line density off by 20%: z 16.5).
 
 mod common;
 
@@ -33,7 +39,8 @@ use meshtrace::bvh::BuildParams;
 use meshtrace::film::Film;
 use meshtrace::render::{RenderJob, RenderScene};
 use meshtrace::scene::{
-    Camera, Material, MaterialKind, Mesh, NO_NORMAL, NO_UV, RenderSettings, Sky, Triangle,
+    Camera, Material, MaterialKind, Mesh, NO_NORMAL, NO_UV, PunctualLight, RenderSettings, Sky,
+    Triangle,
 };
 
 /// Appends the quad a, b, c, d (a parallelogram, counter-clockwise seen from its front).
@@ -74,7 +81,12 @@ const GLASS: u32 = 3;
 /// crossing of its plane by a line between them and the floor or wall). A path through the
 /// mirror has one segment more than its twin in the doubled scene, so the renders let paths
 /// run long (64 segments) for neither to cut off light the other keeps.
-fn mirror_scene(doubled: bool, settings: RenderSettings) -> RenderScene {
+///
+/// With `punctual`, a point light and a spot pointing up at the mirror join the area light
+/// (their images, the spot pointing down, in the doubled scene): the path tracer cannot
+/// find a point light through a mirror at all, so in the mirror scene their light on the
+/// floor comes from light subpaths alone.
+fn mirror_scene(doubled: bool, punctual: bool, settings: RenderSettings) -> RenderScene {
     let mut mesh = Mesh::default();
     // A wall at the back, facing the camera (+z), from the floor to y = 1.9, or in the
     // mirror's image from y = 2.1 to 4.
@@ -123,7 +135,100 @@ fn mirror_scene(doubled: bool, settings: RenderSettings) -> RenderScene {
         None,
     )
     .unwrap();
-    let s = scene(mesh, materials, camera, Sky::Constant(Vec3::ZERO), settings);
+    let mut s = scene(mesh, materials, camera, Sky::Constant(Vec3::ZERO), settings);
+    if punctual {
+        let lights = |image: bool| {
+            // Reflected in the mirror's plane, y = 2, for the image.
+            let at = |p: Vec3| {
+                if image {
+                    Vec3::new(p.x, 4.0 - p.y, p.z)
+                } else {
+                    p
+                }
+            };
+            [
+                PunctualLight::Point {
+                    position: at(Vec3::new(0.5, 1.2, -0.3)),
+                    intensity: Vec3::new(1.0, 1.2, 1.5),
+                },
+                PunctualLight::Spot {
+                    position: at(Vec3::new(-0.5, 1.1, 0.2)),
+                    direction: if image { -Vec3::Y } else { Vec3::Y },
+                    intensity: Vec3::new(16.0, 12.0, 8.0),
+                    cutoff: 30f32.to_radians(),
+                    beam_width: 8f32.to_radians(),
+                },
+            ]
+        };
+        s.lights = lights(false).to_vec();
+        if doubled {
+            s.lights.extend(lights(true));
+        }
+    }
+    RenderScene::new(&s, &BuildParams::default()).unwrap()
+}
+
+/// Sunlight off a mirror: a wall (x = -1, facing +x) lit by a directional light that
+/// travels down and left, and, through a mirror let into a black floor (y = 0), by its
+/// reflection; or, as the `image`, the same without the mirror, its place a hole in the
+/// floor, and a second directional light, the first's mirror image, shining up through
+/// the hole. By the method of images the wall is lit alike (the floor around the hole
+/// shades it as the mirror's edges bound the reflection). Paths are cut at three
+/// segments, so that light the wall sends back to itself by way of the mirror, which the
+/// image scene lacks, is left out of both. The camera sees the wall only. A directional
+/// light's reflection is light the path tracer never finds: in the mirror scene it comes
+/// from light subpaths alone.
+fn sun_mirror_scene(image: bool, settings: RenderSettings) -> RenderScene {
+    let mut mesh = Mesh::default();
+    let wall = [
+        Vec3::new(-1.0, 0.0, 1.0),
+        Vec3::new(-1.0, 0.0, -1.0),
+        Vec3::new(-1.0, 2.0, -1.0),
+        Vec3::new(-1.0, 2.0, 1.0),
+    ];
+    quad(&mut mesh, wall, FLOOR);
+    // The black floor, facing up, around the mirror (or hole) at x in [0.5, 1.5], |z| <= 0.5.
+    let floor = |x0: f32, x1: f32, z0: f32, z1: f32| {
+        [
+            Vec3::new(x0, 0.0, z0),
+            Vec3::new(x0, 0.0, z1),
+            Vec3::new(x1, 0.0, z1),
+            Vec3::new(x1, 0.0, z0),
+        ]
+    };
+    quad(&mut mesh, floor(-1.0, 0.5, -2.0, 2.0), LIGHT);
+    quad(&mut mesh, floor(0.5, 1.5, 0.5, 2.0), LIGHT);
+    quad(&mut mesh, floor(0.5, 1.5, -2.0, -0.5), LIGHT);
+    if !image {
+        quad(&mut mesh, floor(0.5, 1.5, -0.5, 0.5), MIRROR);
+    }
+    let mirror = Material {
+        albedo: Vec3::ONE,
+        ..Material::new(MaterialKind::CONDUCTOR)
+    };
+    let materials = vec![
+        Material::diffuse(Vec3::new(0.8, 0.7, 0.6)),
+        Material::diffuse(Vec3::ZERO),
+        mirror,
+    ];
+    let camera = Camera::new(
+        Vec3::new(1.2, 1.2, 0.0),
+        Vec3::new(-1.0, 1.2, 0.0),
+        Vec3::Y,
+        50.0,
+        0.0,
+        None,
+    )
+    .unwrap();
+    let mut s = scene(mesh, materials, camera, Sky::Constant(Vec3::ZERO), settings);
+    let sun = |y: f32| PunctualLight::Directional {
+        direction: Vec3::new(-1.0, y, 0.0).normalize(),
+        irradiance: Vec3::new(2.0, 1.8, 1.5),
+    };
+    s.lights = vec![sun(-1.0)];
+    if image {
+        s.lights.push(sun(1.0));
+    }
     RenderScene::new(&s, &BuildParams::default()).unwrap()
 }
 
@@ -333,23 +438,28 @@ fn assert_same_image(what: &str, test: &[Film], reference: &[Film], block: u32) 
     );
 }
 
-fn mirror_check(gpu: Option<&meshtrace::render::gpu::GpuContext>) {
+fn mirror_check(gpu: Option<&meshtrace::render::gpu::GpuContext>, punctual: bool) {
     let s = RenderSettings {
         caustics: true,
         ..square(32, if gpu.is_some() { 32 } else { 64 }, 64, 0)
     };
-    let mirror = mirror_scene(false, s);
+    let mirror = mirror_scene(false, punctual, s);
     assert!(
         !mirror.caustic_targets.is_empty(),
         "the mirror must be a caustic target"
     );
-    let doubled = mirror_scene(true, s);
+    let doubled = mirror_scene(true, punctual, s);
     assert!(doubled.caustic_targets.is_empty());
     let test = renders(&mirror, s, 0..16, gpu);
     let reference = renders(&doubled, RenderSettings { spp: 512, ..s }, 100..108, None);
     let device = if gpu.is_some() { "GPU" } else { "CPU" };
+    let lights = if punctual {
+        "area, point and spot lights"
+    } else {
+        "area light"
+    };
     assert_same_image(
-        &format!("mirror ({device}) against its doubled scene"),
+        &format!("mirror, {lights} ({device}), against its doubled scene"),
         &test,
         &reference,
         8,
@@ -358,7 +468,7 @@ fn mirror_check(gpu: Option<&meshtrace::render::gpu::GpuContext>) {
 
 #[test]
 fn a_mirrors_caustic_is_the_lights_mirror_image() {
-    mirror_check(None);
+    mirror_check(None, false);
 }
 
 #[test]
@@ -366,7 +476,62 @@ fn a_mirrors_caustic_is_the_lights_mirror_image_on_the_gpu() {
     let Some(ctx) = common::gpu("a_mirrors_caustic_is_the_lights_mirror_image_on_the_gpu") else {
         return;
     };
-    mirror_check(Some(&ctx));
+    mirror_check(Some(&ctx), false);
+}
+
+/// Point and spot lights seen through the mirror: light the path tracer alone never finds.
+#[test]
+fn a_mirrors_caustics_of_point_and_spot_lights_are_their_mirror_images() {
+    mirror_check(None, true);
+}
+
+#[test]
+fn a_mirrors_caustics_of_point_and_spot_lights_are_their_mirror_images_on_the_gpu() {
+    let Some(ctx) = common::gpu(
+        "a_mirrors_caustics_of_point_and_spot_lights_are_their_mirror_images_on_the_gpu",
+    ) else {
+        return;
+    };
+    mirror_check(Some(&ctx), true);
+}
+
+fn sun_mirror_check(gpu: Option<&meshtrace::render::gpu::GpuContext>) {
+    let s = RenderSettings {
+        caustics: true,
+        ..square(32, if gpu.is_some() { 32 } else { 64 }, 3, 0)
+    };
+    let mirror = sun_mirror_scene(false, s);
+    assert!(
+        !mirror.caustic_targets.is_empty(),
+        "the mirror must be a caustic target"
+    );
+    let test = renders(&mirror, s, 0..16, gpu);
+    let reference = renders(
+        &sun_mirror_scene(true, s),
+        RenderSettings { spp: 256, ..s },
+        100..104,
+        None,
+    );
+    let device = if gpu.is_some() { "GPU" } else { "CPU" };
+    assert_same_image(
+        &format!("sunlight off a mirror ({device}) against its image"),
+        &test,
+        &reference,
+        8,
+    );
+}
+
+#[test]
+fn sunlight_off_a_mirror_is_its_mirror_image() {
+    sun_mirror_check(None);
+}
+
+#[test]
+fn sunlight_off_a_mirror_is_its_mirror_image_on_the_gpu() {
+    let Some(ctx) = common::gpu("sunlight_off_a_mirror_is_its_mirror_image_on_the_gpu") else {
+        return;
+    };
+    sun_mirror_check(Some(&ctx));
 }
 
 /// The path tracer alone, with the same scene: no targets, no light subpaths.

@@ -87,17 +87,11 @@ fn gpu_replays_the_cpu_paths() {
     assert!(same >= 0.99, "only {same} of pixels traced the same rays");
 }
 
-/// The same seed with caustic light subpaths (tests/scenes/box_area.toml: an area light,
-/// glass and mirror spheres): the GPU replays the CPU's paths and light subpaths, whose
-/// splats land in other pixels, so whole images agree to float rounding.
-#[test]
-fn gpu_replays_the_cpu_paths_with_caustics() {
-    let Some(ctx) = common::gpu("gpu_replays_the_cpu_paths_with_caustics") else {
-        return;
-    };
+/// The same seed with caustic light subpaths: the GPU replays the CPU's paths and light
+/// subpaths, whose splats land in other pixels, so whole images agree to float rounding.
+fn replay_with_caustics(ctx: &meshtrace::render::gpu::GpuContext, file: &str) {
     let mut scene =
-        meshtrace::scene::load_scene(&common::fs::root().join("tests/scenes/box_area.toml"))
-            .expect("box_area");
+        meshtrace::scene::load_scene(&common::fs::root().join(file)).expect("test scene");
     scene.settings.caustics = true;
     let rs = meshtrace::render::RenderScene::new(&scene, &meshtrace::bvh::BuildParams::default())
         .expect("BVH");
@@ -106,13 +100,42 @@ fn gpu_replays_the_cpu_paths_with_caustics() {
         spp: 16,
         ..scene.settings
     });
-    let (gpu_film, cpu_film) = (gpu_render(&ctx, &rs, &job), cpu_render(&rs, &job));
+    let (gpu_film, cpu_film) = (gpu_render(ctx, &rs, &job), cpu_render(&rs, &job));
     let frac = fraction_close(&channels(&gpu_film), &channels(&cpu_film));
-    eprintln!("{:.4}% of pixel channels agree to 1e-3", 100.0 * frac);
-    assert!(frac >= 0.99, "only {frac} of pixel channels agree");
+    eprintln!(
+        "{file}: {:.4}% of pixel channels agree to 1e-3",
+        100.0 * frac
+    );
+    assert!(frac >= 0.99, "{file}: only {frac} of pixel channels agree");
     let same = same_rays(&gpu_film, &cpu_film);
-    eprintln!("{:.4}% of pixels traced the same rays", 100.0 * same);
-    assert!(same >= 0.99, "only {same} of pixels traced the same rays");
+    eprintln!(
+        "{file}: {:.4}% of pixels traced the same rays",
+        100.0 * same
+    );
+    assert!(
+        same >= 0.99,
+        "{file}: only {same} of pixels traced the same rays"
+    );
+}
+
+/// tests/scenes/box_area.toml: an area light, glass and mirror spheres.
+#[test]
+fn gpu_replays_the_cpu_paths_with_caustics() {
+    let Some(ctx) = common::gpu("gpu_replays_the_cpu_paths_with_caustics") else {
+        return;
+    };
+    replay_with_caustics(&ctx, "tests/scenes/box_area.toml");
+}
+
+/// tests/scenes/lights.toml: light subpaths from an area light and from point, spot and
+/// directional lights, through a glass sphere.
+#[test]
+fn gpu_replays_the_cpu_paths_with_caustics_of_punctual_lights() {
+    let Some(ctx) = common::gpu("gpu_replays_the_cpu_paths_with_caustics_of_punctual_lights")
+    else {
+        return;
+    };
+    replay_with_caustics(&ctx, "tests/scenes/lights.toml");
 }
 
 /// Two GPU renders with the same seed on the same adapter are bit-identical.

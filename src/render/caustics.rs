@@ -37,8 +37,11 @@
 //! densities as the cosines at their ends; where that is not exact (shading normals) the
 //! weights still sum to one, which is all unbiasedness needs.
 //!
-//! Only triangle emitters start light subpaths; caustics of punctual lights and of the
-//! sky stay with BSDF sampling alone. Scenes without materials that may be delta (or
+//! Emissive triangles and punctual lights (point, spot and directional) start light
+//! subpaths. A punctual light's subpath is the only strategy for its paths (BSDF sampling
+//! never reaches a point or a single direction), so its connections weigh 1
+//! ([`link_weight`]): without light subpaths those caustics are missing, not noisy.
+//! Caustics of the sky stay with BSDF sampling alone. Scenes without materials that may be delta (or
 //! rendered with `caustics = false`) have no targets and trace no light subpath: their
 //! renders are the path tracer's alone.
 //!
@@ -51,11 +54,11 @@ use super::camera::CameraRays;
 use super::integrator::{
     ShadingFrame, SurfaceHit, geometry_agrees, offset_ray_origin, shading_frame, surface_at,
 };
-use super::lights::pick_light;
+use super::lights::{LightPick, pick_light, spot_falloff};
 use super::rng::{self, Rng};
-use super::sampling::{sample_concentric_disk, sample_uniform_triangle};
+use super::sampling::{ONE_MINUS_EPSILON, sample_concentric_disk, sample_uniform_triangle};
 use super::texture::{alpha_test, material_at, triangle_uv};
-use super::{LIGHT_EMITTER, RenderScene, SKY_EMITTER};
+use super::{LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_SPOT, Light, RenderScene, SKY_EMITTER};
 use crate::geometry::{self, T_INF, TriVerts};
 use crate::math::{Aabb, Ray, onb_from_normal};
 use crate::scene::{Material, MaterialKind, NO_TEXTURE};
@@ -219,11 +222,7 @@ pub fn target_pdf(scene: &RenderScene, p: Vec3, dir: Vec3) -> f32 {
 /// uniform point of the cone. Returns the direction and its [`target_pdf`].
 /// mirror: shaders/caustics.wgsl `sample_target`
 pub fn sample_target(scene: &RenderScene, p: Vec3, u: Vec2) -> (Vec3, f32) {
-    let mut total = 0.0;
-    for t in &scene.caustic_targets {
-        total += target_cone(t, p).height;
-    }
-    let mut x = u.x * total;
+    let mut x = u.x * targets_height(scene, p);
     let mut cone = target_cone(&scene.caustic_targets[0], p);
     for t in &scene.caustic_targets {
         cone = target_cone(t, p);
@@ -234,12 +233,29 @@ pub fn sample_target(scene: &RenderScene, p: Vec3, u: Vec2) -> (Vec3, f32) {
     }
     // One minus the cosine of the angle from the axis, uniform in [0, height).
     let v = (x / cone.height).clamp(0.0, 1.0) * cone.height;
+    let dir = sample_cone(&cone, v, u.y);
+    (dir, target_pdf(scene, p, dir))
+}
+
+/// The sum of the targets' cone heights seen from `p` (their total solid angle over 2π).
+/// mirror: shaders/caustics.wgsl `targets_height`
+pub fn targets_height(scene: &RenderScene, p: Vec3) -> f32 {
+    let mut total = 0.0;
+    for t in &scene.caustic_targets {
+        total += target_cone(t, p).height;
+    }
+    total
+}
+
+/// The direction in `cone` at one minus cosine `v` (in [0, `cone.height`]) from its axis,
+/// turned by 2π `turn` about it: uniform in the cone for uniform `v` and `turn`.
+/// mirror: shaders/caustics.wgsl `sample_cone`
+pub fn sample_cone(cone: &TargetCone, v: f32, turn: f32) -> Vec3 {
     let cos_t = 1.0 - v;
     let sin_t = (v * (2.0 - v)).max(0.0).sqrt();
-    let phi = 2.0 * PI * u.y;
+    let phi = 2.0 * PI * turn;
     let (t, b) = onb_from_normal(cone.axis);
-    let dir = (sin_t * phi.cos()) * t + (sin_t * phi.sin()) * b + cos_t * cone.axis;
-    (dir, target_pdf(scene, p, dir))
+    (sin_t * phi.cos()) * t + (sin_t * phi.sin()) * b + cos_t * cone.axis
 }
 
 /// A non-delta vertex of a light subpath, reached through a specular chain, which the
@@ -251,13 +267,15 @@ pub struct LightVertex {
     /// Unit direction from the vertex back along the light's last segment.
     pub wi: Vec3,
     /// Throughput: emitted radiance times the emitted cosine over the light point's and
-    /// direction's pdfs, times the adjoint weights of the delta bounces.
+    /// direction's pdfs (a punctual light's intensity that way over the direction's pdf),
+    /// times the adjoint weights of the delta bounces.
     pub beta: Vec3,
-    /// The light strategy's density for [`caustic_weight`]: the light subpath rate times
-    /// the area pdf of the light point times the solid-angle pdf of the emitted direction,
+    /// The light strategy's density for [`link_weight`]: the light subpath rate times the
+    /// area pdf of the light point times the solid-angle pdf of the emitted direction,
     /// over that direction's cosine; times, at each earlier non-delta vertex of the
     /// subpath, the ratio of its light to its camera sampling density (solid-angle pdfs
-    /// times the cosine of the direction drawn from).
+    /// times the cosine of the direction drawn from). 0 for a punctual light's subpath,
+    /// which no other strategy competes with.
     pub pdf: f32,
     /// Segments from the light to the vertex (at least 2), or 0 for none.
     pub segments: u32,
@@ -302,15 +320,183 @@ impl LightPath {
     };
 }
 
+/// The first segment of a light subpath: its ray, the throughput it carries and the light
+/// strategy's density so far ([`LightVertex::pdf`]'s measure; 0 for a punctual light).
+/// mirror: shaders/caustics.wgsl `LightSubpathStart` (whose field valid stands for the Option)
+#[derive(Clone, Copy, Debug)]
+pub struct LightSubpathStart {
+    pub ray: Ray,
+    pub beta: Vec3,
+    pub pdf: f32,
+}
+
+/// A light subpath's start on emissive triangle `light` (picked by `pick`): a point on it
+/// from the pick's pair, a direction towards the targets from `DIM_CAUSTIC_DIR_U` of
+/// bounce 0. `None` where the point is masked out or the direction leaves by the back.
+/// mirror: shaders/caustics.wgsl `start_at_triangle`
+pub fn start_at_triangle(
+    scene: &RenderScene,
+    light: u32,
+    pick: LightPick,
+    rng: &Rng,
+) -> Option<LightSubpathStart> {
+    let tri = &scene.tris[light as usize];
+    let [a, b, c] = tri.corners();
+    let bary = sample_uniform_triangle(pick.u);
+    if tri.is_masked() && !alpha_test(scene, light, bary.x, bary.y) {
+        return None;
+    }
+    let q = (1.0 - bary.x - bary.y) * a + bary.x * b + bary.y * c;
+    let n = scene.tri_normals[light as usize];
+    let (dir, pdf_dir) = sample_target(scene, q, rng.rng_2d(0, rng::DIM_CAUSTIC_DIR_U));
+    let cos_m = dir.dot(n);
+    if !(cos_m > 0.0 && pdf_dir > 0.0) {
+        return None;
+    }
+    let material = &scene.materials[scene.shading[light as usize].material as usize];
+    let le = if material.emission_texture != NO_TEXTURE {
+        material_at(scene, material, triangle_uv(scene, light, bary.x, bary.y)).emission
+    } else {
+        material.emission
+    };
+    let pdf_point = LIGHT_SUBPATH_RATE * pick.pmf / scene.emitter_areas[pick.index];
+    let pdf = pdf_point * pdf_dir / cos_m;
+    if pdf.is_nan() || pdf <= 0.0 {
+        return None;
+    }
+    Some(LightSubpathStart {
+        ray: Ray::new(offset_ray_origin(q, n, dir), dir),
+        beta: le * (cos_m / (pdf_point * pdf_dir)),
+        pdf,
+    })
+}
+
+/// A light subpath's start at point or spot light `index` (picked with probability
+/// `pmf`): a direction from the pair `DIM_CAUSTIC_DIR_U` of bounce 0, towards the targets
+/// or, for a spot whose cone is the narrower, uniform in that cone (either covers every
+/// direction that both carries light and meets a specular object first), carrying the
+/// light's intensity that way. Its pdf is 0: BSDF sampling never reaches a point, so the
+/// light subpath is the only strategy for its paths, and their weight is 1. A directional
+/// light starts as [`start_at_directional`] says. `None` where a spot sends nothing that
+/// way.
+/// mirror: shaders/caustics.wgsl `start_at_punctual`
+pub fn start_at_punctual(
+    scene: &RenderScene,
+    index: u32,
+    pmf: f32,
+    rng: &Rng,
+) -> Option<LightSubpathStart> {
+    let l = &scene.lights[index as usize];
+    if l.kind == LIGHT_DIRECTIONAL {
+        return start_at_directional(scene, l, pmf, rng);
+    }
+    let q = Vec3::from(l.position);
+    let u = rng.rng_2d(0, rng::DIM_CAUSTIC_DIR_U);
+    let spot = TargetCone {
+        axis: Vec3::from(l.direction),
+        cos_max: l.cos_cutoff,
+        height: 1.0 - l.cos_cutoff,
+    };
+    let (dir, pdf_dir) = if l.kind == LIGHT_SPOT && spot.height < targets_height(scene, q) {
+        (
+            sample_cone(&spot, u.x * spot.height, u.y),
+            1.0 / (2.0 * PI * spot.height),
+        )
+    } else {
+        sample_target(scene, q, u)
+    };
+    let mut intensity = Vec3::from(l.intensity);
+    if l.kind == LIGHT_SPOT {
+        intensity *= spot_falloff(l, dir);
+    }
+    let pdf_dir = LIGHT_SUBPATH_RATE * pmf * pdf_dir;
+    if pdf_dir.is_nan() || pdf_dir <= 0.0 || intensity == Vec3::ZERO {
+        return None;
+    }
+    Some(LightSubpathStart {
+        ray: Ray::new(q, dir),
+        beta: intensity * (1.0 / pdf_dir),
+        pdf: 0.0,
+    })
+}
+
+/// A light subpath's start from directional light `l` (picked with probability `pmf`): a
+/// line along its direction through the disk that faces it across one of the targets
+/// (picked in proportion to the disks' areas by the first number of the pair
+/// `DIM_CAUSTIC_DIR_U` of bounce 0, rescaled, then a point of the disk), starting outside
+/// [`RenderScene::scene_sphere`], so that whatever lies in the light's way still shades
+/// the target. Every line that meets a specular object crosses its target's disk, and the
+/// line's density across it is the number of disks it crosses over their total area. It
+/// carries the light's irradiance over that density; its pdf is 0, as a point light's:
+/// BSDF sampling never finds a directional light.
+/// mirror: shaders/caustics.wgsl `start_at_directional`
+pub fn start_at_directional(
+    scene: &RenderScene,
+    l: &Light,
+    pmf: f32,
+    rng: &Rng,
+) -> Option<LightSubpathStart> {
+    let d = Vec3::from(l.direction);
+    let u = rng.rng_2d(0, rng::DIM_CAUSTIC_DIR_U);
+    let mut total = 0.0;
+    for t in &scene.caustic_targets {
+        total += t.radius * t.radius;
+    }
+    let mut x = u.x * total;
+    let mut picked = scene.caustic_targets[0];
+    for t in &scene.caustic_targets {
+        picked = *t;
+        if x < t.radius * t.radius {
+            break;
+        }
+        x -= t.radius * t.radius;
+    }
+    let r2 = picked.radius * picked.radius;
+    let disk = sample_concentric_disk(Vec2::new((x / r2).clamp(0.0, ONE_MINUS_EPSILON), u.y));
+    let (t, b) = onb_from_normal(d);
+    let s = Vec3::from(picked.center) + picked.radius * (disk.x * t + disk.y * b);
+    let mut count = 0.0;
+    for k in &scene.caustic_targets {
+        let off = s - Vec3::from(k.center);
+        let across = off - off.dot(d) * d;
+        if across.length_squared() <= k.radius * k.radius {
+            count += 1.0;
+        }
+    }
+    let pdf_line = LIGHT_SUBPATH_RATE * pmf * count / (PI * total);
+    if pdf_line.is_nan() || pdf_line <= 0.0 {
+        return None;
+    }
+    let (center, radius) = scene.scene_sphere;
+    let back = (s - center).length() + radius;
+    Some(LightSubpathStart {
+        ray: Ray::new(s - back * d, d),
+        beta: Vec3::from(l.intensity) * (1.0 / pdf_line),
+        pdf: 0.0,
+    })
+}
+
+/// The power-heuristic weight of a connection to light vertex `lv` against BSDF sampling,
+/// whose density for the same path is `pdf_bsdf` (in `LightVertex::pdf`'s measure): 1 for
+/// a punctual light's vertex (`lv.pdf` 0), which BSDF sampling cannot make.
+/// mirror: shaders/caustics.wgsl `link_weight`
+pub fn link_weight(pdf_bsdf: f32, lv: &LightVertex) -> f32 {
+    if lv.pdf > 0.0 {
+        caustic_weight(pdf_bsdf / lv.pdf)
+    } else {
+        1.0
+    }
+}
+
 /// Traces the sample's light subpath, of at most `max_segments` segments: a light point and
-/// a direction towards the targets from the pairs `DIM_CAUSTIC_LIGHT_U` and
+/// a direction (towards the targets) from the pairs `DIM_CAUSTIC_LIGHT_U` and
 /// `DIM_CAUSTIC_DIR_U` of bounce 0, then delta bounces, the one at vertex j taking its lobe
 /// number from `DIM_CAUSTIC_LOBE` of bounce j, up to the first non-delta vertex, which it
 /// keeps. From there it samples the adjoint BSDF (lobe and pair from the same dimensions
 /// of its bounce) and keeps the next non-delta vertex too if a specular chain leads to it,
 /// up to [`MAX_CAUSTIC_HOPS`] vertices. The subpath ends where it misses, meets a
 /// non-delta surface right after a non-delta vertex (or the light), or where the light
-/// picked is not a triangle. Returns the vertices and the rays traced.
+/// picked is the sky ([`start_at_triangle`] and [`start_at_punctual`] start it). Returns the vertices and the rays traced.
 /// mirror: shaders/caustics.wgsl `trace_light_subpath`
 pub fn trace_light_subpath(scene: &RenderScene, rng: &Rng, max_segments: u32) -> (LightPath, u32) {
     let mut path = LightPath::NONE;
@@ -322,32 +508,16 @@ pub fn trace_light_subpath(scene: &RenderScene, rng: &Rng, max_segments: u32) ->
     }
     let pick = pick_light(scene, rng.rng_2d(0, rng::DIM_CAUSTIC_LIGHT_U));
     let light = scene.emitters[pick.index];
-    if light == SKY_EMITTER || light & LIGHT_EMITTER != 0 {
-        return (path, 0);
-    }
-    let tri = &scene.tris[light as usize];
-    let [a, b, c] = tri.corners();
-    let bary = sample_uniform_triangle(pick.u);
-    if tri.is_masked() && !alpha_test(scene, light, bary.x, bary.y) {
-        return (path, 0);
-    }
-    let q = (1.0 - bary.x - bary.y) * a + bary.x * b + bary.y * c;
-    let n = scene.tri_normals[light as usize];
-    let (dir, pdf_dir) = sample_target(scene, q, rng.rng_2d(0, rng::DIM_CAUSTIC_DIR_U));
-    let cos_m = dir.dot(n);
-    if !(cos_m > 0.0 && pdf_dir > 0.0) {
-        return (path, 0);
-    }
-    let material = &scene.materials[scene.shading[light as usize].material as usize];
-    let le = if material.emission_texture != NO_TEXTURE {
-        material_at(scene, material, triangle_uv(scene, light, bary.x, bary.y)).emission
+    let Some(start) = (if light == SKY_EMITTER {
+        None
+    } else if light & LIGHT_EMITTER != 0 {
+        start_at_punctual(scene, light & !LIGHT_EMITTER, pick.pmf, rng)
     } else {
-        material.emission
+        start_at_triangle(scene, light, pick, rng)
+    }) else {
+        return (path, 0);
     };
-    let pdf_point = LIGHT_SUBPATH_RATE * pick.pmf / scene.emitter_areas[pick.index];
-    let mut beta = le * (cos_m / (pdf_point * pdf_dir));
-    let mut pdf = pdf_point * pdf_dir / cos_m;
-    let mut ray = Ray::new(offset_ray_origin(q, n, dir), dir);
+    let (mut beta, mut pdf, mut ray) = (start.beta, start.pdf, start.ray);
     let mut rays = 0;
     // Delta vertices since the last non-delta one (or the light).
     let mut chain = 0;
@@ -421,9 +591,10 @@ pub fn trace_light_subpath(scene: &RenderScene, rng: &Rng, max_segments: u32) ->
         }
         let correction = wo_world.dot(frame.ns).abs() * cos_out / denom;
         beta *= bs.weight * (bs.eta * bs.eta * correction);
-        if !delta {
+        if !delta && pdf > 0.0 {
             // The ratio of this vertex's light density to its camera density, as
-            // `PathState::caustic_pdf` takes it, the other way round.
+            // `PathState::caustic_pdf` takes it, the other way round. (A punctual light's
+            // subpath keeps its pdf of 0: no other strategy makes its paths.)
             let back = shading_frame(&mat, &si, wi_world);
             let pdf_camera = bsdf_pdf(&mat, back.to_local(wi_world), back.to_local(wo_world));
             pdf *= bs.pdf * cos_in / (pdf_camera * cos_out);
@@ -495,7 +666,7 @@ pub fn caustic_link(
     let seen = light_vertex_seen(scene, lv, wc)?;
     // BSDF sampling's density for this path, in the measure of `LightVertex::pdf`.
     let pdf_bsdf = bsdf_pdf(mat, wo, wi) / dist2 * seen.pdf;
-    let w = caustic_weight(pdf_bsdf / lv.pdf);
+    let w = link_weight(pdf_bsdf, lv);
     let origin = offset_ray_origin(si.p, si.ng, wc);
     let to = seen.end - origin;
     let dist = to.length();
@@ -647,7 +818,7 @@ pub fn camera_link(
     let seen = light_vertex_seen(scene, lv, wc)?;
     let importance = camera_pdf(cam, wc);
     let pdf_bsdf = importance / dist2 * seen.pdf;
-    let w = caustic_weight(pdf_bsdf / lv.pdf);
+    let w = link_weight(pdf_bsdf, lv);
     let to = seen.end - origin;
     let len = to.length();
     if len.is_nan() || len <= 0.0 {

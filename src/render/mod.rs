@@ -214,6 +214,9 @@ pub struct RenderScene {
     /// ([`caustics::caustic_targets`]); empty where no material may be delta or the scene's
     /// settings turn caustics off, and then no light subpath is traced.
     pub caustic_targets: Vec<caustics::CausticTarget>,
+    /// A sphere around every triangle (centre, radius), outside which a directional light's
+    /// light subpaths start ([`caustics::start_at_directional`]).
+    pub scene_sphere: (Vec3, f32),
 }
 
 /// An environment map as both renderers read it: its texture record, strength, the cosine
@@ -316,6 +319,13 @@ impl RenderScene {
             .map(srgb8_to_linear)
             .chain((0..=255u8).map(|k| k as f32 / 255.0))
             .collect();
+        let scene_bounds = bounds.iter().fold(Aabb::EMPTY, |a, &b| a.union(b));
+        let scene_sphere = if bounds.is_empty() {
+            (Vec3::ZERO, 0.0)
+        } else {
+            let c = scene_bounds.center();
+            (c, (scene_bounds.max - c).length() * (1.0 + 1e-3))
+        };
         let caustic_targets = if scene.settings.caustics {
             let tri_materials: Vec<u32> = shading.iter().map(|s| s.material).collect();
             caustics::caustic_targets(&tris, &tri_materials, &scene.materials)
@@ -344,6 +354,7 @@ impl RenderScene {
             env: Environment::default(),
             env_cdf: Vec::new(),
             caustic_targets,
+            scene_sphere,
         };
         if let Sky::Environment {
             texture,

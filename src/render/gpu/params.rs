@@ -15,7 +15,7 @@ pub const SKY_CONSTANT: u32 = 0;
 pub const SKY_GRADIENT: u32 = 1;
 pub const SKY_ENVIRONMENT: u32 = 2;
 
-/// One dispatch's parameters (176 bytes). mirror: shaders/types.wgsl `Params`
+/// One dispatch's parameters (192 bytes). mirror: shaders/types.wgsl `Params`
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Params {
@@ -57,6 +57,9 @@ pub struct Params {
     /// no light subpaths.
     pub num_caustic_targets: u32,
     pub _pad: [u32; 1],
+    /// [`RenderScene::scene_sphere`]: where a directional light's light subpaths start.
+    pub scene_center: [f32; 3],
+    pub scene_radius: f32,
 }
 
 impl Params {
@@ -93,6 +96,8 @@ impl Params {
             transparent,
             num_caustic_targets,
             _pad,
+            scene_center,
+            scene_radius,
         })
     }
 
@@ -121,6 +126,8 @@ impl Params {
             num_emitters: scene.emitters.len() as u32,
             sky_pmf: scene.sky_pmf,
             num_caustic_targets: scene.caustic_targets.len() as u32,
+            scene_center: scene.scene_sphere.0.into(),
+            scene_radius: scene.scene_sphere.1,
             ..Self::default()
         }
     }
