@@ -147,9 +147,10 @@ fn start_at_triangle(light: u32, pick: LightPick, rng: Rng) -> LightSubpathStart
     return LightSubpathStart(Ray(offset_ray_origin(q, n, dir), dir), le * (cos_m / (pdf_point * pdf_dir)), pdf, true);
 }
 
-// A line's origin and its density (w; 0 for none).
-// mirror: src/render/caustics.rs `line_through_targets`
-fn line_through_targets(d: vec3<f32>, u: vec2<f32>) -> vec4<f32> {
+// mirror: src/render/caustics.rs `start_at_directional`
+fn start_at_directional(l: Light, pmf: f32, rng: Rng) -> LightSubpathStart {
+    let d = l.direction;
+    let u = rng_2d(rng, 0u, DIM_CAUSTIC_DIR_U);
     var total = 0.0;
     for (var k = 0u; k < params.num_caustic_targets; k++) {
         let t = load_caustic_target(k);
@@ -168,64 +169,21 @@ fn line_through_targets(d: vec3<f32>, u: vec2<f32>) -> vec4<f32> {
     let disk = sample_concentric_disk(vec2<f32>(clamp(x / r2, 0.0, ONE_MINUS_EPSILON), u.y));
     let frame = onb_from_normal(d);
     let s = picked.center + picked.radius * (disk.x * frame[0] + disk.y * frame[1]);
-    let density = line_density(s, d);
-    if !(density > 0.0) {
-        return vec4<f32>(0.0);
-    }
-    let back = length(s - params.scene_center) + params.scene_radius;
-    return vec4<f32>(s - back * d, density);
-}
-
-// mirror: src/render/caustics.rs `line_density`
-fn line_density(p: vec3<f32>, d: vec3<f32>) -> f32 {
-    var total = 0.0;
     var count = 0.0;
     for (var k = 0u; k < params.num_caustic_targets; k++) {
         let c = load_caustic_target(k);
-        let off = p - c.center;
+        let off = s - c.center;
         let across = off - dot(off, d) * d;
-        let r2 = c.radius * c.radius;
-        total += r2;
-        if dot(across, across) <= r2 {
+        if dot(across, across) <= c.radius * c.radius {
             count += 1.0;
         }
     }
-    if total > 0.0 {
-        return count / (PI * total);
-    }
-    return 0.0;
-}
-
-// mirror: src/render/caustics.rs `start_at_directional`
-fn start_at_directional(l: Light, pmf: f32, rng: Rng) -> LightSubpathStart {
-    let d = l.direction;
-    let line = line_through_targets(d, rng_2d(rng, 0u, DIM_CAUSTIC_DIR_U));
-    let pdf_line = LIGHT_SUBPATH_RATE * pmf * line.w;
+    let pdf_line = LIGHT_SUBPATH_RATE * pmf * count / (PI * total);
     if !(pdf_line > 0.0) {
         return no_light_subpath_start();
     }
-    return LightSubpathStart(Ray(line.xyz, d), l.intensity * (1.0 / pdf_line), 0.0, true);
-}
-
-// mirror: src/render/caustics.rs `start_at_sky`
-fn start_at_sky(pick: LightPick, rng: Rng) -> LightSubpathStart {
-    var w = sample_uniform_sphere(pick.u);
-    var pdf_w = UNIFORM_SPHERE_PDF;
-    if params.sky_kind == SKY_ENVIRONMENT {
-        let e = sample_env(pick.u);
-        w = e.dir;
-        pdf_w = e.pdf;
-    }
-    if !(pdf_w > 0.0) {
-        return no_light_subpath_start();
-    }
-    let d = -w;
-    let line = line_through_targets(d, rng_2d(rng, 0u, DIM_CAUSTIC_DIR_U));
-    let pdf = LIGHT_SUBPATH_RATE * params.sky_pmf * pdf_w * line.w;
-    if !(pdf > 0.0) {
-        return no_light_subpath_start();
-    }
-    return LightSubpathStart(Ray(line.xyz, d), sky_radiance(w) * (1.0 / pdf), pdf, true);
+    let back = length(s - params.scene_center) + params.scene_radius;
+    return LightSubpathStart(Ray(s - back * d, d), l.intensity * (1.0 / pdf_line), 0.0, true);
 }
 
 // mirror: src/render/caustics.rs `start_at_punctual`
@@ -265,10 +223,11 @@ fn trace_light_subpath(rng: Rng, max_segments: u32) -> TracedLight {
     }
     let pick = pick_light(rng_2d(rng, 0u, DIM_CAUSTIC_LIGHT_U));
     let light = load_emitter(pick.index);
-    var start: LightSubpathStart;
     if light == SKY_EMITTER {
-        start = start_at_sky(pick, rng);
-    } else if (light & LIGHT_EMITTER) != 0u {
+        return TracedLight(path, 0u);
+    }
+    var start: LightSubpathStart;
+    if (light & LIGHT_EMITTER) != 0u {
         start = start_at_punctual(light & ~LIGHT_EMITTER, pick.pmf, rng);
     } else {
         start = start_at_triangle(light, pick, rng);
@@ -449,12 +408,6 @@ fn caustic_hit_weight(tri: u32, p: vec3<f32>, dir: vec3<f32>, cos_l: f32, pdf_bs
     }
     let area = triangle_area(load_tri(tri));
     let pdf_light = LIGHT_SUBPATH_RATE * pmf / area * target_pdf(p, -dir) / cos_l;
-    return caustic_weight(pdf_light / pdf_bsdf);
-}
-
-// mirror: src/render/caustics.rs `caustic_sky_weight`
-fn caustic_sky_weight(p: vec3<f32>, dir: vec3<f32>, pdf_bsdf: f32) -> f32 {
-    let pdf_light = LIGHT_SUBPATH_RATE * sky_pdf(dir) * line_density(p, dir);
     return caustic_weight(pdf_light / pdf_bsdf);
 }
 

@@ -119,12 +119,8 @@ fn path_step(st: ptr<function, PathState>, light: ptr<function, LightPath>, rng:
     let hit = traverse_closest((*st).ray, T_INF);
     if hit.tri == NO_HIT {
         var w = 1.0;
-        if params.sky_pmf != 0.0 {
-            if !(*st).prev_delta {
-                w = power_heuristic((*st).prev_pdf, sky_pdf((*st).ray.dir));
-            } else if CAUSTICS && (*st).caustic_pdf > 0.0 {
-                w = caustic_sky_weight((*st).ray.origin, (*st).ray.dir, (*st).caustic_pdf);
-            }
+        if !(*st).prev_delta && params.sky_pmf != 0.0 {
+            w = power_heuristic((*st).prev_pdf, sky_pdf((*st).ray.dir));
         }
         (*st).radiance += (*st).beta * w * sky_radiance((*st).ray.dir);
         return true;

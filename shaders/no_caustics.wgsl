@@ -50,10 +50,6 @@ fn caustic_hit_weight(tri: u32, p: vec3<f32>, dir: vec3<f32>, cos_l: f32, pdf_bs
     return 1.0;
 }
 
-fn caustic_sky_weight(p: vec3<f32>, dir: vec3<f32>, pdf_bsdf: f32) -> f32 {
-    return 1.0;
-}
-
 fn camera_pdf(dir: vec3<f32>) -> f32 {
     return 0.0;
 }

@@ -14,9 +14,6 @@
 //!   through a mirror in a black floor, by its reflection, against the mirror's place as a
 //!   hole with the light's image shining up through it: a directional light's subpaths
 //!   start outside the scene, along lines through a disk across the mirror's target.
-//! - **A glass sphere under the sky**, with caustics and without: the sky's light subpaths
-//!   (lines from outside the scene) against BSDF sampling through the glass, which finds
-//!   a constant sky often enough to converge (the sky's weight forced to 1: z 82.7).
 //! - **Glass and mirror spheres under a large light**, with caustics and without: the path
 //!   tracer alone finds the caustics of a large light often enough to converge, so the two
 //!   renders estimate one image. The glass sphere's caustic on the floor, seen by the back
@@ -28,7 +25,7 @@
 //!   the glass, where the camera path meets them from inside too: the adjoint throughput's
 //!   refraction (no squared index ratio) is right only if the image is.
 //!
-//! The first four compare the image means of several seeds of both renders in blocks of
+//! The first three compare the image means of several seeds of both renders in blocks of
 //! pixels, as z scores against the seeds' spread: a wrong weight or throughput anywhere along the
 //! caustic paths moves whole regions by far more than their noise (a spot's falloff left
 //! out: z 14.6; a directional light's line density off by 20%: z 16.5).
@@ -585,55 +582,6 @@ fn caustics_keep_the_expected_image_of_glass_and_mirror_spheres_on_the_gpu() {
         None,
     );
     assert_same_image("glass and mirror spheres (GPU)", &test, &reference, 8);
-}
-
-/// tests/scenes/glass_dof.toml at 64 × 48 with a pinhole: a glass sphere on the ground under
-/// a constant sky, its only light. Light subpaths start from the sky, and the sky that BSDF
-/// sampling finds through the glass is weighed against them.
-fn sky_glass_scene(caustics: bool) -> (RenderScene, RenderSettings) {
-    let mut scene =
-        meshtrace::scene::load_scene(&common::fs::root().join("tests/scenes/glass_dof.toml"))
-            .expect("glass_dof");
-    scene.camera.aperture = 0.0;
-    scene.settings = RenderSettings {
-        width: 64,
-        height: 48,
-        spp: 64,
-        caustics,
-        ..scene.settings
-    };
-    let rs = RenderScene::new(&scene, &BuildParams::default()).unwrap();
-    (rs, scene.settings)
-}
-
-fn sky_check(gpu: Option<&meshtrace::render::gpu::GpuContext>) {
-    let (with, s) = sky_glass_scene(true);
-    assert!(!with.caustic_targets.is_empty(), "the glass is a target");
-    let test = renders(&with, s, 0..8, gpu);
-    let (without, s0) = sky_glass_scene(false);
-    let reference = renders(&without, RenderSettings { spp: 1024, ..s0 }, 30..36, None);
-    let device = if gpu.is_some() { "GPU" } else { "CPU" };
-    assert_same_image(
-        &format!("a glass sphere under the sky ({device})"),
-        &test,
-        &reference,
-        8,
-    );
-}
-
-/// The sky's caustics: light subpaths from the sky (lines through the target's disk from
-/// outside the scene) and BSDF sampling through the glass make one image.
-#[test]
-fn caustics_of_the_sky_keep_the_expected_image() {
-    sky_check(None);
-}
-
-#[test]
-fn caustics_of_the_sky_keep_the_expected_image_on_the_gpu() {
-    let Some(ctx) = common::gpu("caustics_of_the_sky_keep_the_expected_image_on_the_gpu") else {
-        return;
-    };
-    sky_check(Some(&ctx));
 }
 
 /// The dielectric furnace (see the top of the file): flat glass and mirror blocks, and a

@@ -127,16 +127,6 @@ fn gpu_replays_the_cpu_paths_with_caustics() {
     replay_with_caustics(&ctx, "tests/scenes/box_area.toml");
 }
 
-/// tests/scenes/glass_dof.toml: light subpaths from the sky through a glass sphere, seen
-/// through a thin lens.
-#[test]
-fn gpu_replays_the_cpu_paths_with_caustics_of_the_sky() {
-    let Some(ctx) = common::gpu("gpu_replays_the_cpu_paths_with_caustics_of_the_sky") else {
-        return;
-    };
-    replay_with_caustics(&ctx, "tests/scenes/glass_dof.toml");
-}
-
 /// tests/scenes/lights.toml: light subpaths from an area light and from point, spot and
 /// directional lights, through a glass sphere.
 #[test]

@@ -37,13 +37,11 @@
 //! densities as the cosines at their ends; where that is not exact (shading normals) the
 //! weights still sum to one, which is all unbiasedness needs.
 //!
-//! Emissive triangles, punctual lights (point, spot and directional) and the sky start
-//! light subpaths; a directional light's and the sky's along lines through disks across
-//! the targets ([`line_through_targets`]). A punctual light's subpath is the only strategy
-//! for its paths (BSDF sampling never reaches a point or a single direction), so its
-//! connections weigh 1 ([`link_weight`]): without light subpaths those caustics are
-//! missing, not noisy. The sky's are weighed against BSDF sampling as a triangle's are
-//! ([`caustic_sky_weight`]). Scenes without materials that may be delta (or
+//! Emissive triangles and punctual lights (point, spot and directional) start light
+//! subpaths. A punctual light's subpath is the only strategy for its paths (BSDF sampling
+//! never reaches a point or a single direction), so its connections weigh 1
+//! ([`link_weight`]): without light subpaths those caustics are missing, not noisy.
+//! Caustics of the sky stay with BSDF sampling alone. Scenes without materials that may be delta (or
 //! rendered with `caustics = false`) have no targets and trace no light subpath: their
 //! renders are the path tracer's alone.
 //!
@@ -53,21 +51,17 @@ use super::bsdf::{
     bsdf_draws_lobe, bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample, bsdf_transmits,
 };
 use super::camera::CameraRays;
-use super::environment::sample_env;
 use super::integrator::{
     ShadingFrame, SurfaceHit, geometry_agrees, offset_ray_origin, shading_frame, surface_at,
 };
-use super::lights::{LightPick, pick_light, sky_pdf, sky_radiance, spot_falloff};
+use super::lights::{LightPick, pick_light, spot_falloff};
 use super::rng::{self, Rng};
-use super::sampling::{
-    ONE_MINUS_EPSILON, UNIFORM_SPHERE_PDF, sample_concentric_disk, sample_uniform_sphere,
-    sample_uniform_triangle,
-};
+use super::sampling::{ONE_MINUS_EPSILON, sample_concentric_disk, sample_uniform_triangle};
 use super::texture::{alpha_test, material_at, triangle_uv};
 use super::{LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_SPOT, Light, RenderScene, SKY_EMITTER};
 use crate::geometry::{self, T_INF, TriVerts};
 use crate::math::{Aabb, Ray, onb_from_normal};
-use crate::scene::{Material, MaterialKind, NO_TEXTURE, Sky};
+use crate::scene::{Material, MaterialKind, NO_TEXTURE};
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
@@ -426,14 +420,24 @@ pub fn start_at_punctual(
     })
 }
 
-/// A line along unit `d` through the disk that faces it across one of the targets (picked
-/// in proportion to the disks' areas by `u.x`, rescaled, then a point of the disk), from a
-/// point outside [`RenderScene::scene_sphere`], so that whatever lies in its way still
-/// shades the target: where a directional light's or the sky's light subpath starts.
-/// Every line that meets a specular object crosses its target's disk. Returns the line's
-/// origin and its [`line_density`]; `None` where that is 0.
-/// mirror: shaders/caustics.wgsl `line_through_targets`
-pub fn line_through_targets(scene: &RenderScene, d: Vec3, u: Vec2) -> Option<(Vec3, f32)> {
+/// A light subpath's start from directional light `l` (picked with probability `pmf`): a
+/// line along its direction through the disk that faces it across one of the targets
+/// (picked in proportion to the disks' areas by the first number of the pair
+/// `DIM_CAUSTIC_DIR_U` of bounce 0, rescaled, then a point of the disk), starting outside
+/// [`RenderScene::scene_sphere`], so that whatever lies in the light's way still shades
+/// the target. Every line that meets a specular object crosses its target's disk, and the
+/// line's density across it is the number of disks it crosses over their total area. It
+/// carries the light's irradiance over that density; its pdf is 0, as a point light's:
+/// BSDF sampling never finds a directional light.
+/// mirror: shaders/caustics.wgsl `start_at_directional`
+pub fn start_at_directional(
+    scene: &RenderScene,
+    l: &Light,
+    pmf: f32,
+    rng: &Rng,
+) -> Option<LightSubpathStart> {
+    let d = Vec3::from(l.direction);
+    let u = rng.rng_2d(0, rng::DIM_CAUSTIC_DIR_U);
     let mut total = 0.0;
     for t in &scene.caustic_targets {
         total += t.radius * t.radius;
@@ -451,86 +455,24 @@ pub fn line_through_targets(scene: &RenderScene, d: Vec3, u: Vec2) -> Option<(Ve
     let disk = sample_concentric_disk(Vec2::new((x / r2).clamp(0.0, ONE_MINUS_EPSILON), u.y));
     let (t, b) = onb_from_normal(d);
     let s = Vec3::from(picked.center) + picked.radius * (disk.x * t + disk.y * b);
-    let density = line_density(scene, s, d);
-    if density.is_nan() || density <= 0.0 {
+    let mut count = 0.0;
+    for k in &scene.caustic_targets {
+        let off = s - Vec3::from(k.center);
+        let across = off - off.dot(d) * d;
+        if across.length_squared() <= k.radius * k.radius {
+            count += 1.0;
+        }
+    }
+    let pdf_line = LIGHT_SUBPATH_RATE * pmf * count / (PI * total);
+    if pdf_line.is_nan() || pdf_line <= 0.0 {
         return None;
     }
     let (center, radius) = scene.scene_sphere;
     let back = (s - center).length() + radius;
-    Some((s - back * d, density))
-}
-
-/// The density, per unit area across it, with which [`line_through_targets`] draws the
-/// line through `p` along unit `d`: the number of target disks it crosses over their total
-/// area. mirror: shaders/caustics.wgsl `line_density`
-pub fn line_density(scene: &RenderScene, p: Vec3, d: Vec3) -> f32 {
-    let mut total = 0.0;
-    let mut count = 0.0;
-    for k in &scene.caustic_targets {
-        let off = p - Vec3::from(k.center);
-        let across = off - off.dot(d) * d;
-        let r2 = k.radius * k.radius;
-        total += r2;
-        if across.length_squared() <= r2 {
-            count += 1.0;
-        }
-    }
-    if total > 0.0 {
-        count / (PI * total)
-    } else {
-        0.0
-    }
-}
-
-/// A light subpath's start from directional light `l` (picked with probability `pmf`): a
-/// [`line_through_targets`] along its direction, for the pair `DIM_CAUSTIC_DIR_U` of
-/// bounce 0, carrying the light's irradiance over the line's density. Its pdf is 0, as a
-/// point light's: BSDF sampling never finds a directional light.
-/// mirror: shaders/caustics.wgsl `start_at_directional`
-pub fn start_at_directional(
-    scene: &RenderScene,
-    l: &Light,
-    pmf: f32,
-    rng: &Rng,
-) -> Option<LightSubpathStart> {
-    let d = Vec3::from(l.direction);
-    let (origin, density) = line_through_targets(scene, d, rng.rng_2d(0, rng::DIM_CAUSTIC_DIR_U))?;
-    let pdf_line = LIGHT_SUBPATH_RATE * pmf * density;
-    if pdf_line.is_nan() || pdf_line <= 0.0 {
-        return None;
-    }
     Some(LightSubpathStart {
-        ray: Ray::new(origin, d),
+        ray: Ray::new(s - back * d, d),
         beta: Vec3::from(l.intensity) * (1.0 / pdf_line),
         pdf: 0.0,
-    })
-}
-
-/// A light subpath's start from the sky (picked by `pick`): a direction towards the sky from
-/// the pick's pair, as next event estimation draws it (an environment map's distribution,
-/// else uniform), and a [`line_through_targets`] along the light's way back from there,
-/// for the pair `DIM_CAUSTIC_DIR_U` of bounce 0. Its pdf, that of the direction times the
-/// line's density, is weighed against BSDF sampling, which finds the sky too
-/// ([`caustic_sky_weight`]). mirror: shaders/caustics.wgsl `start_at_sky`
-pub fn start_at_sky(scene: &RenderScene, pick: LightPick, rng: &Rng) -> Option<LightSubpathStart> {
-    let (w, pdf_w) = match scene.sky {
-        Sky::Environment { .. } => sample_env(scene, pick.u),
-        _ => (sample_uniform_sphere(pick.u), UNIFORM_SPHERE_PDF),
-    };
-    if pdf_w.is_nan() || pdf_w <= 0.0 {
-        return None;
-    }
-    let d = -w;
-    let (origin, density) = line_through_targets(scene, d, rng.rng_2d(0, rng::DIM_CAUSTIC_DIR_U))?;
-    // The sky's pick probability as next event estimation and `caustic_sky_weight` take it.
-    let pdf = LIGHT_SUBPATH_RATE * scene.sky_pmf * pdf_w * density;
-    if pdf.is_nan() || pdf <= 0.0 {
-        return None;
-    }
-    Some(LightSubpathStart {
-        ray: Ray::new(origin, d),
-        beta: sky_radiance(scene, w) * (1.0 / pdf),
-        pdf,
     })
 }
 
@@ -553,8 +495,8 @@ pub fn link_weight(pdf_bsdf: f32, lv: &LightVertex) -> f32 {
 /// keeps. From there it samples the adjoint BSDF (lobe and pair from the same dimensions
 /// of its bounce) and keeps the next non-delta vertex too if a specular chain leads to it,
 /// up to [`MAX_CAUSTIC_HOPS`] vertices. The subpath ends where it misses, meets a
-/// non-delta surface right after a non-delta vertex (or the light) ([`start_at_triangle`],
-/// [`start_at_punctual`] and [`start_at_sky`] start it). Returns the vertices and the rays traced.
+/// non-delta surface right after a non-delta vertex (or the light), or where the light
+/// picked is the sky ([`start_at_triangle`] and [`start_at_punctual`] start it). Returns the vertices and the rays traced.
 /// mirror: shaders/caustics.wgsl `trace_light_subpath`
 pub fn trace_light_subpath(scene: &RenderScene, rng: &Rng, max_segments: u32) -> (LightPath, u32) {
     let mut path = LightPath::NONE;
@@ -567,7 +509,7 @@ pub fn trace_light_subpath(scene: &RenderScene, rng: &Rng, max_segments: u32) ->
     let pick = pick_light(scene, rng.rng_2d(0, rng::DIM_CAUSTIC_LIGHT_U));
     let light = scene.emitters[pick.index];
     let Some(start) = (if light == SKY_EMITTER {
-        start_at_sky(scene, pick, rng)
+        None
     } else if light & LIGHT_EMITTER != 0 {
         start_at_punctual(scene, light & !LIGHT_EMITTER, pick.pmf, rng)
     } else {
@@ -805,16 +747,6 @@ pub fn caustic_hit_weight(
     }
     let area = geometry::triangle_area(&scene.tris[tri as usize]);
     let pdf_light = LIGHT_SUBPATH_RATE * pmf / area * target_pdf(scene, p, -dir) / cos_l;
-    caustic_weight(pdf_light / pdf_bsdf)
-}
-
-/// The weight of sky light that BSDF sampling found at the end of a specular chain,
-/// leaving its last vertex from `p` along unit `dir`, against the light subpath from the
-/// sky that could have made the same path ([`start_at_sky`]); `pdf_bsdf` is the path's
-/// [`PathState::caustic_pdf`](super::integrator::PathState::caustic_pdf).
-/// mirror: shaders/caustics.wgsl `caustic_sky_weight`
-pub fn caustic_sky_weight(scene: &RenderScene, p: Vec3, dir: Vec3, pdf_bsdf: f32) -> f32 {
-    let pdf_light = LIGHT_SUBPATH_RATE * sky_pdf(scene, dir) * line_density(scene, p, dir);
     caustic_weight(pdf_light / pdf_bsdf)
 }
 

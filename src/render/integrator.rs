@@ -14,7 +14,7 @@ use super::bsdf::{
 use super::camera::CameraRays;
 use super::caustics::{
     LightPath, MAX_CAUSTIC_HOPS, camera_link, camera_pdf, caustic_hit_weight, caustic_link,
-    caustic_sky_weight, trace_light_subpath,
+    trace_light_subpath,
 };
 use super::lights::{light_pdf, sample_light, sky_pdf, sky_radiance};
 use super::rng::{self, Rng};
@@ -220,14 +220,10 @@ pub fn path_step<const CAUSTICS: bool>(
     st.rays += 1;
     let Some(hit) = wide.traverse_closest(&st.ray, T_INF, |t, u, v| alpha_test(scene, t, u, v))
     else {
-        let w = if scene.sky_pmf == 0.0 {
+        let w = if st.prev_delta || scene.sky_pmf == 0.0 {
             1.0
-        } else if !st.prev_delta {
-            power_heuristic(st.prev_pdf, sky_pdf(scene, st.ray.dir))
-        } else if CAUSTICS && st.caustic_pdf > 0.0 {
-            caustic_sky_weight(scene, st.ray.origin, st.ray.dir, st.caustic_pdf)
         } else {
-            1.0
+            power_heuristic(st.prev_pdf, sky_pdf(scene, st.ray.dir))
         };
         st.radiance += st.beta * w * sky_radiance(scene, st.ray.dir);
         return true;
