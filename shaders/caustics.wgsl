@@ -138,7 +138,7 @@ fn start_at_triangle(light: u32, pick: LightPick, rng: Rng) -> LightSubpathStart
     if !(cos_m > 0.0 && pdf_dir > 0.0) {
         return no_light_subpath_start();
     }
-    let le = material_at(load_material(load_shading(light).material), triangle_uv(light, bary.x, bary.y)).emission;
+    let le = triangle_emission(light, bary);
     let pdf_point = LIGHT_SUBPATH_RATE * pick.pmf / triangle_area(tri);
     let pdf = pdf_point * pdf_dir / cos_m;
     if !(pdf > 0.0) {

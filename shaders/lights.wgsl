@@ -91,8 +91,13 @@ fn sample_light(p: vec3<f32>, ng: vec3<f32>, u_pair: vec2<f32>) -> LightSample {
     if !(cos_l > 0.0 && dist > 0.0) || (tri.v0.w != 0.0 && !alpha_test(light, bary.x, bary.y)) {
         return none;
     }
-    let le = material_at(load_material(load_shading(light).material), triangle_uv(light, bary.x, bary.y)).emission;
+    let le = triangle_emission(light, bary);
     return LightSample(origin, wi, dist * (1.0 - 1e-4), le, light_pdf(light, dist, cos_l), false, true);
+}
+
+// mirror: src/render/lights.rs `triangle_emission`
+fn triangle_emission(light: u32, bary: vec2<f32>) -> vec3<f32> {
+    return material_at(load_material(load_shading(light).material), triangle_uv(light, bary.x, bary.y)).emission;
 }
 
 // mirror: src/render/lights.rs `sample_punctual`

@@ -87,18 +87,24 @@ fn gpu_replays_the_cpu_paths() {
     assert!(same >= 0.99, "only {same} of pixels traced the same rays");
 }
 
-/// The same seed with caustic light subpaths: the GPU replays the CPU's paths and light
-/// subpaths, whose splats land in other pixels, so whole images agree to float rounding.
-fn replay_with_caustics(ctx: &meshtrace::render::gpu::GpuContext, file: &str) {
+/// Test scene `file` with caustics on, and its settings; it must have caustic targets.
+fn caustics_scene(file: &str) -> (meshtrace::render::RenderScene, RenderSettings) {
     let mut scene =
         meshtrace::scene::load_scene(&common::fs::root().join(file)).expect("test scene");
     scene.settings.caustics = true;
     let rs = meshtrace::render::RenderScene::new(&scene, &meshtrace::bvh::BuildParams::default())
         .expect("BVH");
-    assert!(!rs.caustic_targets.is_empty());
+    assert!(!rs.caustic_targets.is_empty(), "{file}: no caustic targets");
+    (rs, scene.settings)
+}
+
+/// The same seed with caustic light subpaths: the GPU replays the CPU's paths and light
+/// subpaths, whose splats land in other pixels, so whole images agree to float rounding.
+fn replay_with_caustics(ctx: &meshtrace::render::gpu::GpuContext, file: &str) {
+    let (rs, settings) = caustics_scene(file);
     let job = RenderJob::new(RenderSettings {
         spp: 16,
-        ..scene.settings
+        ..settings
     });
     let (gpu_film, cpu_film) = (gpu_render(ctx, &rs, &job), cpu_render(&rs, &job));
     let frac = fraction_close(&channels(&gpu_film), &channels(&cpu_film));
@@ -152,16 +158,8 @@ fn gpu_renders_are_deterministic() {
     assert_eq!(bits(&a), bits(&b));
     assert_eq!(a.channels, b.channels, "ray counts");
     // With caustics, whose splats the kernel adds atomically in whatever order they come.
-    let mut scene =
-        meshtrace::scene::load_scene(&common::fs::root().join("tests/scenes/box_area.toml"))
-            .expect("box_area");
-    scene.settings.caustics = true;
-    let rs = meshtrace::render::RenderScene::new(&scene, &meshtrace::bvh::BuildParams::default())
-        .expect("BVH");
-    let job = RenderJob::new(RenderSettings {
-        spp: 8,
-        ..scene.settings
-    });
+    let (rs, settings) = caustics_scene("tests/scenes/box_area.toml");
+    let job = RenderJob::new(RenderSettings { spp: 8, ..settings });
     let (a, b) = (gpu_render(&ctx, &rs, &job), gpu_render(&ctx, &rs, &job));
     assert_eq!(bits(&a), bits(&b), "renders with caustics");
 }
@@ -265,17 +263,12 @@ fn long_dispatches_with_caustics_replay_the_cpu_paths() {
     let Some(ctx) = common::gpu("long_dispatches_with_caustics_replay_the_cpu_paths") else {
         return;
     };
-    let mut scene =
-        meshtrace::scene::load_scene(&common::fs::root().join("tests/scenes/box_area.toml"))
-            .expect("box_area");
-    scene.settings.caustics = true;
-    let rs = meshtrace::render::RenderScene::new(&scene, &meshtrace::bvh::BuildParams::default())
-        .expect("BVH");
+    let (rs, settings) = caustics_scene("tests/scenes/box_area.toml");
     let s = RenderSettings {
         width: 24,
         height: 18,
         spp: 512,
-        ..scene.settings
+        ..settings
     };
     let job = RenderJob::new(s);
     let mut session = GpuRenderer::new(&ctx, &rs).unwrap();

@@ -54,10 +54,10 @@ use super::camera::CameraRays;
 use super::integrator::{
     ShadingFrame, SurfaceHit, geometry_agrees, offset_ray_origin, shading_frame, surface_at,
 };
-use super::lights::{LightPick, pick_light, spot_falloff};
+use super::lights::{LightPick, pick_light, spot_falloff, triangle_emission};
 use super::rng::{self, Rng};
 use super::sampling::{ONE_MINUS_EPSILON, sample_concentric_disk, sample_uniform_triangle};
-use super::texture::{alpha_test, material_at, triangle_uv};
+use super::texture::{alpha_test, material_at};
 use super::{LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_SPOT, Light, RenderScene, SKY_EMITTER};
 use crate::geometry::{self, T_INF, TriVerts};
 use crate::math::{Aabb, Ray, onb_from_normal};
@@ -353,12 +353,7 @@ pub fn start_at_triangle(
     if !(cos_m > 0.0 && pdf_dir > 0.0) {
         return None;
     }
-    let material = &scene.materials[scene.shading[light as usize].material as usize];
-    let le = if material.emission_texture != NO_TEXTURE {
-        material_at(scene, material, triangle_uv(scene, light, bary.x, bary.y)).emission
-    } else {
-        material.emission
-    };
+    let le = triangle_emission(scene, light, bary);
     let pdf_point = LIGHT_SUBPATH_RATE * pick.pmf / scene.emitter_areas[pick.index];
     let pdf = pdf_point * pdf_dir / cos_m;
     if pdf.is_nan() || pdf <= 0.0 {

@@ -143,12 +143,7 @@ pub fn sample_light(scene: &RenderScene, p: Vec3, ng: Vec3, u: Vec2) -> Option<L
     {
         return None;
     }
-    let material = &scene.materials[scene.shading[light as usize].material as usize];
-    let le = if material.emission_texture != NO_TEXTURE {
-        material_at(scene, material, triangle_uv(scene, light, bary.x, bary.y)).emission
-    } else {
-        material.emission
-    };
+    let le = triangle_emission(scene, light, bary);
     Some(LightSample {
         origin,
         wi,
@@ -162,6 +157,18 @@ pub fn sample_light(scene: &RenderScene, p: Vec3, ng: Vec3, u: Vec2) -> Option<L
         ),
         delta: false,
     })
+}
+
+/// The radiance emitted at barycentric point `bary` of emissive triangle `light`: its
+/// material's emission, or its emission texture there.
+/// mirror: shaders/lights.wgsl `triangle_emission`
+pub fn triangle_emission(scene: &RenderScene, light: u32, bary: Vec2) -> Vec3 {
+    let material = &scene.materials[scene.shading[light as usize].material as usize];
+    if material.emission_texture != NO_TEXTURE {
+        material_at(scene, material, triangle_uv(scene, light, bary.x, bary.y)).emission
+    } else {
+        material.emission
+    }
 }
 
 /// The shadow ray and arriving radiance of punctual light `index`, picked with probability
