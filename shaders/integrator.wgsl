@@ -107,8 +107,48 @@ fn connect_light_vertex(st: ptr<function, PathState>, si: SurfaceHit, mat: Mater
     }
 }
 
-// One bounce; true when the path has ended. mirror: src/render/integrator.rs `path_step`
+// One bounce: path_vertex, connect_light_path and path_continue; true when the path has
+// ended. mirror: src/render/integrator.rs `path_step`
 fn path_step(st: ptr<function, PathState>, light: ptr<function, LightPath>, rng: Rng) -> bool {
+    let v = path_vertex(st, rng, 1u);
+    if !v.valid {
+        return true;
+    }
+    connect_light_path(st, v, light);
+    return path_continue(st, v, rng);
+}
+
+// A path vertex whose BSDF is still to be sampled. mirror: src/render/integrator.rs `PathVertex`
+struct PathVertex {
+    si: SurfaceHit,
+    mat: Material,
+    sf: ShadingFrame,
+    wo_world: vec3<f32>,
+    wo: vec3<f32>,
+    area_pdf: f32,
+    u_lobe: f32,
+    u: vec2<f32>,
+    // False where the path has ended (no vertex).
+    valid: bool,
+}
+
+// mirror: src/render/integrator.rs `bsdf_numbers`
+fn bsdf_numbers(mat: Material, depth: u32, rng: Rng, v: ptr<function, PathVertex>) {
+    (*v).u_lobe = 0.0;
+    if bsdf_draws_lobe(mat) {
+        (*v).u_lobe = rng_1d(rng, depth, DIM_BSDF_LOBE);
+    }
+    (*v).u = vec2<f32>(0.0);
+    if bsdf_draws_direction(mat) {
+        (*v).u = rng_2d(rng, depth, DIM_BSDF_U);
+    }
+}
+
+// The first half of a bounce: the hit, its emission and next event estimation.
+// mirror: src/render/integrator.rs `path_vertex`
+fn path_vertex(st: ptr<function, PathState>, rng: Rng, branches: u32) -> PathVertex {
+    var v: PathVertex;
+    v.valid = false;
     // The light pair, drawn before the traversal (as on the CPU, where that hides its
     // latency; on a miss, a delta material or the last segment it goes unused).
     var u_light = vec2<f32>(0.0);
@@ -123,7 +163,7 @@ fn path_step(st: ptr<function, PathState>, light: ptr<function, LightPath>, rng:
             w = power_heuristic((*st).prev_pdf, sky_pdf((*st).ray.dir));
         }
         (*st).radiance += (*st).beta * w * sky_radiance((*st).ray.dir);
-        return true;
+        return v;
     }
     let si = surface_at((*st).ray, hit);
     let mat = material_at(load_material(si.material), si.uv);
@@ -145,7 +185,7 @@ fn path_step(st: ptr<function, PathState>, light: ptr<function, LightPath>, rng:
         area_pdf = (*st).prev_pdf * abs(dot((*st).ray.dir, si.ng)) / (hit.t * hit.t);
     }
     if (*st).depth + 1u >= params.max_depth {
-        return true;
+        return v;
     }
     let wo_world = -(*st).ray.dir;
     let sf = shading_frame(mat, si, wo_world);
@@ -154,14 +194,10 @@ fn path_step(st: ptr<function, PathState>, light: ptr<function, LightPath>, rng:
     let wo = wo_world * frame;
 
     // The numbers BSDF sampling reads, drawn only where the material reads them (before
-    // next event estimation, as on the CPU, where that hides their latency).
-    var u_lobe = 0.0;
-    if bsdf_draws_lobe(mat) {
-        u_lobe = rng_1d(rng, (*st).depth, DIM_BSDF_LOBE);
-    }
-    var u = vec2<f32>(0.0);
-    if bsdf_draws_direction(mat) {
-        u = rng_2d(rng, (*st).depth, DIM_BSDF_U);
+    // next event estimation, as on the CPU, where that hides their latency), and only
+    // where the path does not branch here.
+    if branches == 1u {
+        bsdf_numbers(mat, (*st).depth, rng, &v);
     }
 
     // Next event estimation.
@@ -185,16 +221,40 @@ fn path_step(st: ptr<function, PathState>, light: ptr<function, LightPath>, rng:
         }
     }
 
-    // Caustic connections: to each vertex of the sample's light subpath that leaves the
-    // path room for the link and the subpath's segments.
-    if caustics && !bsdf_is_delta(mat) {
-        for (var k = 0u; k < (*light).count; k++) {
-            connect_light_vertex(st, si, mat, sf, wo_world, wo, (*light).vertices[k]);
-        }
-    }
+    v.si = si;
+    v.mat = mat;
+    v.sf = sf;
+    v.wo_world = wo_world;
+    v.wo = wo;
+    v.area_pdf = area_pdf;
+    v.valid = true;
+    return v;
+}
 
+// Caustic connections: vertex v (where it is not delta) to each vertex of the light subpath
+// that leaves the path room for the link and the subpath's segments.
+// mirror: src/render/integrator.rs `connect_light_path`
+fn connect_light_path(st: ptr<function, PathState>, v: PathVertex, light: ptr<function, LightPath>) {
+    if !(CAUSTICS && params.num_caustic_targets != 0u) || bsdf_is_delta(v.mat) {
+        return;
+    }
+    for (var k = 0u; k < (*light).count; k++) {
+        connect_light_vertex(st, v.si, v.mat, v.sf, v.wo_world, v.wo, (*light).vertices[k]);
+    }
+}
+
+// The second half of a bounce: BSDF sampling at v and Russian roulette; true when the path
+// has ended. mirror: src/render/integrator.rs `path_continue`
+fn path_continue(st: ptr<function, PathState>, v: PathVertex, rng: Rng) -> bool {
+    let si = v.si;
+    let mat = v.mat;
+    let wo_world = v.wo_world;
+    let wo = v.wo;
+    let frame = v.sf.m;
+    let area_pdf = v.area_pdf;
+    let caustics = CAUSTICS && params.num_caustic_targets != 0u;
     // BSDF sampling.
-    let bs = bsdf_sample(mat, wo, u_lobe, u);
+    let bs = bsdf_sample(mat, wo, v.u_lobe, v.u);
     if !bs.valid {
         return true;
     }
@@ -294,26 +354,89 @@ fn seen_camera_link(lv: LightVertex, rng: Rng) -> SeenLink {
     return out;
 }
 
-// mirror: src/render/integrator.rs `PathSample`
+// What a camera sample adds to the film: its radiance and rays, and for the tests its
+// light subpaths' splats, summed (their values, and the pixels of those that land).
+// mirror: src/render/integrator.rs `PathSample` (whose splats go to a closure instead)
 struct PathSample {
     radiance: vec3<f32>,
     rays: u32,
-    splat_pixels: array<u32, MAX_CAUSTIC_HOPS>,
-    splats: array<vec3<f32>, MAX_CAUSTIC_HOPS>,
+    splat_sum: vec3<f32>,
+    splat_pixel_sum: u32,
 }
 
-// mirror: src/render/integrator.rs `trace_path`
+// The shader tests' camera sample; the render kernel (render.wgsl) runs the same steps in
+// its loop of persistent paths. mirror: src/render/integrator.rs `trace_path`
 fn trace_path(ray: Ray, rng: Rng) -> PathSample {
-    let ls = start_light(rng);
-    var light = ls.light;
     var st = path_start(ray, camera_pdf(ray.dir));
-    st.rays = ls.rays;
-    loop {
-        if path_step(&st, &light, rng) {
-            break;
-        }
+    let v = path_vertex(&st, rng, params.branches);
+    var out = PathSample(st.radiance, st.rays, vec3<f32>(0.0), 0u);
+    if !(CAUSTICS && params.num_caustic_targets != 0u) && !v.valid {
+        return out;
     }
-    return PathSample(st.radiance, st.rays, ls.splat_pixels, ls.splats);
+    var sum = vec3<f32>(0.0);
+    for (var j = 0u; j < params.branches; j++) {
+        var b = branch_start(st, v, rng, j, params.branches);
+        for (var k = 0u; k < MAX_CAUSTIC_HOPS; k++) {
+            if any(b.ls.splats[k] != vec3<f32>(0.0)) {
+                out.splat_sum += b.ls.splats[k];
+                out.splat_pixel_sum += b.ls.splat_pixels[k];
+            }
+        }
+        var light = b.ls.light;
+        var bst = b.st;
+        if !b.ended {
+            loop {
+                if path_step(&bst, &light, b.rng) {
+                    break;
+                }
+            }
+        }
+        sum += bst.radiance;
+        out.rays += bst.rays;
+    }
+    out.radiance += sum * params.branch_weight;
+    return out;
+}
+
+// mirror: src/render/integrator.rs `branch_sample`
+fn branch_sample(sample: u32, j: u32, k: u32) -> u32 {
+    return sample * k + j;
+}
+
+// A branch of a camera sample, ready for path_step. mirror: src/render/integrator.rs `Branch`
+struct Branch {
+    st: PathState,
+    ls: LightStart,
+    rng: Rng,
+    ended: bool,
+}
+
+// Branch j of the k of the camera sample of stream rng, whose path base reached first
+// vertex v (not valid: the path ended there). mirror: src/render/integrator.rs `branch_start`
+fn branch_start(base: PathState, v: PathVertex, rng: Rng, j: u32, k: u32) -> Branch {
+    let branch_rng = Rng(rng.pixel, branch_sample(rng.sample, j, k), rng.seed);
+    var b: Branch;
+    b.ls = start_light(branch_rng);
+    // (Pointer arguments must point at whole variables: the path is one of its own here.)
+    var st = base;
+    st.radiance = vec3<f32>(0.0);
+    st.rays = b.ls.rays;
+    b.rng = branch_rng;
+    b.ended = true;
+    for (var i = 0u; i < MAX_CAUSTIC_HOPS; i++) {
+        b.ls.splats[i] *= params.branch_weight;
+    }
+    if v.valid {
+        var light = b.ls.light;
+        connect_light_path(&st, v, &light);
+        var w = v;
+        if k > 1u {
+            bsdf_numbers(v.mat, base.depth, branch_rng, &w);
+        }
+        b.ended = path_continue(&st, w, branch_rng);
+    }
+    b.st = st;
+    return b;
 }
 
 // What the AOVs read of a camera ray's first hit. mirror: src/render/integrator.rs `FirstHit`

@@ -85,11 +85,11 @@ fn set_aov_ids(sums: ptr<function, AovSums>, fh: FirstHit) {
     (*sums).t[5] = texel_add(none, vec4<f32>(f32(fh.material & 0xffffu), f32(fh.material >> 16u), 0.0, 1.0));
 }
 
-// A sample's camera ray and its light subpath (`ls`, whose splats wait for the sample's
-// end). With AOVs, also adds its first hit to `sums` (and with sample 0 the pixel-centre
-// ray's ids), and returns in `seen` whether its radiance counts: not in a transparent
-// render where it misses.
-fn start_sample(x: u32, y: u32, s: u32, rng: Rng, sums: ptr<function, AovSums>, seen: ptr<function, bool>, ls: ptr<function, LightStart>) -> PathState {
+// A sample's camera ray and its first vertex (`v`, whose BSDF its branches sample); returns
+// the path there. With AOVs, also adds its first hit to `sums` (and with sample 0 the
+// pixel-centre ray's ids), and returns in `seen` whether its radiance counts: not in a
+// transparent render where it misses.
+fn start_sample(x: u32, y: u32, s: u32, rng: Rng, sums: ptr<function, AovSums>, seen: ptr<function, bool>, v: ptr<function, PathVertex>) -> PathState {
     let ray = generate_camera_ray(x, y, rng);
     *seen = true;
     if params.aovs != 0u {
@@ -100,10 +100,18 @@ fn start_sample(x: u32, y: u32, s: u32, rng: Rng, sums: ptr<function, AovSums>, 
             set_aov_ids(sums, first_hit(pixel_centre_ray(x, y)));
         }
     }
-    *ls = start_light(rng);
     var st = path_start(ray, camera_pdf(ray.dir));
-    st.rays = (*ls).rays;
+    *v = path_vertex(&st, rng, params.branches);
     return st;
+}
+
+// The branches of a sample whose first vertex is `v`: none where the path ended there and
+// there are no light subpaths to trace. mirror: src/render/integrator.rs `camera_sample`
+fn sample_branches(v: PathVertex) -> u32 {
+    if !(CAUSTICS && params.num_caustic_targets != 0u) && !v.valid {
+        return 0u;
+    }
+    return params.branches;
 }
 
 // mirror: src/render/cpu.rs `render_pixel`
@@ -138,8 +146,8 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         report_checks();
         return;
     }
-    // Persistent paths: a lane whose path ends starts its next sample at once, so the lanes
-    // of a SIMD group do not all wait for the longest path of every sample.
+    // Persistent paths: a lane whose path ends starts its next branch or sample at once, so
+    // the lanes of a SIMD group do not all wait for the longest path of every sample.
     var sums = AovSums();
     for (var k = 0u; k < 7u; k++) {
         if (params.aovs & (1u << k)) != 0u {
@@ -147,30 +155,62 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
     var seen = true;
-    var ls: LightStart;
     var rng = Rng(pixel, s, params.seed);
-    var st = start_sample(x, y, s, rng, &sums, &seen, &ls);
-    // (A variable of its own: a pointer argument must point at a whole variable.)
-    var light = ls.light;
+    var v0: PathVertex;
+    var first = start_sample(x, y, s, rng, &sums, &seen, &v0);
+    // The sample's branches: the next to start (j of k), the one being traced (b, whose
+    // light subpath is `light` and path `bst`), their radiance so far and the sample's
+    // rays. (nb is k.)
+    var nb = sample_branches(v0);
+    var j = 0u;
+    var b: Branch;
+    var light: LightPath;
+    var bst: PathState;
+    var running = false;
+    var sum = vec3<f32>(0.0);
+    var sample_rays = first.rays;
     loop {
-        if path_step(&st, &light, rng) {
-            if is_finite3(st.radiance) && seen {
-                radiance = texel_add(radiance, vec4<f32>(st.radiance, 0.0));
+        if running {
+            if path_step(&bst, &light, b.rng) {
+                running = false;
+                sum += bst.radiance;
+                sample_rays += bst.rays;
             }
-            rays = texel_add(rays, vec4<f32>(f32(st.rays), 0.0, 0.0, 0.0));
+            continue;
+        }
+        if j < nb {
+            b = branch_start(first, v0, rng, j, nb);
+            j += 1u;
             if CAUSTICS {
-                for (var k = 0u; k < MAX_CAUSTIC_HOPS; k++) {
-                    add_splat(ls.splat_pixels[k], ls.splats[k]);
+                for (var i = 0u; i < MAX_CAUSTIC_HOPS; i++) {
+                    add_splat(b.ls.splat_pixels[i], b.ls.splats[i]);
                 }
             }
-            s += 1u;
-            if s >= params.sample_end {
-                break;
+            light = b.ls.light;
+            bst = b.st;
+            if b.ended {
+                sum += b.st.radiance;
+                sample_rays += b.st.rays;
+            } else {
+                running = true;
             }
-            rng = Rng(pixel, s, params.seed);
-            st = start_sample(x, y, s, rng, &sums, &seen, &ls);
-            light = ls.light;
+            continue;
         }
+        let sample_radiance = first.radiance + sum * params.branch_weight;
+        if is_finite3(sample_radiance) && seen {
+            radiance = texel_add(radiance, vec4<f32>(sample_radiance, 0.0));
+        }
+        rays = texel_add(rays, vec4<f32>(f32(sample_rays), 0.0, 0.0, 0.0));
+        s += 1u;
+        if s >= params.sample_end {
+            break;
+        }
+        rng = Rng(pixel, s, params.seed);
+        first = start_sample(x, y, s, rng, &sums, &seen, &v0);
+        nb = sample_branches(v0);
+        j = 0u;
+        sum = vec3<f32>(0.0);
+        sample_rays = first.rays;
     }
     var rounds = 0u;
     let bound = 2u + atomicLoad(&status[1]);

@@ -158,8 +158,8 @@ fn test_first_hit(@builtin(global_invocation_id) gid: vec3<u32>) {
     case_out(i, vec4<u32>(select(0u, 1u, fh.hit), fh.cost, fh.material, fh.object), u4(vec4<f32>(fh.normal, depth)));
 }
 
-// in: (x, y, sample, _) | out: (radiance xyz, rays), (splat values summed xyz, the
-// pixels of the splats, 16 bits each)
+// in: (x, y, sample, _) | out: (radiance xyz, rays), (splat values summed xyz, the sum of
+// the pixels of the splats that land)
 @compute @workgroup_size(64)
 fn test_trace_path(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = case_index(gid);
@@ -167,9 +167,7 @@ fn test_trace_path(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = case_in(i, 0u);
     let rng = Rng(k.y * params.width + k.x, k.z, params.seed);
     let p = trace_path(generate_camera_ray(k.x, k.y, rng), rng);
-    let splat = p.splats[0] + p.splats[1];
-    let pixels = (p.splat_pixels[0] & 0xffffu) | (p.splat_pixels[1] << 16u);
-    case_out(i, vec4<u32>(u4(vec4<f32>(p.radiance, 0.0)).xyz, p.rays), vec4<u32>(u4(vec4<f32>(splat, 0.0)).xyz, pixels));
+    case_out(i, vec4<u32>(u4(vec4<f32>(p.radiance, 0.0)).xyz, p.rays), vec4<u32>(u4(vec4<f32>(p.splat_sum, 0.0)).xyz, p.splat_pixel_sum));
 }
 
 // in: (x, y, sample, _) | out: the light subpath's (vertex count, rays of start_light,

@@ -74,7 +74,7 @@ struct CausticTarget {
     radius: f32,
 }
 
-// mirror: src/render/gpu/params.rs `Params` (192 bytes): one dispatch's camera, sky and range.
+// mirror: src/render/gpu/params.rs `Params` (208 bytes): one dispatch's camera, sky and range.
 struct Params {
     cam_position: vec3<f32>,
     width: u32,
@@ -115,11 +115,17 @@ struct Params {
     transparent: u32,
     // Spheres in the caustic targets table; 0 traces no light subpaths.
     num_caustic_targets: u32,
-    _pad0: u32,
+    // The branches of each camera sample at its first hit, and 1 / branches as the host
+    // computes it (src/render/integrator.rs `branch_weight`).
+    branches: u32,
     // A sphere around every triangle, outside which a directional light's light subpaths
     // start.
     scene_center: vec3<f32>,
     scene_radius: f32,
+    branch_weight: f32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 

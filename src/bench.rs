@@ -351,6 +351,7 @@ pub fn bench_scene(
         max_depth: scene.settings.max_depth,
         seed: 0,
         caustics: scene.settings.caustics,
+        branches: scene.settings.branches,
     };
     let job = RenderJob::new(settings);
     let samples = opts.width as f64 * opts.height as f64 * opts.spp as f64;

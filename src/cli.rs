@@ -241,6 +241,11 @@ pub struct RenderArgs {
     /// [render] caustics; else on].
     #[arg(long, value_name = "on|off", value_parser = clap::builder::BoolishValueParser::new())]
     pub caustics: Option<bool>,
+    /// Paths each camera sample branches into at its first hit: the samples of indirect
+    /// light per camera sample (1 to 64; powers of two stratify best) [scene's [render]
+    /// branches; else 4, or 1 in a render with caustic light subpaths].
+    #[arg(long)]
+    pub branches: Option<u32>,
     #[command(flatten)]
     pub on: DeviceArgs,
     /// Print nothing but warnings and errors.
@@ -427,6 +432,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     s.max_depth = args.max_depth.unwrap_or(s.max_depth);
     s.seed = args.seed.unwrap_or(s.seed);
     s.caustics = args.caustics.unwrap_or(s.caustics);
+    s.branches = args.branches.or(s.branches);
     if let Err((field, message)) = validate_settings(s) {
         bail!("--{}: {message}", field.replace('_', "-"));
     }

@@ -1015,28 +1015,26 @@ fn replay_paths(
         let rng = Rng::new(y * settings.width + x, sample, settings.seed);
         let cam = CameraRays::new(&rs.camera, settings.width, settings.height);
         let ray = generate_camera_ray(&cam, x, y, &rng);
-        let ps = trace_path(rs, &cam, ray, &rng, settings.max_depth);
+        // The light subpaths' splats: their values summed, and the sum of their pixels.
+        let (mut splat, mut pixels) = (Vec3::ZERO, 0u32);
+        let ps = trace_path(
+            rs,
+            &cam,
+            ray,
+            &rng,
+            settings.max_depth,
+            settings.branches(!rs.caustic_targets.is_empty()),
+            &mut |pixel, value| {
+                splat += value;
+                pixels = pixels.wrapping_add(pixel);
+            },
+        );
         let (l, rays) = (ps.radiance, ps.rays);
         let (gl, grays) = (v3(o[0]), o[0][3] as f32);
         let near = |a: Vec3, b: Vec3| {
             (0..3).all(|i| (a[i] - b[i]).abs() <= 1e-3 * a[i].abs().max(b[i].abs()) + 1e-4)
         };
-        // The light subpath's splats: their values summed, and their pixels where they land.
-        let splat = ps.splats.iter().sum::<Vec3>();
-        let pixels = (0..2)
-            .map(|k| {
-                if ps.splats[k] == Vec3::ZERO {
-                    0
-                } else {
-                    ps.splat_pixels[k]
-                }
-            })
-            .collect::<Vec<u32>>();
-        let gpu_pixels = [o[1][3] & 0xffff, o[1][3] >> 16]
-            .iter()
-            .zip(&ps.splats)
-            .map(|(&p, v)| if *v == Vec3::ZERO { 0 } else { p })
-            .collect::<Vec<u32>>();
+        let gpu_pixels = o[1][3];
         splats += (splat != Vec3::ZERO) as usize;
         let close = near(l, gl) && near(splat, v3(o[1])) && pixels == gpu_pixels;
         radiance_ok += close as usize;

@@ -287,15 +287,18 @@ pub fn render_pixel(
                 set_aov_ids(aov, &first_hit(scene, &pixel_centre_ray(cam, x, y)));
             }
         }
-        let ps = trace_path(scene, cam, ray, &rng, s.max_depth);
+        let ps = trace_path(
+            scene,
+            cam,
+            ray,
+            &rng,
+            s.max_depth,
+            s.branches(!scene.caustic_targets.is_empty()),
+            &mut |pixel, value| splats.add(pixel, value),
+        );
         acc.rays = fixed_add(acc.rays, to_fixed(ps.rays as f32));
         if ps.radiance.is_finite() && seen {
             acc.radiance = fixed_add3(acc.radiance, to_fixed3(ps.radiance));
-        }
-        if !scene.caustic_targets.is_empty() {
-            for (&pixel, &value) in ps.splat_pixels.iter().zip(&ps.splats) {
-                splats.add(pixel, value);
-            }
         }
     }
     acc

@@ -27,6 +27,7 @@ use crate::geometry::T_INF;
 use crate::math::{Ray, onb_from_normal};
 use crate::scene::{Material, MaterialKind};
 use glam::{Vec2, Vec3};
+use std::mem::MaybeUninit;
 
 /// Path depth (in bounces) from which Russian roulette may end a path.
 /// The shaders get it from `render::gpu::shader::shared_constants`.
@@ -196,10 +197,8 @@ pub fn path_start(ray: Ray, camera_pdf: f32) -> PathState {
     }
 }
 
-/// One bounce: traces `st.ray`, adds the emission it finds, next event estimation and the
-/// connections to the vertices of the sample's light subpath `light` at the hit, then
-/// samples the BSDF for the next ray. Returns true when the path has ended.
-/// mirror: shaders/integrator.wgsl `path_step`
+/// One bounce: [`path_vertex`], [`connect_light_path`] and [`path_continue`]. Returns
+/// true when the path has ended. mirror: shaders/integrator.wgsl `path_step`
 #[inline(always)]
 pub fn path_step<const CAUSTICS: bool>(
     scene: &RenderScene,
@@ -208,6 +207,79 @@ pub fn path_step<const CAUSTICS: bool>(
     rng: &Rng,
     max_depth: u32,
 ) -> bool {
+    let mut textured = MaybeUninit::uninit();
+    match path_vertex::<CAUSTICS>(scene, st, rng, max_depth, 1, &mut textured) {
+        Some(v) => {
+            if CAUSTICS {
+                connect_light_path(scene, st, &v, light, max_depth);
+            }
+            path_continue::<CAUSTICS>(st, &v, rng)
+        }
+        None => true,
+    }
+}
+
+/// Caustic connections: vertex `v` (where it is not delta) to each vertex of the light
+/// subpath `light` that leaves the path room for the link and the subpath's segments.
+/// mirror: shaders/integrator.wgsl `connect_light_path`
+#[inline(always)]
+pub fn connect_light_path(
+    scene: &RenderScene,
+    st: &mut PathState,
+    v: &PathVertex,
+    light: &LightPath,
+    max_depth: u32,
+) {
+    if bsdf_is_delta(v.mat) {
+        return;
+    }
+    for lv in &light.vertices[..light.count as usize] {
+        if st.depth + 2 + lv.segments <= max_depth
+            && let Some(link) = caustic_link(scene, &v.si, v.mat, &v.frame, v.wo_world, v.wo, lv)
+        {
+            st.rays += 1;
+            if !scene
+                .wide
+                .traverse_any(&link.ray, link.t_max, |t, u, v| alpha_test(scene, t, u, v))
+            {
+                st.radiance += st.beta * link.value;
+            }
+        }
+    }
+}
+
+/// A path vertex whose BSDF is still to be sampled: what [`path_continue`] needs of it.
+/// mirror: shaders/integrator.wgsl `PathVertex`
+#[derive(Clone, Copy, Debug)]
+pub struct PathVertex<'a> {
+    pub si: SurfaceHit,
+    /// The material there, its textures applied (a copy of the scene's where it has any).
+    pub mat: &'a Material,
+    pub frame: ShadingFrame,
+    pub wo_world: Vec3,
+    /// `wo_world` in `frame`.
+    pub wo: Vec3,
+    /// The camera's (or BSDF sampling's) density of this vertex in area, where a light
+    /// subpath ending here could have been connected to the camera path; else 0.
+    pub area_pdf: f32,
+    /// The numbers BSDF sampling reads ([`bsdf_numbers`]).
+    pub u_lobe: f32,
+    pub u: Vec2,
+}
+
+/// The first half of a bounce: traces `st.ray`, adds the emission it finds and next event
+/// estimation at the hit. Returns the vertex to sample the BSDF at (whose numbers it draws
+/// where the path does not branch there: `branches` 1), or `None` when the path has ended.
+/// mirror: shaders/integrator.wgsl `path_vertex`
+#[inline(always)]
+pub fn path_vertex<'a, const CAUSTICS: bool>(
+    scene: &'a RenderScene,
+    st: &mut PathState,
+    rng: &Rng,
+    max_depth: u32,
+    branches: u32,
+    textured: &'a mut MaybeUninit<Material>,
+) -> Option<PathVertex<'a>> {
     // The CPU traverses the wide tree, which finds the hits the GPU's binary tree finds.
     let wide = &scene.wide;
     // The light pair, drawn before the traversal so that its hashes run in the traversal's
@@ -226,15 +298,13 @@ pub fn path_step<const CAUSTICS: bool>(
             power_heuristic(st.prev_pdf, sky_pdf(scene, st.ray.dir))
         };
         st.radiance += st.beta * w * sky_radiance(scene, st.ray.dir);
-        return true;
+        return None;
     };
     let si = surface_at(scene, &st.ray, &hit);
     // A material without textures is used where it lies (no copy); the WGSL copies anyway.
     let base = &scene.materials[si.material as usize];
-    let textured;
     let mat = if base.has_texture() {
-        textured = material_at(scene, base, si.uv);
-        &textured
+        &*textured.write(material_at(scene, base, si.uv))
     } else {
         base
     };
@@ -260,7 +330,7 @@ pub fn path_step<const CAUSTICS: bool>(
     };
     // Segments so far: depth + 1. Both light sampling and continuing add one more.
     if st.depth + 1 >= max_depth {
-        return true;
+        return None;
     }
     let wo_world = -st.ray.dir;
     let frame = shading_frame(mat, &si, wo_world);
@@ -269,15 +339,11 @@ pub fn path_step<const CAUSTICS: bool>(
 
     // The numbers BSDF sampling reads, drawn only where the material reads them, and
     // before next event estimation, whose shadow ray then hides their hashes' latency.
-    let u_lobe = if bsdf_draws_lobe(mat) {
-        rng.rng_1d(st.depth, rng::DIM_BSDF_LOBE)
+    // A vertex whose BSDF is sampled by branches of their own draws none.
+    let (u_lobe, u) = if branches == 1 {
+        bsdf_numbers(mat, st.depth, rng)
     } else {
-        0.0
-    };
-    let u = if bsdf_draws_direction(mat) {
-        rng.rng_2d(st.depth, rng::DIM_BSDF_U)
-    } else {
-        Vec2::ZERO
+        (0.0, Vec2::ZERO)
     };
 
     // Next event estimation.
@@ -312,22 +378,44 @@ pub fn path_step<const CAUSTICS: bool>(
         }
     }
 
-    // Caustic connections: the first hit to each vertex of the sample's light subpath that
-    // leaves the path room for the link and the subpath's segments.
-    if caustics && !bsdf_is_delta(mat) {
-        for lv in &light.vertices[..light.count as usize] {
-            if st.depth + 2 + lv.segments <= max_depth
-                && let Some(link) = caustic_link(scene, &si, mat, &frame, wo_world, wo, lv)
-            {
-                st.rays += 1;
-                if !wide.traverse_any(&link.ray, link.t_max, |t, u, v| alpha_test(scene, t, u, v)) {
-                    st.radiance += st.beta * link.value;
-                }
-            }
-        }
-    }
+    Some(PathVertex {
+        si,
+        mat,
+        frame,
+        wo_world,
+        wo,
+        area_pdf,
+        u_lobe,
+        u,
+    })
+}
 
-    // BSDF sampling.
+/// The numbers BSDF sampling at bounce `depth` reads from `rng` (lobe, direction), drawn
+/// only where `mat` reads them. mirror: shaders/integrator.wgsl `bsdf_numbers`
+#[inline(always)]
+pub fn bsdf_numbers(mat: &Material, depth: u32, rng: &Rng) -> (f32, Vec2) {
+    let u_lobe = if bsdf_draws_lobe(mat) {
+        rng.rng_1d(depth, rng::DIM_BSDF_LOBE)
+    } else {
+        0.0
+    };
+    let u = if bsdf_draws_direction(mat) {
+        rng.rng_2d(depth, rng::DIM_BSDF_U)
+    } else {
+        Vec2::ZERO
+    };
+    (u_lobe, u)
+}
+
+/// The second half of a bounce: samples the BSDF at vertex `v` for the next ray, and
+/// Russian roulette. Returns true when the path has ended.
+/// mirror: shaders/integrator.wgsl `path_continue`
+#[inline(always)]
+pub fn path_continue<const CAUSTICS: bool>(st: &mut PathState, v: &PathVertex, rng: &Rng) -> bool {
+    let (si, mat, frame, wo_world, wo) = (&v.si, &v.mat, &v.frame, v.wo_world, v.wo);
+    let (u_lobe, u) = (v.u_lobe, v.u);
+    let caustics = CAUSTICS;
+    let area_pdf = v.area_pdf;
     let Some(bs) = bsdf_sample(mat, wo, u_lobe, u) else {
         return true;
     };
@@ -359,7 +447,7 @@ pub fn path_step<const CAUSTICS: bool>(
             // density joins the product.
             let cos_out = wi_world.dot(si.ng).abs();
             let cos_in = wo_world.dot(si.ng).abs();
-            let back = shading_frame(mat, &si, wi_world);
+            let back = shading_frame(mat, si, wi_world);
             let pdf_light = bsdf_pdf(mat, back.to_local(wi_world), back.to_local(wo_world));
             st.caustic_pdf *= bs.pdf * cos_in / (pdf_light * cos_out);
             st.caustic_hops += 1;
@@ -399,16 +487,21 @@ pub struct LightStart {
     pub splats: [Vec3; MAX_CAUSTIC_HOPS],
 }
 
-/// Traces the sample's light subpath and links each of its vertices to the camera, through
-/// the lens point of that vertex's `DIM_LENS_U` pair.
-/// mirror: shaders/integrator.wgsl `start_light`
-pub fn start_light(scene: &RenderScene, cam: &CameraRays, rng: &Rng, max_depth: u32) -> LightStart {
-    let mut out = LightStart {
+impl LightStart {
+    /// No light subpath.
+    pub const NONE: Self = Self {
         light: LightPath::NONE,
         rays: 0,
         splat_pixels: [0; MAX_CAUSTIC_HOPS],
         splats: [Vec3::ZERO; MAX_CAUSTIC_HOPS],
     };
+}
+
+/// Traces the sample's light subpath and links each of its vertices to the camera, through
+/// the lens point of that vertex's `DIM_LENS_U` pair.
+/// mirror: shaders/integrator.wgsl `start_light`
+pub fn start_light(scene: &RenderScene, cam: &CameraRays, rng: &Rng, max_depth: u32) -> LightStart {
+    let mut out = LightStart::NONE;
     if scene.caustic_targets.is_empty() {
         return out;
     }
@@ -429,18 +522,20 @@ pub fn start_light(scene: &RenderScene, cam: &CameraRays, rng: &Rng, max_depth: 
     out
 }
 
-/// What one camera sample adds to the film: its path's radiance estimate, the rays it
-/// traced (its light subpath's included), and its light subpath's splats.
+/// What one camera sample adds to the film: its path's radiance estimate and the rays it
+/// traced (its light subpaths' included). Its light subpaths' splats go to the caller's
+/// `splat` as they are made.
 #[derive(Clone, Copy, Debug)]
 pub struct PathSample {
     pub radiance: Vec3,
     pub rays: u32,
-    pub splat_pixels: [u32; MAX_CAUSTIC_HOPS],
-    pub splats: [Vec3; MAX_CAUSTIC_HOPS],
 }
 
-/// One camera sample: [`start_light`], then [`path_step`] until the camera path ends (in a
-/// scene without caustic targets, the path alone).
+/// One camera sample of `branches` branches: the camera ray's first vertex
+/// ([`path_vertex`]: its emission and next event estimation), then each branch
+/// ([`branch_start`]) traced to its end by [`path_step`]. The sample's radiance is the
+/// first vertex's plus the mean of the branches'. (In a scene without caustic targets, the
+/// path's caustic bookkeeping is compiled out.)
 /// mirror: shaders/integrator.wgsl `trace_path`
 pub fn trace_path(
     scene: &RenderScene,
@@ -448,29 +543,138 @@ pub fn trace_path(
     ray: Ray,
     rng: &Rng,
     max_depth: u32,
+    branches: u32,
+    splat: &mut impl FnMut(u32, Vec3),
 ) -> PathSample {
-    // A scene without caustic targets skips the light subpath and its bookkeeping (a loop
-    // of its own, where the compiler knows that there is no light vertex to connect to).
     if scene.caustic_targets.is_empty() {
-        let mut st = path_start(ray, 0.0);
-        while !path_step::<false>(scene, &mut st, &LightPath::NONE, rng, max_depth) {}
-        return PathSample {
-            radiance: st.radiance,
-            rays: st.rays,
-            splat_pixels: [0; MAX_CAUSTIC_HOPS],
-            splats: [Vec3::ZERO; MAX_CAUSTIC_HOPS],
-        };
+        camera_sample::<false>(scene, cam, ray, rng, max_depth, branches, splat)
+    } else {
+        camera_sample::<true>(scene, cam, ray, rng, max_depth, branches, splat)
     }
-    let ls = start_light(scene, cam, rng, max_depth);
-    let mut st = path_start(ray, camera_pdf(cam, ray.dir));
-    st.rays = ls.rays;
-    while !path_step::<true>(scene, &mut st, &ls.light, rng, max_depth) {}
-    PathSample {
+}
+
+#[inline(always)]
+fn camera_sample<const CAUSTICS: bool>(
+    scene: &RenderScene,
+    cam: &CameraRays,
+    ray: Ray,
+    rng: &Rng,
+    max_depth: u32,
+    branches: u32,
+    splat: &mut impl FnMut(u32, Vec3),
+) -> PathSample {
+    let camera_pdf = if CAUSTICS {
+        camera_pdf(cam, ray.dir)
+    } else {
+        0.0
+    };
+    let mut st = path_start(ray, camera_pdf);
+    let mut textured = MaybeUninit::uninit();
+    let v = path_vertex::<CAUSTICS>(scene, &mut st, rng, max_depth, branches, &mut textured);
+    let mut out = PathSample {
         radiance: st.radiance,
         rays: st.rays,
-        splat_pixels: ls.splat_pixels,
-        splats: ls.splats,
+    };
+    // Without light subpaths, a path that ended at its first vertex has no branches.
+    if !CAUSTICS && v.is_none() {
+        return out;
     }
+    let mut sum = Vec3::ZERO;
+    for j in 0..branches {
+        let mut b =
+            branch_start::<CAUSTICS>(scene, cam, &st, v.as_ref(), rng, j, branches, max_depth);
+        for (&pixel, &value) in b.ls.splat_pixels.iter().zip(&b.ls.splats) {
+            if value != Vec3::ZERO {
+                splat(pixel, value);
+            }
+        }
+        if !b.ended {
+            while !path_step::<CAUSTICS>(scene, &mut b.st, &b.ls.light, &b.rng, max_depth) {}
+        }
+        sum += b.st.radiance;
+        out.rays += b.st.rays;
+    }
+    out.radiance += sum * branch_weight(branches);
+    out
+}
+
+/// The weight of one of `branches` branches in its sample: their mean's factor.
+/// (The GPU gets it from `Params::branch_weight`.)
+pub fn branch_weight(branches: u32) -> f32 {
+    1.0 / branches as f32
+}
+
+/// The sample index of branch `j` of camera sample `sample` that branches `k` ways: the
+/// branches of a pixel's samples take consecutive indices, so that they are stratified
+/// together as `k` times as many samples would be (and with `k` 1 the sample's own).
+/// mirror: shaders/integrator.wgsl `branch_sample`
+#[inline(always)]
+pub fn branch_sample(sample: u32, j: u32, k: u32) -> u32 {
+    sample.wrapping_mul(k).wrapping_add(j)
+}
+
+/// A branch of a camera sample, ready for [`path_step`]: its path, its light subpath with
+/// its splats (weighted as one of the sample's branches), the random stream it draws from,
+/// and whether it has ended already. mirror: shaders/integrator.wgsl `Branch`
+#[derive(Clone, Copy, Debug)]
+pub struct Branch<'a> {
+    pub st: PathState,
+    pub ls: LightStart,
+    pub rng: Rng<'a>,
+    pub ended: bool,
+}
+
+/// Branch `j` of the `k` of the camera sample of stream `rng`, whose path `base` reached
+/// first vertex `v` (`None`: the path ended there). The branch draws from the stream of
+/// its [`branch_sample`] index: its light subpath ([`start_light`], in a scene with
+/// caustic targets), whose vertices it connects to `v`, then the BSDF sample at `v`
+/// ([`path_continue`]). Its path starts with no radiance and no rays of `base`'s.
+/// mirror: shaders/integrator.wgsl `branch_start`
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub fn branch_start<'a, const CAUSTICS: bool>(
+    scene: &RenderScene,
+    cam: &CameraRays,
+    base: &PathState,
+    v: Option<&PathVertex>,
+    rng: &Rng<'a>,
+    j: u32,
+    k: u32,
+    max_depth: u32,
+) -> Branch<'a> {
+    let mut branch_rng = *rng;
+    branch_rng.set_sample(branch_sample(rng.sample(), j, k));
+    let mut b = Branch {
+        st: PathState {
+            radiance: Vec3::ZERO,
+            rays: 0,
+            ..*base
+        },
+        ls: if CAUSTICS {
+            start_light(scene, cam, &branch_rng, max_depth)
+        } else {
+            LightStart::NONE
+        },
+        rng: branch_rng,
+        ended: true,
+    };
+    b.st.rays = b.ls.rays;
+    for s in &mut b.ls.splats {
+        *s *= branch_weight(k);
+    }
+    if let Some(v) = v {
+        if CAUSTICS {
+            connect_light_path(scene, &mut b.st, v, &b.ls.light, max_depth);
+        }
+        b.ended = if k > 1 {
+            let mut v = *v;
+            (v.u_lobe, v.u) = bsdf_numbers(v.mat, base.depth, &branch_rng);
+            path_continue::<CAUSTICS>(&mut b.st, &v, &branch_rng)
+        } else {
+            path_continue::<CAUSTICS>(&mut b.st, v, &branch_rng)
+        };
+    }
+    b
 }
 
 /// What the AOVs read of a camera ray's first hit.

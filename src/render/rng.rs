@@ -241,6 +241,11 @@ impl<'a> Rng<'a> {
         }
     }
 
+    /// The sample index.
+    pub fn sample(&self) -> u32 {
+        self.sample
+    }
+
     /// The stream of another sample of the same pixel and seed.
     pub fn set_sample(&mut self, sample: u32) {
         self.sample = sample;

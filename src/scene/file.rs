@@ -75,6 +75,7 @@ pub struct RenderFile {
     pub max_depth: Option<u32>,
     pub seed: Option<u32>,
     pub caustics: Option<bool>,
+    pub branches: Option<u32>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -13,8 +13,8 @@ use super::sphere::{default_subdivisions, icosphere};
 use super::studio::{self, BareOptions, Up};
 use super::texture::{TextureError, TextureRef, TextureSource, Textures, Usage, UvTransform, Wrap};
 use super::{
-    Camera, Material, MaterialKind, Mesh, NO_NORMAL, NO_TANGENT, NO_TEXTURE, NO_UV, RenderSettings,
-    Scene, SceneError, Sky, Triangle,
+    Camera, MAX_BRANCHES, Material, MaterialKind, Mesh, NO_NORMAL, NO_TANGENT, NO_TEXTURE, NO_UV,
+    RenderSettings, Scene, SceneError, Sky, Triangle,
 };
 use crate::math::Aabb;
 use glam::{Mat3, Mat4, Vec3};
@@ -742,6 +742,7 @@ impl Ctx<'_> {
             max_depth: r.max_depth.unwrap_or(d.max_depth),
             seed: r.seed.unwrap_or(d.seed),
             caustics: r.caustics.unwrap_or(d.caustics),
+            branches: r.branches.or(d.branches),
         };
         validate_settings(&s)
             .map_err(|(field, message)| self.invalid(format!("render.{field}"), message))?;
@@ -1264,6 +1265,14 @@ pub fn validate_settings(s: &RenderSettings) -> Result<(), (&'static str, String
     }
     if s.max_depth == 0 {
         return Err(("max_depth", "must be at least 1".into()));
+    }
+    if let Some(b) = s.branches
+        && !(1..=MAX_BRANCHES).contains(&b)
+    {
+        return Err((
+            "branches",
+            format!("must be from 1 to {MAX_BRANCHES}, not {b}"),
+        ));
     }
     Ok(())
 }

@@ -134,10 +134,23 @@ pub struct RenderSettings {
     /// materials, joined to the camera paths (`render::caustics`): caustics with far less
     /// noise. Off, the render is the path tracer's alone, as Mitsuba 3's `path` renders.
     pub caustics: bool,
+    /// How many paths each camera sample branches into at its first hit
+    /// (`render::integrator`): the samples of indirect light per camera sample. Each
+    /// costs about a path less its camera ray and first vertex. `None`: [`Self::branches`]
+    /// decides.
+    pub branches: Option<u32>,
 }
 
 /// Whether renders trace caustic light subpaths unless told otherwise.
 pub const CAUSTICS_DEFAULT: bool = true;
+
+/// Branches at the first hit unless told otherwise, in a render without caustic light
+/// subpaths (BENCHMARKS.md: the quality per second of 1, 2, 4 and 8 on the benchmark
+/// scenes).
+pub const BRANCHES_DEFAULT: u32 = 4;
+
+/// The most branches a setting may ask for.
+pub const MAX_BRANCHES: u32 = 64;
 
 impl Default for RenderSettings {
     fn default() -> Self {
@@ -148,7 +161,19 @@ impl Default for RenderSettings {
             max_depth: 8,
             seed: 0,
             caustics: CAUSTICS_DEFAULT,
+            branches: None,
         }
+    }
+}
+
+impl RenderSettings {
+    /// The branches of each camera sample: as set, else [`BRANCHES_DEFAULT`] in a render
+    /// that traces no caustic light subpaths and 1 in one that does. There each branch
+    /// traces a light subpath of its own and costs nearly a whole sample, so that
+    /// branching no longer pays (BENCHMARKS.md, the glass-and-mirror box).
+    pub fn branches(&self, light_subpaths: bool) -> u32 {
+        self.branches
+            .unwrap_or(if light_subpaths { 1 } else { BRANCHES_DEFAULT })
     }
 }
 

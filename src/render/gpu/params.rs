@@ -5,6 +5,7 @@
 use super::layout::{StructLayout, struct_layout};
 use crate::render::RenderScene;
 use crate::render::camera::CameraRays;
+use crate::render::integrator::branch_weight;
 use crate::scene::{Camera, RenderSettings, Sky};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -15,7 +16,7 @@ pub const SKY_CONSTANT: u32 = 0;
 pub const SKY_GRADIENT: u32 = 1;
 pub const SKY_ENVIRONMENT: u32 = 2;
 
-/// One dispatch's parameters (192 bytes). mirror: shaders/types.wgsl `Params`
+/// One dispatch's parameters (208 bytes). mirror: shaders/types.wgsl `Params`
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Params {
@@ -56,10 +57,15 @@ pub struct Params {
     /// Spheres in the caustic targets table ([`RenderScene::caustic_targets`]); 0 traces
     /// no light subpaths.
     pub num_caustic_targets: u32,
-    pub _pad: [u32; 1],
+    /// The branches of each camera sample at its first hit
+    /// ([`RenderSettings::branches`]; set with the settings, after the scene), and their weight
+    /// ([`branch_weight`](crate::render::integrator::branch_weight)).
+    pub branches: u32,
     /// [`RenderScene::scene_sphere`]: where a directional light's light subpaths start.
     pub scene_center: [f32; 3],
     pub scene_radius: f32,
+    pub branch_weight: f32,
+    pub _pad: [u32; 3],
 }
 
 impl Params {
@@ -95,9 +101,11 @@ impl Params {
             aovs,
             transparent,
             num_caustic_targets,
-            _pad,
+            branches,
             scene_center,
             scene_radius,
+            branch_weight,
+            _pad,
         })
     }
 
@@ -136,6 +144,7 @@ impl Params {
     /// every row and no samples yet.
     pub fn with_settings(self, camera: &Camera, settings: &RenderSettings) -> Self {
         let c = CameraRays::new(camera, settings.width, settings.height);
+        let branches = settings.branches(self.num_caustic_targets != 0);
         Self {
             cam_position: c.position.into(),
             width: settings.width,
@@ -143,6 +152,8 @@ impl Params {
             height: settings.height,
             cam_right: c.right.into(),
             max_depth: settings.max_depth,
+            branches,
+            branch_weight: branch_weight(branches),
             cam_up: c.up.into(),
             seed: settings.seed,
             tan_half_vfov: c.tan_half_vfov,
