@@ -18,6 +18,8 @@
 //!   tracer alone finds the caustics of a large light often enough to converge, so the two
 //!   renders estimate one image. The glass sphere's caustic on the floor, seen by the back
 //!   wall through the sphere, is a two-hop light subpath `L S S D S S D`.
+//!   With 2 branches a camera sample, each with its light subpath, on both devices too
+//!   (the splats left at full weight instead of 1/2: z 21.6).
 //! - **An emissive enclosure holding glass and mirrors** (the dielectric furnace): walls
 //!   that emit Le and reflect albedo a fill the enclosure with radiance Le / (1 - a), which
 //!   lossless glass, a perfect mirror and a white block inside the glass leave unchanged,
@@ -32,12 +34,12 @@
 
 mod common;
 
+use common::images::{assert_same_image, renders};
 use common::scenes::{add_box, add_sphere, scene, square};
 use common::stats::assert_mean;
 use glam::Vec3;
 use meshtrace::bvh::BuildParams;
-use meshtrace::film::Film;
-use meshtrace::render::{RenderJob, RenderScene};
+use meshtrace::render::RenderScene;
 use meshtrace::scene::{
     Camera, Material, MaterialKind, Mesh, NO_NORMAL, NO_UV, PunctualLight, RenderSettings, Sky,
     Triangle,
@@ -351,93 +353,6 @@ fn pool_scene(settings: RenderSettings) -> RenderScene {
     RenderScene::new(&s, &BuildParams::default()).unwrap()
 }
 
-/// The largest |z| a block may show: the seeds' spread is itself estimated from 8 or 16
-/// renders (Student's t with 7 or 15 degrees of freedom), over 16 blocks.
-const Z_MAX: f64 = 6.0;
-
-/// Renders seeds `seeds` of `settings` on the CPU or, with `gpu`, the GPU.
-fn renders(
-    rs: &RenderScene,
-    settings: RenderSettings,
-    seeds: std::ops::Range<u32>,
-    gpu: Option<&meshtrace::render::gpu::GpuContext>,
-) -> Vec<Film> {
-    seeds
-        .map(|seed| {
-            let job = RenderJob::new(RenderSettings { seed, ..settings });
-            match gpu {
-                Some(ctx) => common::gpu_render(ctx, rs, &job),
-                None => common::cpu_render(rs, &job),
-            }
-        })
-        .collect()
-}
-
-/// Each render's mean of r + g + b over every block of `block` × `block` pixels, with a
-/// last entry for the whole image; then per entry the mean over the renders and its
-/// standard error.
-fn block_means(films: &[Film], block: u32) -> Vec<(f64, f64)> {
-    let (w, h) = (films[0].width, films[0].height);
-    let (bw, bh) = (w / block, h / block);
-    let per_film: Vec<Vec<f64>> = films
-        .iter()
-        .map(|f| {
-            let mean = f.mean();
-            let mut sums = vec![0.0f64; (bw * bh) as usize];
-            for y in 0..bh * block {
-                for x in 0..bw * block {
-                    let v = mean[(y * w + x) as usize];
-                    sums[((y / block) * bw + x / block) as usize] += (v.x + v.y + v.z) as f64;
-                }
-            }
-            let mut means: Vec<f64> = sums.iter().map(|s| s / (block * block) as f64).collect();
-            means.push(means.iter().sum::<f64>() / means.len() as f64);
-            means
-        })
-        .collect();
-    (0..per_film[0].len())
-        .map(|b| {
-            let values: Vec<f64> = per_film.iter().map(|v| v[b]).collect();
-            common::stats::mean_and_stderr(&values)
-        })
-        .collect()
-}
-
-/// Fails where a block's mean, or the whole image's, differs between `test` and
-/// `reference` by more than `Z_MAX` standard errors of the difference.
-fn assert_same_image(what: &str, test: &[Film], reference: &[Film], block: u32) {
-    let (a, b) = (block_means(test, block), block_means(reference, block));
-    let z: Vec<f64> = a
-        .iter()
-        .zip(&b)
-        .map(|((ma, sa), (mb, sb))| (ma - mb) / (sa * sa + sb * sb).sqrt().max(1e-9))
-        .collect();
-    let (whole, blocks) = z.split_last().unwrap();
-    let (worst, at) = blocks
-        .iter()
-        .enumerate()
-        .map(|(k, &z)| (z, k))
-        .fold(
-            (0.0f64, 0),
-            |m, c| if c.0.abs() > m.0.abs() { c } else { m },
-        );
-    let ((ta, _), (tb, _)) = (a[a.len() - 1], b[b.len() - 1]);
-    eprintln!(
-        "{what}: {} blocks, worst z {worst:.2} (block {at}); whole image {ta:.5} against {tb:.5} ({:+.2}%, z {whole:.2})",
-        blocks.len(),
-        100.0 * (ta - tb) / tb,
-    );
-    assert!(tb > 0.0, "{what}: a black reference proves nothing");
-    assert!(
-        worst.abs() <= Z_MAX,
-        "{what}: block {at} differs by {worst:.2} standard errors"
-    );
-    assert!(
-        whole.abs() <= Z_MAX,
-        "{what}: the whole image differs by {whole:.2} standard errors"
-    );
-}
-
 fn mirror_check(gpu: Option<&meshtrace::render::gpu::GpuContext>, punctual: bool) {
     let s = RenderSettings {
         caustics: true,
@@ -582,6 +497,45 @@ fn caustics_keep_the_expected_image_of_glass_and_mirror_spheres_on_the_gpu() {
         None,
     );
     assert_same_image("glass and mirror spheres (GPU)", &test, &reference, 8);
+}
+
+/// Glass and mirror spheres with caustics and 2 branches a camera sample (each tracing a
+/// light subpath of its own, its splats weighed 1/2) against the path tracer alone.
+fn branched_spheres_check(gpu: Option<&meshtrace::render::gpu::GpuContext>) {
+    let s = RenderSettings {
+        caustics: true,
+        branches: Some(2),
+        ..square(32, 32, 8, 0)
+    };
+    let test = renders(&spheres_scene(s), s, 0..6, gpu);
+    let plain = RenderSettings {
+        spp: 1024,
+        branches: Some(1),
+        ..s
+    };
+    let reference = renders(&without_caustics(plain), plain, 20..26, None);
+    let device = if gpu.is_some() { "GPU" } else { "CPU" };
+    assert_same_image(
+        &format!("glass and mirror spheres, 2 branches ({device})"),
+        &test,
+        &reference,
+        8,
+    );
+}
+
+#[test]
+fn branched_caustics_keep_the_expected_image_of_glass_and_mirror_spheres() {
+    branched_spheres_check(None);
+}
+
+#[test]
+fn branched_caustics_keep_the_expected_image_of_glass_and_mirror_spheres_on_the_gpu() {
+    let Some(ctx) = common::gpu(
+        "branched_caustics_keep_the_expected_image_of_glass_and_mirror_spheres_on_the_gpu",
+    ) else {
+        return;
+    };
+    branched_spheres_check(Some(&ctx));
 }
 
 /// The dielectric furnace (see the top of the file): flat glass and mirror blocks, and a

@@ -26,7 +26,11 @@
 //!   own reader (tools/gltf_read.py), not meshtrace's.
 //!
 //! Scenes with punctual lights render with `caustics = false`: Mitsuba's path tracer cannot
-//! find those lights' caustics, which meshtrace's light subpaths add.
+//! find those lights' caustics, which meshtrace's light subpaths add. Every scene renders
+//! with 1 branch a camera sample, so that both sides trace one path a sample; the branched
+//! paths of the default settings are checked against Mitsuba on the Cornell box at equal
+//! paths (16 camera samples of 4 branches against Mitsuba's 64 spp), and against 1 branch
+//! on both devices in tests/branches.rs.
 //!
 //! The references and Mitsuba's own numbers come from
 //! `python3 tools/make_references.py --materials` (tests/references/<scene>.json).
@@ -98,6 +102,7 @@ fn check(scene_name: &str, device: &str, render: &dyn Fn(&RenderScene, &[RenderJ
     if !scene.lights.is_empty() {
         scene.settings.caustics = false;
     }
+    scene.settings.branches = Some(1);
     let json = reference_json(scene_name);
     if file.ends_with(".gltf") {
         // A bare glTF file has no [render] table: the size is the reference's, as
@@ -167,6 +172,31 @@ fn check_gpu(scene: &str) {
 #[test]
 fn cpu_matches_mitsuba_cornell() {
     check_cpu("cornell");
+}
+
+/// The Cornell box as users render it by default, 4 branches a camera sample, at 16 camera
+/// samples: its relMSE against Mitsuba's at 64 spp, the same number of paths.
+#[test]
+fn cpu_matches_mitsuba_cornell_branched() {
+    let scene = load_scene(&root().join("assets/cornell/cornell.toml")).unwrap();
+    let settings = meshtrace::scene::RenderSettings {
+        spp: 16,
+        branches: Some(4),
+        ..scene.settings
+    };
+    let rs = RenderScene::new(&scene, &BuildParams::default()).unwrap();
+    let (_, _, reference) = read_linear(&root().join("tests/references/cornell_ref.exr")).unwrap();
+    let film = common::cpu_render(&rs, &RenderJob::new(settings));
+    let ours = relmse(&film, &reference);
+    let theirs = mitsuba_relmse(&reference_json("cornell"), 64);
+    let ratio = ours / theirs;
+    eprintln!(
+        "cornell cpu 16 spp x 4 branches: relMSE {ours:.6}, Mitsuba 64 spp {theirs:.6}, ratio {ratio:.3}"
+    );
+    assert!(
+        ratio <= MAX_RATIO,
+        "cornell, 16 spp x 4 branches: relMSE ratio {ratio:.3} > {MAX_RATIO}"
+    );
 }
 
 #[test]

@@ -709,6 +709,14 @@ fn render_ranges() {
         let msg = invalid(name, &with_cam(&format!("[render]\n{key} = 0\n")), field);
         assert_eq!(msg, "must be at least 1");
     }
+    for (name, value) in [("branches0", 0), ("branches65", 65)] {
+        let msg = invalid(
+            name,
+            &with_cam(&format!("[render]\nbranches = {value}\n")),
+            "render.branches",
+        );
+        assert_eq!(msg, format!("must be from 1 to 64, not {value}"));
+    }
 }
 
 #[test]

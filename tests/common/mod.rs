@@ -7,6 +7,7 @@
 //! - [`rand`]: deterministic random inputs (SplitMix64, and hashed random access).
 //! - [`scenes`]: scenes built in code, the built-in Cornell box, render settings.
 //! - [`stats`]: means and standard errors, relative errors, error and failure trackers.
+//! - [`images`]: renders of several seeds compared block by block as z scores.
 //! - [`materials`]: BSDF test helpers (material names, directions, GGX conditioning).
 //! - [`chi2`]: the chi-square goodness-of-fit test of sampled directions.
 //! - [`gamma`]: ln Gamma and the regularised incomplete gamma function (in logs), for the
@@ -22,6 +23,7 @@ pub mod cli;
 pub mod fs;
 pub mod gamma;
 pub mod gltf;
+pub mod images;
 pub mod kernels;
 pub mod materials;
 pub mod rand;

@@ -17,7 +17,9 @@ pub fn cornell() -> (RenderScene, RenderSettings) {
     )
 }
 
-/// Settings for a square image of `width` pixels.
+/// Settings for a square image of `width` pixels, one path a camera sample (1 branch): the
+/// tests of other features compare with references that trace one path a sample, and
+/// tests/branches.rs checks the branches.
 pub fn square(width: u32, spp: u32, max_depth: u32, seed: u32) -> RenderSettings {
     RenderSettings {
         width,
@@ -25,6 +27,7 @@ pub fn square(width: u32, spp: u32, max_depth: u32, seed: u32) -> RenderSettings
         spp,
         max_depth,
         seed,
+        branches: Some(1),
         ..RenderSettings::default()
     }
 }
