@@ -500,6 +500,7 @@ impl LightStart {
 /// Traces the sample's light subpath and links each of its vertices to the camera, through
 /// the lens point of that vertex's `DIM_LENS_U` pair.
 /// mirror: shaders/integrator.wgsl `start_light`
+#[inline(always)]
 pub fn start_light(scene: &RenderScene, cam: &CameraRays, rng: &Rng, max_depth: u32) -> LightStart {
     let mut out = LightStart::NONE;
     if scene.caustic_targets.is_empty() {
