@@ -505,7 +505,7 @@ fn branched_spheres_check(gpu: Option<&meshtrace::render::gpu::GpuContext>) {
     let s = RenderSettings {
         caustics: true,
         branches: Some(2),
-        ..square(32, 32, 8, 0)
+        ..square(32, if gpu.is_some() { 16 } else { 32 }, 8, 0)
     };
     let test = renders(&spheres_scene(s), s, 0..6, gpu);
     let plain = RenderSettings {

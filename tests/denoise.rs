@@ -31,9 +31,15 @@ fn relmse(image: &[Vec3], reference: &[Vec3]) -> f64 {
     sum / (3 * reference.len()) as f64
 }
 
-/// The built-in Cornell box (256×256, as its reference) and its 16384-spp reference.
+/// The built-in Cornell box (256×256, as its reference) and its 16384-spp reference, one
+/// path a camera sample (1 branch), as the denoiser's measurements in BENCHMARKS.md were
+/// made.
 fn cornell_and_reference() -> (RenderScene, RenderSettings, Vec<Vec3>) {
     let (rs, settings) = common::scenes::cornell();
+    let settings = RenderSettings {
+        branches: Some(1),
+        ..settings
+    };
     let (w, h, reference) =
         read_linear(&root().join("tests/references/cornell_ref.exr")).expect("reference");
     assert_eq!((w, h), (settings.width, settings.height));
