@@ -368,14 +368,14 @@ struct PathSample {
 // its loop of persistent paths. mirror: src/render/integrator.rs `trace_path`
 fn trace_path(ray: Ray, rng: Rng) -> PathSample {
     var st = path_start(ray, camera_pdf(ray.dir));
-    let v = path_vertex(&st, rng, params.branches);
+    var v = path_vertex(&st, rng, params.branches);
     var out = PathSample(st.radiance, st.rays, vec3<f32>(0.0), 0u);
     if !(CAUSTICS && params.num_caustic_targets != 0u) && !v.valid {
         return out;
     }
     var sum = vec3<f32>(0.0);
     for (var j = 0u; j < params.branches; j++) {
-        var b = branch_start(st, v, rng, j, params.branches);
+        var b = branch_start(st, rng, j, params.branches);
         for (var k = 0u; k < MAX_CAUSTIC_HOPS; k++) {
             if any(b.ls.splats[k] != vec3<f32>(0.0)) {
                 out.splat_sum += b.ls.splats[k];
@@ -384,10 +384,14 @@ fn trace_path(ray: Ray, rng: Rng) -> PathSample {
         }
         var light = b.ls.light;
         var bst = b.st;
-        if !b.ended {
-            loop {
-                if path_step(&bst, &light, b.rng) {
-                    break;
+        if v.valid {
+            branch_numbers(&v, st.depth, b.rng, params.branches);
+            connect_light_path(&bst, v, &light);
+            if !path_continue(&bst, v, b.rng) {
+                loop {
+                    if path_step(&bst, &light, b.rng) {
+                        break;
+                    }
                 }
             }
         }
@@ -403,40 +407,42 @@ fn branch_sample(sample: u32, j: u32, k: u32) -> u32 {
     return sample * k + j;
 }
 
-// A branch of a camera sample, ready for path_step. mirror: src/render/integrator.rs `Branch`
+// A branch of a camera sample before its first step: its path (the camera sample's up to
+// its first vertex, with no radiance yet and its light subpath's rays), its light subpath
+// with its splats (weighted as one of the sample's branches) and its stream. Its first step
+// is connect_light_path and path_continue at the sample's first vertex, with its own BSDF
+// numbers there (branch_numbers). mirror: src/render/integrator.rs `Branch`
 struct Branch {
     st: PathState,
     ls: LightStart,
     rng: Rng,
-    ended: bool,
 }
 
-// Branch j of the k of the camera sample of stream rng, whose path base reached first
-// vertex v (not valid: the path ended there). mirror: src/render/integrator.rs `branch_start`
-fn branch_start(base: PathState, v: PathVertex, rng: Rng, j: u32, k: u32) -> Branch {
+// Branch j of the k of the camera sample of stream rng, whose path base reached its first
+// vertex. The branch draws from the stream of its branch_sample index, and traces its light
+// subpath there (start_light). mirror: src/render/integrator.rs `branch_start`
+fn branch_start(base: PathState, rng: Rng, j: u32, k: u32) -> Branch {
     let branch_rng = Rng(rng.pixel, branch_sample(rng.sample, j, k), rng.seed);
     var b: Branch;
     b.ls = start_light(branch_rng);
-    // (Pointer arguments must point at whole variables: the path is one of its own here.)
-    var st = base;
-    st.radiance = vec3<f32>(0.0);
-    st.rays = b.ls.rays;
+    b.st = base;
+    b.st.radiance = vec3<f32>(0.0);
+    b.st.rays = b.ls.rays;
     b.rng = branch_rng;
-    b.ended = true;
     for (var i = 0u; i < MAX_CAUSTIC_HOPS; i++) {
         b.ls.splats[i] *= params.branch_weight;
     }
-    if v.valid {
-        var light = b.ls.light;
-        connect_light_path(&st, v, &light);
-        var w = v;
-        if k > 1u {
-            bsdf_numbers(v.mat, base.depth, branch_rng, &w);
-        }
-        b.ended = path_continue(&st, w, branch_rng);
-    }
-    b.st = st;
     return b;
+}
+
+// Gives the camera sample's first vertex v (at bounce depth) the BSDF numbers of the
+// branch of stream rng of k, where the sample branches; with one branch path_vertex drew
+// them from the sample's own stream, which is the branch's.
+// mirror: src/render/integrator.rs `branch_numbers`
+fn branch_numbers(v: ptr<function, PathVertex>, depth: u32, rng: Rng, k: u32) {
+    if k > 1u {
+        bsdf_numbers((*v).mat, depth, rng, v);
+    }
 }
 
 // What the AOVs read of a camera ray's first hit. mirror: src/render/integrator.rs `FirstHit`

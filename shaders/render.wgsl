@@ -85,11 +85,10 @@ fn set_aov_ids(sums: ptr<function, AovSums>, fh: FirstHit) {
     (*sums).t[5] = texel_add(none, vec4<f32>(f32(fh.material & 0xffffu), f32(fh.material >> 16u), 0.0, 1.0));
 }
 
-// A sample's camera ray and its first vertex (`v`, whose BSDF its branches sample); returns
-// the path there. With AOVs, also adds its first hit to `sums` (and with sample 0 the
-// pixel-centre ray's ids), and returns in `seen` whether its radiance counts: not in a
-// transparent render where it misses.
-fn start_sample(x: u32, y: u32, s: u32, rng: Rng, sums: ptr<function, AovSums>, seen: ptr<function, bool>, v: ptr<function, PathVertex>) -> PathState {
+// A sample's path up to its camera ray. With AOVs, also adds its first hit to `sums` (and
+// with sample 0 the pixel-centre ray's ids), and returns in `seen` whether its radiance
+// counts: not in a transparent render where it misses.
+fn start_sample(x: u32, y: u32, s: u32, rng: Rng, sums: ptr<function, AovSums>, seen: ptr<function, bool>) -> PathState {
     let ray = generate_camera_ray(x, y, rng);
     *seen = true;
     if params.aovs != 0u {
@@ -100,9 +99,7 @@ fn start_sample(x: u32, y: u32, s: u32, rng: Rng, sums: ptr<function, AovSums>, 
             set_aov_ids(sums, first_hit(pixel_centre_ray(x, y)));
         }
     }
-    var st = path_start(ray, camera_pdf(ray.dir));
-    *v = path_vertex(&st, rng, params.branches);
-    return st;
+    return path_start(ray, camera_pdf(ray.dir));
 }
 
 // The branches of a sample whose first vertex is `v`: none where the path ended there and
@@ -113,6 +110,12 @@ fn sample_branches(v: PathVertex) -> u32 {
     }
     return params.branches;
 }
+
+// What a lane does next in render's loop: start a sample (its camera ray), find the next
+// vertex of its path, or start the sample's next branch (or end the sample).
+const PHASE_CAMERA: u32 = 0u;
+const PHASE_VERTEX: u32 = 1u;
+const PHASE_BRANCH: u32 = 2u;
 
 // mirror: src/render/cpu.rs `render_pixel`
 //
@@ -154,63 +157,100 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
             sums.t[k] = film[aov_texel(base, 1u << k)];
         }
     }
+    // Each stage of a path is called from one place in this loop, so the compiler, which
+    // inlines every call, makes one copy of each: a lane runs the stages its phase needs.
     var seen = true;
-    var rng = Rng(pixel, s, params.seed);
+    var phase = PHASE_CAMERA;
+    // The sample's stream, its path to the first vertex (`first`, vertex `v0`) and whether
+    // the vertex to find next is that one.
+    var rng: Rng;
+    var first: PathState;
     var v0: PathVertex;
-    var first = start_sample(x, y, s, rng, &sums, &seen, &v0);
-    // The sample's branches: the next to start (j of k), the one being traced (b, whose
-    // light subpath is `light` and path `bst`), their radiance so far and the sample's
-    // rays. (nb is k.)
-    var nb = sample_branches(v0);
+    var at_first = false;
+    // The sample's branches: the next to start (j of nb), the path being traced (`st`, its
+    // stream `path_rng` and light subpath `light`), their radiance so far and the sample's
+    // rays.
+    var nb = 0u;
     var j = 0u;
-    var b: Branch;
-    var light: LightPath;
-    var bst: PathState;
-    var running = false;
+    var st: PathState;
+    var path_rng: Rng;
+    var light = no_light_path();
     var sum = vec3<f32>(0.0);
-    var sample_rays = first.rays;
+    var sample_rays = 0u;
     loop {
-        if running {
-            if path_step(&bst, &light, b.rng) {
-                running = false;
-                sum += bst.radiance;
-                sample_rays += bst.rays;
-            }
-            continue;
+        if phase == PHASE_CAMERA {
+            rng = Rng(pixel, s, params.seed);
+            st = start_sample(x, y, s, rng, &sums, &seen);
+            path_rng = rng;
+            at_first = true;
+            phase = PHASE_VERTEX;
         }
-        if j < nb {
-            b = branch_start(first, v0, rng, j, nb);
-            j += 1u;
-            if CAUSTICS {
-                for (var i = 0u; i < MAX_CAUSTIC_HOPS; i++) {
-                    add_splat(b.ls.splat_pixels[i], b.ls.splats[i]);
-                }
-            }
-            light = b.ls.light;
-            bst = b.st;
-            if b.ended {
-                sum += b.st.radiance;
-                sample_rays += b.st.rays;
+        // The vertex whose BSDF the path samples next, where `step`.
+        var v: PathVertex;
+        var step = false;
+        if phase == PHASE_VERTEX {
+            v = path_vertex(&st, path_rng, select(1u, params.branches, at_first));
+            if at_first {
+                at_first = false;
+                first = st;
+                v0 = v;
+                nb = sample_branches(v0);
+                j = 0u;
+                sum = vec3<f32>(0.0);
+                sample_rays = st.rays;
+                phase = PHASE_BRANCH;
+            } else if v.valid {
+                step = true;
             } else {
-                running = true;
+                sum += st.radiance;
+                sample_rays += st.rays;
+                phase = PHASE_BRANCH;
             }
-            continue;
         }
-        let sample_radiance = first.radiance + sum * params.branch_weight;
-        if is_finite3(sample_radiance) && seen {
-            radiance = texel_add(radiance, vec4<f32>(sample_radiance, 0.0));
+        if phase == PHASE_BRANCH {
+            if j < nb {
+                let b = branch_start(first, rng, j, nb);
+                j += 1u;
+                if CAUSTICS {
+                    for (var i = 0u; i < MAX_CAUSTIC_HOPS; i++) {
+                        add_splat(b.ls.splat_pixels[i], b.ls.splats[i]);
+                    }
+                }
+                light = b.ls.light;
+                st = b.st;
+                path_rng = b.rng;
+                if v0.valid {
+                    v = v0;
+                    branch_numbers(&v, first.depth, path_rng, nb);
+                    step = true;
+                    phase = PHASE_VERTEX;
+                } else {
+                    sum += st.radiance;
+                    sample_rays += st.rays;
+                }
+            } else {
+                let sample_radiance = first.radiance + sum * params.branch_weight;
+                if is_finite3(sample_radiance) && seen {
+                    radiance = texel_add(radiance, vec4<f32>(sample_radiance, 0.0));
+                }
+                rays = texel_add(rays, vec4<f32>(f32(sample_rays), 0.0, 0.0, 0.0));
+                s += 1u;
+                if s >= params.sample_end {
+                    break;
+                }
+                phase = PHASE_CAMERA;
+            }
         }
-        rays = texel_add(rays, vec4<f32>(f32(sample_rays), 0.0, 0.0, 0.0));
-        s += 1u;
-        if s >= params.sample_end {
-            break;
+        if step {
+            connect_light_path(&st, v, &light);
+            if path_continue(&st, v, path_rng) {
+                sum += st.radiance;
+                sample_rays += st.rays;
+                phase = PHASE_BRANCH;
+            } else {
+                phase = PHASE_VERTEX;
+            }
         }
-        rng = Rng(pixel, s, params.seed);
-        first = start_sample(x, y, s, rng, &sums, &seen, &v0);
-        nb = sample_branches(v0);
-        j = 0u;
-        sum = vec3<f32>(0.0);
-        sample_rays = first.rays;
     }
     var rounds = 0u;
     let bound = 2u + atomicLoad(&status[1]);

@@ -534,7 +534,8 @@ pub struct PathSample {
 
 /// One camera sample of `branches` branches: the camera ray's first vertex
 /// ([`path_vertex`]: its emission and next event estimation), then each branch
-/// ([`branch_start`]) traced to its end by [`path_step`]. The sample's radiance is the
+/// ([`branch_start`]): its first step at that vertex, with its own BSDF numbers
+/// ([`branch_numbers`]), then [`path_step`]s to its end. The sample's radiance is the
 /// first vertex's plus the mean of the branches'. (In a scene without caustic targets, the
 /// path's caustic bookkeeping is compiled out.)
 /// mirror: shaders/integrator.wgsl `trace_path`
@@ -580,17 +581,23 @@ fn camera_sample<const CAUSTICS: bool>(
     if !CAUSTICS && v.is_none() {
         return out;
     }
+    let mut v = v;
     let mut sum = Vec3::ZERO;
     for j in 0..branches {
-        let mut b =
-            branch_start::<CAUSTICS>(scene, cam, &st, v.as_ref(), rng, j, branches, max_depth);
+        let mut b = branch_start::<CAUSTICS>(scene, cam, &st, rng, j, branches, max_depth);
         for (&pixel, &value) in b.ls.splat_pixels.iter().zip(&b.ls.splats) {
             if value != Vec3::ZERO {
                 splat(pixel, value);
             }
         }
-        if !b.ended {
-            while !path_step::<CAUSTICS>(scene, &mut b.st, &b.ls.light, &b.rng, max_depth) {}
+        if let Some(v) = v.as_mut() {
+            branch_numbers(v, st.depth, &b.rng, branches);
+            if CAUSTICS {
+                connect_light_path(scene, &mut b.st, v, &b.ls.light, max_depth);
+            }
+            if !path_continue::<CAUSTICS>(&mut b.st, v, &b.rng) {
+                while !path_step::<CAUSTICS>(scene, &mut b.st, &b.ls.light, &b.rng, max_depth) {}
+            }
         }
         sum += b.st.radiance;
         out.rays += b.st.rays;
@@ -614,30 +621,28 @@ pub fn branch_sample(sample: u32, j: u32, k: u32) -> u32 {
     sample.wrapping_mul(k).wrapping_add(j)
 }
 
-/// A branch of a camera sample, ready for [`path_step`]: its path, its light subpath with
-/// its splats (weighted as one of the sample's branches), the random stream it draws from,
-/// and whether it has ended already. mirror: shaders/integrator.wgsl `Branch`
+/// A branch of a camera sample before its first step: its path (the camera sample's up to
+/// its first vertex, with no radiance yet and its light subpath's rays), its light subpath
+/// with its splats (weighted as one of the sample's branches) and the random stream it
+/// draws from. Its first step is [`connect_light_path`] and [`path_continue`] at the
+/// sample's first vertex, with its own BSDF numbers there ([`branch_numbers`]).
+/// mirror: shaders/integrator.wgsl `Branch`
 #[derive(Clone, Copy, Debug)]
 pub struct Branch<'a> {
     pub st: PathState,
     pub ls: LightStart,
     pub rng: Rng<'a>,
-    pub ended: bool,
 }
 
 /// Branch `j` of the `k` of the camera sample of stream `rng`, whose path `base` reached
-/// first vertex `v` (`None`: the path ended there). The branch draws from the stream of
-/// its [`branch_sample`] index: its light subpath ([`start_light`], in a scene with
-/// caustic targets), whose vertices it connects to `v`, then the BSDF sample at `v`
-/// ([`path_continue`]). Its path starts with no radiance and no rays of `base`'s.
+/// its first vertex. The branch draws from the stream of its [`branch_sample`] index, and
+/// traces its light subpath there ([`start_light`], in a scene with caustic targets).
 /// mirror: shaders/integrator.wgsl `branch_start`
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub fn branch_start<'a, const CAUSTICS: bool>(
     scene: &RenderScene,
     cam: &CameraRays,
     base: &PathState,
-    v: Option<&PathVertex>,
     rng: &Rng<'a>,
     j: u32,
     k: u32,
@@ -657,25 +662,23 @@ pub fn branch_start<'a, const CAUSTICS: bool>(
             LightStart::NONE
         },
         rng: branch_rng,
-        ended: true,
     };
     b.st.rays = b.ls.rays;
     for s in &mut b.ls.splats {
         *s *= branch_weight(k);
     }
-    if let Some(v) = v {
-        if CAUSTICS {
-            connect_light_path(scene, &mut b.st, v, &b.ls.light, max_depth);
-        }
-        b.ended = if k > 1 {
-            let mut v = *v;
-            (v.u_lobe, v.u) = bsdf_numbers(v.mat, base.depth, &branch_rng);
-            path_continue::<CAUSTICS>(&mut b.st, &v, &branch_rng)
-        } else {
-            path_continue::<CAUSTICS>(&mut b.st, v, &branch_rng)
-        };
-    }
     b
+}
+
+/// Gives the camera sample's first vertex `v` (at bounce `depth`) the BSDF numbers of the
+/// branch of stream `rng` of `k`, where the sample branches; with one branch
+/// [`path_vertex`] drew them from the sample's own stream, which is the branch's.
+/// mirror: shaders/integrator.wgsl `branch_numbers`
+#[inline(always)]
+pub fn branch_numbers(v: &mut PathVertex, depth: u32, rng: &Rng, k: u32) {
+    if k > 1 {
+        (v.u_lobe, v.u) = bsdf_numbers(v.mat, depth, rng);
+    }
 }
 
 /// What the AOVs read of a camera ray's first hit.
