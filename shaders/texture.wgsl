@@ -1,6 +1,14 @@
 // Texture lookups. mirror: src/render/texture.rs — every function has a Rust twin of the
 // same name.
 
+// Whether the scene has textures and alpha masks, set per pipeline from the scene
+// (src/render/gpu/shader.rs `Features`). Off, the code that reads them compiles out of the
+// kernel, which changes no result: a scene without textures has no texture slot to look
+// up, and one without alpha masks no masked triangle. (The Rust twins need no such switch:
+// a branch the CPU never takes costs it next to nothing.)
+override TEXTURES: bool = true;
+override ALPHA_MASKS: bool = true;
+
 // mirror: src/render/texture.rs `texel`
 fn texel(t: Texture, x: u32, y: u32) -> vec4<f32> {
     let i = y * t.width + x;
@@ -87,6 +95,9 @@ fn scalar_lookup(index: u32, uv: vec2<f32>) -> f32 {
 
 // mirror: src/render/texture.rs `material_at`
 fn material_at(m: Material, uv: vec2<f32>) -> Material {
+    if !TEXTURES {
+        return m;
+    }
     var out = m;
     if m.albedo_texture != NO_TEXTURE {
         out.albedo *= texture_lookup(m.albedo_texture, uv).xyz;
@@ -111,6 +122,9 @@ fn material_at(m: Material, uv: vec2<f32>) -> Material {
 
 // mirror: src/render/texture.rs `normal_mapped`
 fn normal_mapped(tri: u32, b1: f32, b2: f32, uv: vec2<f32>, n: vec3<f32>, ng: vec3<f32>) -> vec3<f32> {
+    if !TEXTURES {
+        return n;
+    }
     let m = load_material(load_shading(tri).material);
     let g = load_tri_tangents(tri);
     let w = 1.0 - b1 - b2;
@@ -137,12 +151,15 @@ fn normal_mapped(tri: u32, b1: f32, b2: f32, uv: vec2<f32>, n: vec3<f32>, ng: ve
 
 // mirror: src/render/texture.rs `alpha_test`
 fn alpha_test(tri: u32, b1: f32, b2: f32) -> bool {
+    if !ALPHA_MASKS {
+        return true;
+    }
     let m = load_material(load_shading(tri).material);
     if (m.flags & MAT_ALPHA_MASK) == 0u {
         return true;
     }
     var alpha = m.alpha;
-    if m.albedo_texture != NO_TEXTURE {
+    if TEXTURES && m.albedo_texture != NO_TEXTURE {
         let uv = triangle_uv(tri, b1, b2);
         alpha *= texture_lookup(m.albedo_texture, uv).w;
     }

@@ -2,9 +2,13 @@
 //! real limits (never wgpu's conservative defaults, which would cap storage bindings).
 
 use super::pipelines::Pipeline;
-use super::shader::ShaderChecks;
+use super::shader::{Features, ShaderChecks};
 use super::{Accel, GpuError};
+use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
+
+/// A device's render kernels by (caustics, [`Features`]).
+type RenderKernels = HashMap<(bool, Features), Arc<Pipeline>>;
 
 /// One adapter as `meshtrace adapters` lists it.
 #[derive(Clone, Debug, PartialEq)]
@@ -76,10 +80,10 @@ pub struct GpuContext {
     pub scene_layout: wgpu::BindGroupLayout,
     /// How the render kernel is compiled: trusted unless [`GpuContext::with_shader_checks`].
     checks: ShaderChecks,
-    /// The render kernel, compiled by the first render on this device and kept for every
-    /// later scene (a batch's meshes), since its source and layouts do not depend on them.
-    /// The render kernel without and with the caustics code (`CAUSTICS`).
-    render: Arc<Mutex<[Option<Arc<Pipeline>>; 2]>>,
+    /// The render kernels, each compiled by the first render on this device that needs it
+    /// and kept for every later scene (a batch's meshes): without and with the caustics
+    /// code (`CAUSTICS`), for each set of [`Features`].
+    render: Arc<Mutex<RenderKernels>>,
     fault: Arc<Mutex<Option<String>>>,
 }
 
@@ -161,11 +165,15 @@ impl GpuContext {
     /// The render kernel (`shaders/render.wgsl`), compiled on first use: with the code of
     /// caustic light subpaths for scenes that have caustic targets, or without it
     /// ([`super::shader::render_source_without_caustics`]), which compiles in less than
-    /// half the time and holds no registers for light subpaths that it never traces.
-    pub fn render_pipeline(&self, caustics: bool) -> Result<Arc<Pipeline>, GpuError> {
-        let mut slots = self.render.lock().unwrap_or_else(|p| p.into_inner());
-        let slot = &mut slots[caustics as usize];
-        if let Some(p) = slot.as_ref() {
+    /// half the time and holds no registers for light subpaths that it never traces; and
+    /// with the optional parts the scene uses (`features`).
+    pub fn render_pipeline(
+        &self,
+        caustics: bool,
+        features: Features,
+    ) -> Result<Arc<Pipeline>, GpuError> {
+        let mut kernels = self.render.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(p) = kernels.get(&(caustics, features)) {
             return Ok(p.clone());
         }
         let p = Arc::new(Pipeline::new(
@@ -179,8 +187,9 @@ impl GpuContext {
             "render",
             (0, 3),
             self.checks,
+            features,
         )?);
-        *slot = Some(p.clone());
+        kernels.insert((caustics, features), p.clone());
         Ok(p)
     }
 

