@@ -161,12 +161,10 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     // inlines every call, makes one copy of each: a lane runs the stages its phase needs.
     var seen = true;
     var phase = PHASE_CAMERA;
-    // The sample's stream, its path to the first vertex (`first`, vertex `v0`) and whether
-    // the vertex to find next is that one.
+    // The sample's stream and its path to the first vertex (`first`, vertex `v0`).
     var rng: Rng;
     var first: PathState;
     var v0: PathVertex;
-    var at_first = false;
     // The sample's branches: the next to start (j of nb), the path being traced (`st`, its
     // stream `path_rng` and light subpath `light`), their radiance so far and the sample's
     // rays.
@@ -178,11 +176,12 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     var sum = vec3<f32>(0.0);
     var sample_rays = 0u;
     loop {
-        if phase == PHASE_CAMERA {
+        // A sample's camera ray goes on to its first vertex in the same round.
+        let at_first = phase == PHASE_CAMERA;
+        if at_first {
             rng = Rng(pixel, s, params.seed);
             st = start_sample(x, y, s, rng, &sums, &seen);
             path_rng = rng;
-            at_first = true;
             phase = PHASE_VERTEX;
         }
         // The vertex whose BSDF the path samples next, where `step`.
@@ -191,7 +190,6 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         if phase == PHASE_VERTEX {
             v = path_vertex(&st, path_rng, select(1u, params.branches, at_first));
             if at_first {
-                at_first = false;
                 first = st;
                 v0 = v;
                 nb = sample_branches(v0);

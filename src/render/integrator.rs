@@ -572,7 +572,7 @@ fn camera_sample<const CAUSTICS: bool>(
     };
     let mut st = path_start(ray, camera_pdf);
     let mut textured = MaybeUninit::uninit();
-    let v = path_vertex::<CAUSTICS>(scene, &mut st, rng, max_depth, branches, &mut textured);
+    let mut v = path_vertex::<CAUSTICS>(scene, &mut st, rng, max_depth, branches, &mut textured);
     let mut out = PathSample {
         radiance: st.radiance,
         rays: st.rays,
@@ -581,7 +581,6 @@ fn camera_sample<const CAUSTICS: bool>(
     if !CAUSTICS && v.is_none() {
         return out;
     }
-    let mut v = v;
     let mut sum = Vec3::ZERO;
     for j in 0..branches {
         let mut b = branch_start::<CAUSTICS>(scene, cam, &st, rng, j, branches, max_depth);
