@@ -338,8 +338,8 @@ def render_embree(e):
            f"Embree measured in turn." if direct else
            "Embree traced through the embreex bindings, whose scenes set "
            "`RTC_SCENE_FLAG_ROBUST`, which Mitsuba 3 does not set and which cost Embree "
-           "about a fifth of its rate when measured (BENCHMARKS log, twentieth session): "
-           "these ratios flatter meshtrace.")
+           "about a fifth of its rate when measured on 2026-12-04 (BENCHMARKS.md, "
+           "Traversal, Against Embree 4): these ratios flatter meshtrace.")
     lines = table(head + ["ratio", "target"], body) + [
         "",
         f"{e['name']}, {e['triangles']} triangles, {e['width']}×{e['height']} rays a view, "
