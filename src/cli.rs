@@ -14,7 +14,7 @@ use meshtrace::render::digest::render_digest;
 use meshtrace::render::gpu::{self, Accel, GpuError};
 use meshtrace::render::{LIGHT_EMITTER, RenderJob, RenderScene, SKY_EMITTER};
 use meshtrace::scene::studio::{BareOptions, Up};
-use meshtrace::scene::{self, Scene, TextureFormat, builtin, load::validate_settings};
+use meshtrace::scene::{self, Scene, TextureFormat, builtin};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -353,7 +353,7 @@ fn load(path: &Path, options: &BareOptions) -> Result<Scene> {
             bail!("--up: applies to a bare mesh (.obj, .gltf, .glb), not to a built-in scene")
         }
         Some(name) => builtin::load_builtin(name)?,
-        None => scene::load::load_scene_with(path, &scene::obj::Fs, options)?,
+        None => scene::load::load_scene_with(path, &scene::source::Fs, options)?,
     };
     for w in &scene.warnings {
         eprintln!("warning: {w}");
@@ -433,7 +433,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     s.seed = args.seed.unwrap_or(s.seed);
     s.caustics = args.caustics.unwrap_or(s.caustics);
     s.branches = args.branches.or(s.branches);
-    if let Err((field, message)) = validate_settings(s) {
+    if let Err((field, message)) = s.validate() {
         bail!("--{}: {message}", field.replace('_', "-"));
     }
     let settings = *s;

@@ -5,7 +5,8 @@
 use glam::{DVec3, Vec3};
 use meshtrace::geometry::TriVerts;
 use meshtrace::math::{Aabb, Ray};
-use meshtrace::scene::obj::{Fs, load_obj};
+use meshtrace::scene::obj::load_obj;
+use meshtrace::scene::source::Fs;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 

@@ -8,7 +8,8 @@
 use meshtrace::bvh::{BuildParams, validate};
 use meshtrace::math::Aabb;
 use meshtrace::render::RenderScene;
-use meshtrace::scene::obj::{FileSource, load_obj};
+use meshtrace::scene::obj::load_obj;
+use meshtrace::scene::source::FileSource;
 use meshtrace::scene::{
     NO_NORMAL, NO_TANGENT, NO_TEXTURE, NO_UV, PunctualLight, Scene, load_scene_from,
 };

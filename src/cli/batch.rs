@@ -9,7 +9,6 @@ use meshtrace::batch::{self, Manifest, Task};
 use meshtrace::bvh::BuildParams;
 use meshtrace::film::{Film, Format};
 use meshtrace::render::{RenderJob, RenderScene};
-use meshtrace::scene::load::validate_settings;
 use meshtrace::scene::studio::BareOptions;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -273,7 +272,7 @@ fn run_input(
     }
     let mut scene = load(&group[0].input, &BareOptions { up: job.up })?;
     scene.settings = manifest.settings.apply(scene.settings);
-    if let Err((field, message)) = validate_settings(&scene.settings) {
+    if let Err((field, message)) = scene.settings.validate() {
         bail!("{}: render.{field}: {message}", manifest.path.display());
     }
     let settings = scene.settings;

@@ -1,6 +1,6 @@
 //! Scenes built into the binary, from `assets/`, so that `meshtrace render` works anywhere.
 
-use super::obj::FileSource;
+use super::source::FileSource;
 use super::{Scene, SceneError, load_scene_from};
 use std::path::Path;
 

@@ -5,24 +5,33 @@
 //! error; `obj`/`mtl` and `gltf` read the meshes.
 //! Nothing here knows about BVHs or devices.
 
+pub mod builder;
 pub mod builtin;
 pub mod camera;
+pub mod checks;
+pub mod error;
 pub mod file;
 pub mod gltf;
 pub mod light;
+pub mod lines;
 pub mod load;
 pub mod material;
 pub mod mtl;
 pub mod obj;
+pub mod part;
+pub mod settings;
+pub mod source;
 pub mod sphere;
 pub mod studio;
 pub mod tangents;
 pub mod texture;
 
 pub use camera::Camera;
+pub use error::{SceneError, shown};
 pub use light::PunctualLight;
 pub use load::{load_scene, load_scene_from, parse_scene};
 pub use material::{Material, MaterialKind, NO_TEXTURE};
+pub use settings::{BRANCHES_DEFAULT, CAUSTICS_DEFAULT, MAX_BRANCHES, MAX_PIXELS, RenderSettings};
 pub use texture::{Texture, TextureFormat, Textures, Wrap};
 
 use glam::{Vec2, Vec3, Vec4};
@@ -121,62 +130,6 @@ impl Sky {
     }
 }
 
-/// How to render: the `[render]` table, after command-line overrides.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct RenderSettings {
-    pub width: u32,
-    pub height: u32,
-    pub spp: u32,
-    /// Longest path in segments from the camera (1 = emitters seen directly).
-    pub max_depth: u32,
-    pub seed: u32,
-    /// Whether some camera samples also trace light subpaths through the scene's specular
-    /// materials, joined to the camera paths (`render::caustics`): caustics with far less
-    /// noise. Off, the render is the path tracer's alone, as Mitsuba 3's `path` renders.
-    pub caustics: bool,
-    /// How many paths each camera sample branches into at its first hit
-    /// (`render::integrator`): the samples of indirect light per camera sample. Each
-    /// costs about a path less its camera ray and first vertex. `None`: [`Self::branches`]
-    /// decides.
-    pub branches: Option<u32>,
-}
-
-/// Whether renders trace caustic light subpaths unless told otherwise.
-pub const CAUSTICS_DEFAULT: bool = true;
-
-/// Branches at the first hit unless told otherwise, in a render without caustic light
-/// subpaths (BENCHMARKS.md: the quality per second of 1, 2, 4 and 8 on the benchmark
-/// scenes).
-pub const BRANCHES_DEFAULT: u32 = 4;
-
-/// The most branches a setting may ask for.
-pub const MAX_BRANCHES: u32 = 64;
-
-impl Default for RenderSettings {
-    fn default() -> Self {
-        Self {
-            width: 640,
-            height: 480,
-            spp: 64,
-            max_depth: 8,
-            seed: 0,
-            caustics: CAUSTICS_DEFAULT,
-            branches: None,
-        }
-    }
-}
-
-impl RenderSettings {
-    /// The branches of each camera sample: as set, else [`BRANCHES_DEFAULT`] in a render
-    /// that traces no caustic light subpaths and 1 in one that does. There each branch
-    /// traces a light subpath of its own and costs nearly a whole sample, so that
-    /// branching no longer pays (BENCHMARKS.md, the glass-and-mirror box).
-    pub fn branches(&self, light_subpaths: bool) -> u32 {
-        self.branches
-            .unwrap_or(if light_subpaths { 1 } else { BRANCHES_DEFAULT })
-    }
-}
-
 /// A loaded scene, ready to be built into an acceleration structure and rendered.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -200,61 +153,4 @@ pub struct Scene {
     /// (the ground left out), for other views framed alike (`meshtrace batch`'s turntables).
     /// `None` for a scene file.
     pub framed: Option<crate::math::Aabb>,
-}
-
-/// A path as error messages show it: on one line whatever characters it holds.
-pub fn shown(path: &std::path::Path) -> String {
-    path.display().to_string().escape_debug().to_string()
-}
-
-/// Why a scene could not be loaded. Each message is one line naming the file and the
-/// line or field at fault.
-#[derive(Debug, thiserror::Error)]
-pub enum SceneError {
-    #[error("{path}: {source}")]
-    Io {
-        path: String,
-        #[source]
-        source: std::io::Error,
-    },
-    #[error("{path}:{line}:{column}: {message}")]
-    Syntax {
-        path: String,
-        line: usize,
-        column: usize,
-        message: String,
-    },
-    #[error("{path}: {field}: {message}")]
-    Invalid {
-        path: String,
-        field: String,
-        message: String,
-    },
-    /// An image that cannot be read as a texture.
-    #[error("{path}: {message}")]
-    Image { path: String, message: String },
-    /// A problem with a glTF file at `at`: a JSON path such as
-    /// `meshes[2].primitives[0].indices`, or a part of a `.glb` container.
-    #[error("{path}: {at}: {message}")]
-    Gltf {
-        path: String,
-        at: String,
-        message: String,
-    },
-    /// A file that is none of the inputs meshtrace reads.
-    #[error("{path}: {message}")]
-    Unsupported { path: String, message: String },
-    /// A problem with an OBJ file or an MTL library it loads (`path` names the file at
-    /// fault), at `line` when one line is at fault; whole-mesh problems have no line.
-    #[error("{path}{}: {message}", at_line(*.line))]
-    Obj {
-        path: String,
-        line: Option<usize>,
-        message: String,
-    },
-}
-
-/// The `:{line}` of an error message, or nothing when the line is not known.
-fn at_line(line: Option<usize>) -> String {
-    line.map(|l| format!(":{l}")).unwrap_or_default()
 }

@@ -11,7 +11,7 @@
 //! warning), as is `map_d` (ignored, with a warning). Every other statement
 //! (`Ka`, `Ns`, `Tr`, unknown keywords) is ignored: nothing reads it.
 
-use super::obj::{BadLine, quoted, text_lines};
+use super::lines::{BadLine, quoted, text_lines};
 use glam::Vec3;
 
 /// One `newmtl` block of a library, as far as the mapping reads it.

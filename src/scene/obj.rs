@@ -8,73 +8,15 @@
 //! of every error, and a face only partly given `vn` indices is flat-shaded rather than
 //! borrowing a neighbour's normal.
 
+use super::lines::{BadLine, quoted, text_lines};
 use super::mtl::{MtlMap, MtlMaterial, parse_mtl};
+use super::part::{MeshPart, PartTriangle};
+use super::source::FileSource;
 use super::texture::{TextureRef, TextureSource, Usage, UvTransform, Wrap};
 use super::{Material, MaterialKind, NO_NORMAL, NO_TANGENT, NO_UV, SceneError};
-use glam::{Vec2, Vec3, Vec4};
+use glam::{Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::Path;
-
-/// Where scene files and meshes are read from: the file system, or the scenes built in.
-pub trait FileSource {
-    fn read(&self, path: &Path) -> std::io::Result<Vec<u8>>;
-}
-
-/// The file system.
-pub struct Fs;
-
-impl FileSource for Fs {
-    fn read(&self, path: &Path) -> std::io::Result<Vec<u8>> {
-        std::fs::read(path)
-    }
-}
-
-/// One piece of geometry in its own space, as a scene object brings it: an OBJ file with
-/// its materials already mapped, a sphere, or a glTF primitive. The scene builder
-/// transforms it and appends it to the scene mesh.
-#[derive(Debug, Default)]
-pub struct MeshPart {
-    /// Every vertex position the part defines (for an OBJ, every `v` line in file order,
-    /// whether or not a face uses it).
-    pub positions: Vec<Vec3>,
-    /// Every vertex normal the part defines (for an OBJ, every `vn` line in file order).
-    pub normals: Vec<Vec3>,
-    /// Every texture coordinate the part defines, v running down the image from its top
-    /// edge (an OBJ `vt u v` is (u, −v): OBJ runs v up from the bottom edge).
-    pub texcoords: Vec<Vec2>,
-    /// Tangents (glTF `TANGENT`): xyz the direction of increasing u, w (±1) the handedness
-    /// of the bitangent, `cross(normal, tangent.xyz) * w`.
-    pub tangents: Vec<Vec4>,
-    /// The triangles, in file order.
-    pub triangles: Vec<PartTriangle>,
-    /// The materials the triangles refer to: for an OBJ, every material of every library it
-    /// loaded, in load order (a name defined twice is listed twice).
-    pub materials: Vec<Material>,
-    /// The MTL name of each of `materials`.
-    pub material_names: Vec<String>,
-    /// The textures the materials' texture slots index, before their images are read.
-    pub textures: Vec<TextureRef>,
-    /// Problems that did not stop loading, each one line naming the file.
-    pub warnings: Vec<String>,
-}
-
-/// One triangle of a [`MeshPart`], by index into the part's own tables.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct PartTriangle {
-    /// Corner positions, indices into [`MeshPart::positions`].
-    pub p: [u32; 3],
-    /// Corner normals, indices into [`MeshPart::normals`], or `[NO_NORMAL; 3]` for a
-    /// flat-shaded triangle.
-    pub n: [u32; 3],
-    /// Corner texture coordinates, indices into [`MeshPart::texcoords`], or `[NO_UV; 3]`
-    /// when not every corner of the face has one.
-    pub t: [u32; 3],
-    /// Corner tangents, indices into [`MeshPart::tangents`], or `[NO_TANGENT; 3]`.
-    pub g: [u32; 3],
-    /// Index into [`MeshPart::materials`], or `None` for a face that names no material
-    /// (or an unknown one): the scene's default material.
-    pub material: Option<u32>,
-}
 
 /// Reads an OBJ file and the MTL libraries it names, fan-triangulating polygons. An error
 /// names the file (the OBJ, or the MTL library at fault) and, where one is at fault, the
@@ -87,14 +29,6 @@ pub fn load_obj(path: &Path, files: &dyn FileSource) -> Result<MeshPart, SceneEr
     })?;
     let dir = path.parent().unwrap_or(Path::new(""));
     parse_obj(&bytes, &shown, dir, files)
-}
-
-/// The first line of an OBJ or MTL file that the parser rejects: its 1-based number and
-/// why.
-#[derive(Debug)]
-pub(super) struct BadLine {
-    pub line: usize,
-    pub message: String,
 }
 
 /// The three kinds of element a face corner refers to, in corner order (`v/vt/vn`).
@@ -356,28 +290,6 @@ fn parse_obj(
     Ok(part)
 }
 
-/// A file's text up to the first line that is not valid UTF-8 (all of it when every line
-/// is), and that line's error, to report once the lines before it have been read: the first
-/// malformed line is the one reported. One check for the whole file is faster than one per
-/// line.
-pub(super) fn text_lines(bytes: &[u8]) -> (&str, Option<BadLine>) {
-    match std::str::from_utf8(bytes) {
-        Ok(text) => (text, None),
-        Err(e) => {
-            let valid = &bytes[..e.valid_up_to()];
-            let start = valid.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
-            // A prefix of the valid part, so this cannot fail.
-            let text = std::str::from_utf8(&valid[..start]).unwrap_or_default();
-            let line = valid[..start].iter().filter(|&&b| b == b'\n').count() + 1;
-            let bad = BadLine {
-                line,
-                message: "the line is not valid UTF-8 text".into(),
-            };
-            (text, Some(bad))
-        }
-    }
-}
-
 /// The indices of one face corner as written: `v`, `v/vt`, `v//vn` or `v/vt/vn`, each an
 /// integer as `isize::from_str` reads it (negative counting back). `None` for anything
 /// else. Byte by byte rather than through `split('/')` and `str::parse`: faces are most of a
@@ -533,18 +445,6 @@ fn check_numbers_into(
             "malformed {what}: expected {form}, found {count} numbers"
         ))
     }
-}
-
-/// A word of the file as a message shows it: quoted, escaped onto one line, and cut short.
-pub(super) fn quoted(word: &str) -> String {
-    const MAX: usize = 32;
-    let cut: String = word.chars().take(MAX).collect();
-    let more = if word.chars().nth(MAX).is_some() {
-        "…"
-    } else {
-        ""
-    };
-    format!("`{}{more}`", cut.escape_debug())
 }
 
 /// Why a word ending in `\` failed: OBJ's line continuation, which is not supported.

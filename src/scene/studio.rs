@@ -4,12 +4,19 @@
 //! studio environment (`assets/env/studio.hdr`, made by `tools/gen_studio_env.py`) whose
 //! soft key, fill and rim lights show its shape.
 
+use super::builder::Builder;
 use super::camera::Camera;
-use super::obj::{MeshPart, PartTriangle};
+use super::gltf::load_gltf;
+use super::material::Material;
+use super::obj::load_obj;
+use super::part::{MeshPart, PartTriangle};
+use super::settings::RenderSettings;
+use super::source::FileSource;
 use super::texture::{TextureError, TextureRef, TextureSource, Textures};
-use super::{NO_NORMAL, NO_TANGENT, NO_UV, SceneError, Sky};
+use super::{NO_NORMAL, NO_TANGENT, NO_UV, Scene, SceneError, Sky};
 use crate::math::Aabb;
 use glam::{Mat4, Vec3};
+use std::path::Path;
 use std::sync::Arc;
 
 /// The studio environment, built into the binary.
@@ -134,7 +141,7 @@ pub fn sky(textures: &mut Textures) -> Result<Sky, SceneError> {
         bytes: Arc::from(STUDIO_HDR),
         format: Some(image::ImageFormat::Hdr),
     });
-    let texture = textures.add(&r, &super::obj::Fs).map_err(|e| match e {
+    let texture = textures.add(&r, &super::source::Fs).map_err(|e| match e {
         TextureError::Fatal(e) => e,
         TextureError::Missing(name) => SceneError::Invalid {
             path: name,
@@ -147,4 +154,161 @@ pub fn sky(textures: &mut Textures) -> Result<Sky, SceneError> {
         strength: STUDIO_STRENGTH,
         rotation: 0.0,
     })
+}
+
+/// A bare OBJ in the studio: its own materials, turned so that its up axis (given, or
+/// detected from its bounds) is +Y, framed by the studio camera.
+pub(super) fn load_bare_obj(
+    path: &Path,
+    files: &dyn FileSource,
+    options: &BareOptions,
+) -> Result<Scene, SceneError> {
+    let mut builder = Builder::default();
+    let part = load_obj(path, files)?;
+    // The frame is that of the vertices the faces use, degenerate faces included: a file
+    // may define vertices that no face uses, and they must not move the camera.
+    let mut used = vec![false; part.positions.len()];
+    for t in &part.triangles {
+        for i in t.p {
+            used[i as usize] = true;
+        }
+    }
+    let shown = super::shown(path);
+    let obj_error = |message: String| SceneError::Obj {
+        path: shown.clone(),
+        line: None,
+        message,
+    };
+    let raw = part
+        .positions
+        .iter()
+        .zip(&used)
+        .filter(|&(_, &used)| used)
+        .fold(Aabb::EMPTY, |b, (&p, _)| b.grow(p));
+    if raw.is_empty() {
+        return Err(obj_error("the mesh has no faces".into()));
+    }
+    let turn = options.up.unwrap_or_else(|| Up::detect(&raw)).to_y();
+    builder.append_part(part, turn, None, files, &obj_error)?;
+    let bounds = builder
+        .mesh
+        .positions
+        .iter()
+        .zip(&used)
+        .filter(|&(_, &used)| used)
+        .fold(Aabb::EMPTY, |b, (&p, _)| b.grow(p));
+    let camera = camera(&bounds).ok_or_else(|| {
+        obj_error(format!(
+            "the mesh spans {} to {}, too far out to frame with a camera",
+            bounds.min, bounds.max
+        ))
+    })?;
+    let sky = builder.light_the_studio(&bounds, files)?;
+    let mut scene = builder.finish(
+        Some(path.to_path_buf()),
+        camera,
+        sky,
+        RenderSettings::default(),
+    );
+    scene.framed = Some(bounds);
+    Ok(scene)
+}
+
+/// A bare glTF file in the studio: its materials and lights, turned so that its up axis
+/// (given, or glTF's +Y) is +Y, seen through its first perspective camera or else the
+/// studio camera.
+pub(super) fn load_bare_gltf(
+    path: &Path,
+    files: &dyn FileSource,
+    options: &BareOptions,
+) -> Result<Scene, SceneError> {
+    let shown = super::shown(path);
+    let asset = load_gltf(path, files)?;
+    let turn = options.up.unwrap_or(Up::Y).to_y();
+    let own_camera = asset.camera.clone();
+    let mut builder = Builder::default();
+    let error = |at: &str, message: String| SceneError::Gltf {
+        path: shown.clone(),
+        at: at.to_string(),
+        message,
+    };
+    builder.append_gltf(asset, turn, None, true, files, &error)?;
+    let mesh = &builder.mesh;
+    if mesh.triangles.is_empty() {
+        return Err(error(
+            "scene",
+            "the default scene has no triangles to render".into(),
+        ));
+    }
+    let bounds = mesh.triangles.iter().fold(Aabb::EMPTY, |b, t| {
+        b.union(Aabb::from_points(&mesh.vertices(t)))
+    });
+    let camera = match own_camera {
+        Some(c) => Camera::new(
+            turn.transform_point3(c.position),
+            turn.transform_point3(c.position + c.forward),
+            turn.transform_vector3(c.up),
+            c.vfov,
+            c.aperture,
+            Some(c.focus_distance),
+        ),
+        None => camera(&bounds),
+    }
+    .ok_or_else(|| {
+        error(
+            "scene",
+            format!(
+                "the scene spans {} to {}, too far out to frame with a camera",
+                bounds.min, bounds.max
+            ),
+        )
+    })?;
+    let sky = builder.light_the_studio(&bounds, files)?;
+    let mut scene = builder.finish(
+        Some(path.to_path_buf()),
+        camera,
+        sky,
+        RenderSettings::default(),
+    );
+    scene.framed = Some(bounds);
+    Ok(scene)
+}
+
+impl Builder {
+    /// The lighting of a bare mesh of `bounds`: a file that brings its own light
+    /// (emissive materials or punctual lights) is lit by that alone, under a black sky;
+    /// any other gets the studio environment and a ground under it.
+    pub(super) fn light_the_studio(
+        &mut self,
+        bounds: &Aabb,
+        files: &dyn FileSource,
+    ) -> Result<Sky, SceneError> {
+        let emissive = self
+            .mesh
+            .triangles
+            .iter()
+            .any(|t| self.materials[t.material as usize].is_emissive());
+        if emissive || !self.lights.is_empty() {
+            return Ok(Sky::Constant(Vec3::ZERO));
+        }
+        let ground_material = self.add_material(
+            GROUND_MATERIAL,
+            Material::diffuse(Vec3::splat(GROUND_ALBEDO)),
+        );
+        // The ground is an object of its own, after the mesh's.
+        self.object = self.mesh.objects.iter().max().map_or(0, |&o| o + 1);
+        let no_error = |message: String| SceneError::Invalid {
+            path: "studio".into(),
+            field: "ground".into(),
+            message,
+        };
+        self.append_part(
+            ground(bounds),
+            Mat4::IDENTITY,
+            Some(ground_material),
+            files,
+            &no_error,
+        )?;
+        sky(&mut self.textures)
+    }
 }

@@ -5,7 +5,7 @@
 //! texel. The lookup, the same on both renderers, is `render::texture`.
 
 use super::SceneError;
-use super::obj::FileSource;
+use super::source::FileSource;
 use bytemuck::{Pod, Zeroable};
 use image::ImageFormat;
 use std::collections::HashMap;

@@ -1,6 +1,6 @@
 //! The bytes a glTF file refers to: its buffers (the GLB's BIN chunk, `data:` URIs, or files
 //! beside it) and its images (the same, or a buffer view), each read once, when first
-//! needed, through the scene's [`FileSource`](crate::scene::obj::FileSource).
+//! needed, through the scene's [`FileSource`](crate::scene::source::FileSource).
 
 use super::Doc;
 use crate::scene::SceneError;

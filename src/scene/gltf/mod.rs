@@ -19,7 +19,8 @@ mod material;
 mod nodes;
 mod primitive;
 
-use super::obj::{FileSource, MeshPart};
+use super::part::MeshPart;
+use super::source::FileSource;
 use super::texture::TextureRef;
 use super::{Camera, Material, PunctualLight, SceneError};
 use glam::Mat4;

@@ -6,7 +6,7 @@ use super::buffers::Buffers;
 use super::material::Materials;
 use super::primitive::read_primitive;
 use super::{Doc, GltfAsset, GltfPart};
-use crate::scene::obj::MeshPart;
+use crate::scene::part::MeshPart;
 use crate::scene::{Camera, PunctualLight, SceneError};
 use glam::{Mat4, Quat, Vec3};
 use gltf::json;

@@ -4,7 +4,7 @@
 
 use super::accessor::{self, read_floats, read_indices};
 use super::buffers::Buffers;
-use crate::scene::obj::{MeshPart, PartTriangle};
+use crate::scene::part::{MeshPart, PartTriangle};
 use crate::scene::{NO_NORMAL, NO_TANGENT, NO_UV, SceneError};
 use glam::{Vec2, Vec3, Vec4};
 use gltf::json::mesh::{Mode, Primitive, Semantic};

@@ -1,0 +1,100 @@
+//! The settings that decide an image's size, samples and light transport: the `[render]`
+//! table of a scene file, over which a render request lays its own.
+
+/// How to render: the `[render]` table, after command-line overrides.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    /// Longest path in segments from the camera (1 = emitters seen directly).
+    pub max_depth: u32,
+    pub seed: u32,
+    /// Whether some camera samples also trace light subpaths through the scene's specular
+    /// materials, joined to the camera paths (`render::caustics`): caustics with far less
+    /// noise. Off, the render is the path tracer's alone, as Mitsuba 3's `path` renders.
+    pub caustics: bool,
+    /// How many paths each camera sample branches into at its first hit
+    /// (`render::integrator`): the samples of indirect light per camera sample. Each
+    /// costs about a path less its camera ray and first vertex. `None`: [`Self::branches`]
+    /// decides.
+    pub branches: Option<u32>,
+}
+
+/// Most pixels an image may have: 2^26 (8192 x 8192); the film alone then takes 768 MiB.
+pub const MAX_PIXELS: u64 = 1 << 26;
+
+/// Whether renders trace caustic light subpaths unless told otherwise.
+pub const CAUSTICS_DEFAULT: bool = true;
+
+/// Branches at the first hit unless told otherwise, in a render without caustic light
+/// subpaths (BENCHMARKS.md: the quality per second of 1, 2, 4 and 8 on the benchmark
+/// scenes).
+pub const BRANCHES_DEFAULT: u32 = 4;
+
+/// The most branches a setting may ask for.
+pub const MAX_BRANCHES: u32 = 64;
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            width: 640,
+            height: 480,
+            spp: 64,
+            max_depth: 8,
+            seed: 0,
+            caustics: CAUSTICS_DEFAULT,
+            branches: None,
+        }
+    }
+}
+
+impl RenderSettings {
+    /// Checks the settings, wherever they came from (a scene file, a manifest, flags, a
+    /// library caller): the one check of them all. The error names the field as the scene
+    /// format spells it (`max_depth`), for the caller to place (`render.max_depth`,
+    /// `--max-depth`).
+    pub fn validate(&self) -> Result<(), (&'static str, String)> {
+        let s = self;
+        if s.width == 0 {
+            return Err(("width", "must be at least 1".into()));
+        }
+        if s.height == 0 {
+            return Err(("height", "must be at least 1".into()));
+        }
+        let pixels = s.width as u64 * s.height as u64;
+        if pixels > MAX_PIXELS {
+            return Err((
+                "width",
+                format!(
+                    "{}x{} is too large: at most {MAX_PIXELS} pixels",
+                    s.width, s.height
+                ),
+            ));
+        }
+        if s.spp == 0 {
+            return Err(("spp", "must be at least 1".into()));
+        }
+        if s.max_depth == 0 {
+            return Err(("max_depth", "must be at least 1".into()));
+        }
+        if let Some(b) = s.branches
+            && !(1..=MAX_BRANCHES).contains(&b)
+        {
+            return Err((
+                "branches",
+                format!("must be from 1 to {MAX_BRANCHES}, not {b}"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The branches of each camera sample: as set, else [`BRANCHES_DEFAULT`] in a render
+    /// that traces no caustic light subpaths and 1 in one that does. There each branch
+    /// traces a light subpath of its own and costs nearly a whole sample, so that
+    /// branching no longer pays (BENCHMARKS.md, the glass-and-mirror box).
+    pub fn branches(&self, light_subpaths: bool) -> u32 {
+        self.branches
+            .unwrap_or(if light_subpaths { 1 } else { BRANCHES_DEFAULT })
+    }
+}
