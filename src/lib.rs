@@ -17,5 +17,7 @@ pub mod film;
 pub mod fixed;
 pub mod geometry;
 pub mod math;
+pub mod pipeline;
 pub mod render;
+pub mod request;
 pub mod scene;

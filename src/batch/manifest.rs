@@ -3,8 +3,7 @@
 //! error names the manifest and the field (`jobs[1].output`) or line.
 
 use super::BatchError;
-use crate::film::Aov;
-use crate::scene::RenderSettings;
+use crate::request::RenderRequest;
 use crate::scene::studio::Up;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -12,20 +11,8 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ManifestFile {
-    render: Option<RenderSection>,
+    render: Option<RenderRequest>,
     jobs: Option<Vec<JobFile>>,
-}
-
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RenderSection {
-    width: Option<u32>,
-    height: Option<u32>,
-    spp: Option<u32>,
-    max_depth: Option<u32>,
-    seed: Option<u32>,
-    aov: Option<Vec<String>>,
-    transparent: Option<bool>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -38,30 +25,6 @@ struct JobFile {
     azimuth: Option<f32>,
     up: Option<String>,
     output: Option<String>,
-}
-
-/// What the `[render]` table sets: each given key overrides the scene's own value.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct SettingsOverride {
-    pub width: Option<u32>,
-    pub height: Option<u32>,
-    pub spp: Option<u32>,
-    pub max_depth: Option<u32>,
-    pub seed: Option<u32>,
-}
-
-impl SettingsOverride {
-    /// `settings` with the given keys replaced.
-    pub fn apply(&self, s: RenderSettings) -> RenderSettings {
-        RenderSettings {
-            width: self.width.unwrap_or(s.width),
-            height: self.height.unwrap_or(s.height),
-            spp: self.spp.unwrap_or(s.spp),
-            max_depth: self.max_depth.unwrap_or(s.max_depth),
-            seed: self.seed.unwrap_or(s.seed),
-            ..s
-        }
-    }
 }
 
 /// What a job renders.
@@ -100,10 +63,9 @@ pub struct Manifest {
     pub path: PathBuf,
     /// Its folder: relative paths start here.
     pub dir: PathBuf,
-    pub settings: SettingsOverride,
-    /// The AOVs every image gets ([`Aov::mask`]).
-    pub aovs: u32,
-    pub transparent: bool,
+    /// The `[render]` table: what every image asks for beyond its input (relative paths
+    /// in it resolved against the manifest's folder).
+    pub request: RenderRequest,
     pub jobs: Vec<Job>,
 }
 
@@ -136,34 +98,14 @@ impl Manifest {
                 message: e.message().replace(['\n', '\r'], " ").trim().to_string(),
             }
         })?;
-        let render = file.render.unwrap_or_default();
-        let settings = SettingsOverride {
-            width: render.width,
-            height: render.height,
-            spp: render.spp,
-            max_depth: render.max_depth,
-            seed: render.seed,
-        };
-        for (key, value) in [
-            ("width", settings.width),
-            ("height", settings.height),
-            ("spp", settings.spp),
-            ("max_depth", settings.max_depth),
-        ] {
-            if value == Some(0) {
-                return Err(invalid(
-                    format!("render.{key}"),
-                    "must be at least 1".into(),
-                ));
-            }
+        let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let mut request = file.render.unwrap_or_default();
+        if let Some(env) = &request.environment {
+            request.environment = Some(dir.join(env));
         }
-        let aovs = match &render.aov {
-            Some(list) => Aov::mask(
-                &Aov::parse_list(&list.join(","))
-                    .map_err(|e| invalid("render.aov".into(), e.to_string()))?,
-            ),
-            None => 0,
-        };
+        request
+            .validate()
+            .map_err(|e| invalid(format!("render.{}", e.field), e.message))?;
         let jobs = file.jobs.unwrap_or_default();
         if jobs.is_empty() {
             return Err(invalid(
@@ -226,7 +168,7 @@ impl Manifest {
             check_pattern(&output, views).map_err(|m| invalid(field("output"), m))?;
             let format = crate::film::Format::from_path(Path::new(&output))
                 .map_err(|e| invalid(field("output"), e.to_string()))?;
-            if render.transparent == Some(true) && format != crate::film::Format::Png {
+            if request.transparent() && format != crate::film::Format::Png {
                 return Err(invalid(
                     field("output"),
                     "render.transparent writes RGBA PNGs (alpha is the coverage); give a .png pattern".into(),
@@ -242,11 +184,9 @@ impl Manifest {
             });
         }
         Ok(Self {
-            dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+            dir,
             path: path.to_path_buf(),
-            settings,
-            aovs,
-            transparent: render.transparent.unwrap_or(false),
+            request,
             jobs: out,
         })
     }

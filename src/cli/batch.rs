@@ -2,14 +2,14 @@
 //! prepared on the device once for all its views, outputs that are already complete
 //! skipped, and every output folder's `transforms.json` kept up to date.
 
-use super::{DeviceArgs, Interrupted, load, set_threads};
+use super::{DeviceArgs, Interrupted, backend, pipeline_error, set_threads, warn};
 use anyhow::{Context, Result, bail};
 use meshtrace::batch::transforms::{self, Frame, Intrinsics};
 use meshtrace::batch::{self, Manifest, Task};
-use meshtrace::bvh::BuildParams;
 use meshtrace::film::{Film, Format};
-use meshtrace::render::{RenderJob, RenderScene};
-use meshtrace::scene::studio::BareOptions;
+use meshtrace::pipeline::Prepared;
+use meshtrace::render::backend::Backend;
+use meshtrace::request::RenderRequest;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -167,7 +167,9 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
         None => (0, 1),
     };
     let tasks = batch::shard(&all, k, n);
-    let backend = args.on.backend(args.quiet)?;
+    // The command line's device options win over the manifest's.
+    let request = args.on.request().over(&manifest.request);
+    let backend = backend(&request, args.quiet)?;
     if !args.quiet {
         eprintln!(
             "shard {k}/{n}: {} of {} images, on {}",
@@ -202,7 +204,9 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
         if cancel.load(Ordering::SeqCst) {
             break;
         }
-        let result = run_input(&manifest, group, &backend, &cancel, args.quiet, &mut tally);
+        let result = run_input(
+            &manifest, &request, group, &backend, &cancel, args.quiet, &mut tally,
+        );
         if flushed.elapsed().as_secs_f64() > FLUSH_SECONDS {
             record(&std::mem::take(&mut tally.frames))?;
             flushed = Instant::now();
@@ -257,29 +261,37 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
 /// camera. The input is loaded only if some view needs rendering or recording.
 fn run_input(
     manifest: &Manifest,
+    request: &RenderRequest,
     group: &[Task],
-    backend: &meshtrace::render::backend::Backend,
+    backend: &Backend,
     cancel: &Arc<AtomicBool>,
     quiet: bool,
     tally: &mut Tally,
 ) -> Result<()> {
     let job = &manifest.jobs[group[0].job];
-    let aovs = manifest.aovs != 0;
+    let aovs = request.aov_mask() != 0;
     let done: Vec<bool> = group.iter().map(|t| complete(t, aovs)).collect();
     if done.iter().all(|&d| d) && all_recorded(group) {
         tally.skipped += group.len();
         return Ok(());
     }
-    let mut scene = load(&group[0].input, &BareOptions { up: job.up })?;
-    scene.settings = manifest.settings.apply(scene.settings);
-    if let Err((field, message)) = scene.settings.validate() {
-        bail!("{}: render.{field}: {message}", manifest.path.display());
+    // The job's up axis, where it gives one, over the request's.
+    let request = RenderRequest {
+        up: job.up,
+        ..Default::default()
     }
-    let settings = scene.settings;
-    let own = scene.camera.clone();
-    let framed = scene.framed;
-    let mut prepared = backend.prepare(RenderScene::new(&scene, &BuildParams::default())?)?;
-    drop(scene);
+    .over(request);
+    let prepared = Prepared::new(&group[0].input, &request, &warn).map_err(|e| match e {
+        meshtrace::pipeline::PipelineError::Request(e) => {
+            anyhow::anyhow!("{}: render.{e}", manifest.path.display())
+        }
+        e => pipeline_error(e),
+    })?;
+    let settings = prepared.job.settings;
+    let own = prepared.camera.clone();
+    let framed = prepared.framed;
+    let mut views = prepared.views(backend).map_err(pipeline_error)?;
+    views.job_mut().cancel = Some(cancel.clone());
     for (task, done) in group.iter().zip(done) {
         let camera = batch::view_camera(job, task.view, &own, framed.as_ref())
             .with_context(|| format!("view {} cannot be framed", task.view))?;
@@ -289,18 +301,13 @@ fn run_input(
             tally.skipped += 1;
             continue;
         }
-        prepared.set_camera(&camera);
-        let mut render_job =
-            RenderJob::new(settings).with_aovs(manifest.aovs, manifest.transparent);
-        render_job.cancel = Some(cancel.clone());
         let t0 = Instant::now();
-        let mut film = prepared.render(&render_job, &|_| {})?;
+        let film = views.render(&camera, &|_| {}).map_err(pipeline_error)?;
         if film.samples < settings.spp {
             // An image cut short is not written (nor its frame): a resumed run renders it.
             tally.frames.pop();
             return Err(Interrupted("interrupted".into()).into());
         }
-        film.saved_aovs = manifest.aovs;
         if let Some(dir) = task.output.parent() {
             std::fs::create_dir_all(dir)
                 .with_context(|| format!("cannot create {}", dir.display()))?;
