@@ -239,7 +239,15 @@ fn bad_manifests_fail_cleanly() {
         ),
         (
             "[render]\naov = [\"colour\"]\n[[jobs]]\nscene = \"x.toml\"\noutput = \"a.png\"\n",
-            &["render.aov", "unknown AOV `colour`"],
+            &["bad.toml:2", "unknown AOV `colour`"],
+        ),
+        (
+            "[render]\nbranches = 99\ncaustics = false\n[[jobs]]\nscene = \"x.toml\"\noutput = \"a.png\"\n",
+            &["render.branches", "from 1 to 64"],
+        ),
+        (
+            "[render]\npart = 1\n[[jobs]]\nscene = \"x.toml\"\noutput = \"a.png\"\n",
+            &["bad.toml:2", "unknown field `part`"],
         ),
         ("[render]\nspp = 1\n", &["jobs", "no [[jobs]]"]),
     ];
