@@ -522,6 +522,7 @@ const TWINS: &[(&str, &str)] = &[
     ("src/render/sampling.rs", "shaders/sampling.wgsl"),
     ("src/render/bsdf.rs", "shaders/bsdf.wgsl"),
     ("src/render/camera.rs", "shaders/camera.wgsl"),
+    ("src/render/surface.rs", "shaders/surface.wgsl"),
     ("src/render/lights.rs", "shaders/lights.wgsl"),
     ("src/render/integrator.rs", "shaders/integrator.wgsl"),
 ];

@@ -51,12 +51,12 @@ use super::bsdf::{
     bsdf_draws_lobe, bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample, bsdf_transmits,
 };
 use super::camera::CameraRays;
-use super::integrator::{
-    ShadingFrame, SurfaceHit, geometry_agrees, offset_ray_origin, shading_frame, surface_at,
-};
 use super::lights::{LightPick, pick_light, spot_falloff, triangle_emission};
 use super::rng::{self, Rng};
 use super::sampling::{ONE_MINUS_EPSILON, sample_concentric_disk, sample_uniform_triangle};
+use super::surface::{
+    ShadingFrame, SurfaceHit, geometry_agrees, offset_ray_origin, shading_frame, surface_at,
+};
 use super::texture::{alpha_test, material_at};
 use super::{LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_SPOT, Light, RenderScene, SKY_EMITTER};
 use crate::geometry::{self, T_INF, TriVerts};

@@ -1,6 +1,6 @@
 //! Rendering: the flat scene tables both devices read ([`RenderScene`]); the stages of the
 //! path tracer, each a Rust file with a WGSL twin of the same name in `shaders/` (`rng`,
-//! `sampling`, `bsdf`, `camera`, `lights`, `integrator`); and the two drivers that run
+//! `sampling`, `bsdf`, `camera`, `surface`, `lights`, `integrator`); and the two drivers that run
 //! them, [`cpu`] and [`gpu`], chosen by [`backend`]. The GPU renderer uploads exactly these
 //! tables, so a path can be replayed on either device.
 
@@ -16,6 +16,7 @@ pub mod integrator;
 pub mod lights;
 pub mod rng;
 pub mod sampling;
+pub mod surface;
 pub mod texture;
 pub mod watch;
 

@@ -157,6 +157,7 @@ const SHADING: &[Source] = &[
     shader!("bsdf.wgsl"),
     shader!("camera.wgsl"),
     shader!("texture.wgsl"),
+    shader!("surface.wgsl"),
     shader!("environment.wgsl"),
     shader!("lights.wgsl"),
 ];
