@@ -7,7 +7,6 @@
 //! name), drawing every random number from the same counter-based [`Rng`], so a path traced
 //! on either device is the same path.
 
-use super::RenderScene;
 use super::bsdf::{
     bsdf_draws_direction, bsdf_draws_lobe, bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample,
     bsdf_transmits,
@@ -23,6 +22,7 @@ use super::sampling::power_heuristic;
 /// Also reachable here, the path that callers outside the renderer (`crate::bench`) name.
 pub use super::surface::offset_ray_origin;
 use super::surface::{ShadingFrame, SurfaceHit, geometry_agrees, shading_frame, surface_at};
+use super::tables::RenderScene;
 use super::texture::{alpha_test, material_at};
 use crate::bvh::traverse_closest_counted;
 use crate::film::NO_ID;

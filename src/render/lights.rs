@@ -8,8 +8,10 @@ use super::sampling::{
     sample_uniform_triangle,
 };
 use super::surface::offset_ray_origin;
+use super::tables::{
+    LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_SPOT, Light, RenderScene, SKY_EMITTER,
+};
 use super::texture::{alpha_test, material_at, triangle_uv};
-use super::{LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_SPOT, Light, RenderScene, SKY_EMITTER};
 use crate::geometry::{self, T_INF};
 use crate::scene::{NO_TEXTURE, Sky};
 use glam::{Vec2, Vec3};

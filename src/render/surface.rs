@@ -6,8 +6,8 @@
 //! `shaders/surface.wgsl`.
 
 use super::bsdf::bsdf_is_two_sided;
+use super::tables::{RenderScene, TRI_SMOOTH, TRI_TANGENT, TRI_UV};
 use super::texture::{normal_mapped, triangle_uv};
-use super::{RenderScene, TRI_SMOOTH, TRI_TANGENT, TRI_UV};
 use crate::bvh::Hit;
 use crate::math::{Ray, onb_from_normal};
 use crate::scene::Material;
