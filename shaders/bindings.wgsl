@@ -1,4 +1,4 @@
-// The scene, group 0: the tables of src/render/mod.rs `RenderScene`, uploaded as they are
+// The scene, group 0: the tables of src/render/tables.rs `RenderScene`, uploaded as they are
 // (src/render/gpu/tables.rs).
 //
 // Each table is read as texels of an Rgba32Uint texture, row-major, TABLE_WIDTH texels a

@@ -12,7 +12,7 @@ struct BvhNode {
     count: u32,
 }
 
-// mirror: src/render/mod.rs `TriShading` (48 bytes)
+// mirror: src/render/tables.rs `TriShading` (48 bytes)
 struct TriShading {
     n0: vec3<f32>,
     material: u32,
@@ -22,7 +22,7 @@ struct TriShading {
     flags: u32,
 }
 
-// mirror: src/render/mod.rs `TriTangents` (48 bytes): each corner's unit tangent and its
+// mirror: src/render/tables.rs `TriTangents` (48 bytes): each corner's unit tangent and its
 // bitangent's handedness (w = ±1).
 struct TriTangents {
     t0: vec4<f32>,
@@ -30,7 +30,7 @@ struct TriTangents {
     t2: vec4<f32>,
 }
 
-// mirror: src/render/mod.rs `TriUvs` (32 bytes): texture coordinates, v running down.
+// mirror: src/render/tables.rs `TriUvs` (32 bytes): texture coordinates, v running down.
 struct TriUvs {
     uv0: vec2<f32>,
     uv1: vec2<f32>,
@@ -53,7 +53,7 @@ struct Texture {
     wrap: u32,
 }
 
-// mirror: src/render/mod.rs `Light` (64 bytes): a punctual light; kind is a LIGHT_* code.
+// mirror: src/render/tables.rs `Light` (64 bytes): a punctual light; kind is a LIGHT_* code.
 struct Light {
     position: vec3<f32>,
     kind: u32,
@@ -67,7 +67,7 @@ struct Light {
     _pad1: u32,
 }
 
-// mirror: src/render/caustics.rs `CausticTarget` (16 bytes): a sphere around specular
+// mirror: src/render/tables.rs `CausticTarget` (16 bytes): a sphere around specular
 // geometry, which light subpaths aim at.
 struct CausticTarget {
     center: vec3<f32>,
@@ -104,7 +104,7 @@ struct Params {
     // Texels per pixel of the accumulation buffer: radiance, then one per film channel.
     film_texels: u32,
     // The environment map: its texture record, strength, the cosine and sine of its
-    // rotation about +Y, and its cells along u and v (src/render/environment.rs).
+    // rotation about +Y, and its cells along u and v (src/render/tables.rs `Environment`).
     env_texture: u32,
     env_strength: f32,
     env_rotation: vec2<f32>,

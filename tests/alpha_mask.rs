@@ -10,8 +10,6 @@ mod common;
 
 use common::fs::TempDir;
 use common::gltf::Asset;
-use meshtrace::bvh::BuildParams;
-use meshtrace::render::{RenderJob, RenderScene};
 use meshtrace::scene::load_scene;
 use serde_json::json;
 
@@ -53,13 +51,7 @@ fn radiance(
     );
     let path = dir.write("scene.toml", toml);
     let scene = load_scene(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
-    let rs = RenderScene::new(&scene, &BuildParams::default()).unwrap();
-    let job = RenderJob::new(scene.settings);
-    let mut films = vec![("cpu", common::cpu_render(&rs, &job))];
-    if let Some(ctx) = common::gpu(name) {
-        films.push(("gpu", common::gpu_render(&ctx, &rs, &job)));
-    }
-    films
+    common::render_both(name, &scene)
         .into_iter()
         .map(|(device, film)| {
             let mean = film.mean();

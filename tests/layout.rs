@@ -522,7 +522,11 @@ const TWINS: &[(&str, &str)] = &[
     ("src/render/sampling.rs", "shaders/sampling.wgsl"),
     ("src/render/bsdf.rs", "shaders/bsdf.wgsl"),
     ("src/render/camera.rs", "shaders/camera.wgsl"),
+    ("src/render/texture.rs", "shaders/texture.wgsl"),
+    ("src/render/surface.rs", "shaders/surface.wgsl"),
+    ("src/render/environment.rs", "shaders/environment.wgsl"),
     ("src/render/lights.rs", "shaders/lights.wgsl"),
+    ("src/render/caustics.rs", "shaders/caustics.wgsl"),
     ("src/render/integrator.rs", "shaders/integrator.wgsl"),
 ];
 

@@ -7,8 +7,6 @@
 mod common;
 
 use common::fs::TempDir;
-use meshtrace::bvh::BuildParams;
-use meshtrace::render::{RenderJob, RenderScene};
 use meshtrace::scene::load_scene;
 
 const RHO: f32 = 0.6;
@@ -29,13 +27,7 @@ fn floor_radiance(name: &str, light: &str) -> Vec<(&'static str, [f32; 3])> {
          [[objects]]\nmesh = \"floor.obj\"\nmaterial = \"floor\"\n[[lights]]\n{light}\n"
     );
     let scene = load_scene(&dir.write("scene.toml", toml)).unwrap_or_else(|e| panic!("{e}"));
-    let rs = RenderScene::new(&scene, &BuildParams::default()).unwrap();
-    let job = RenderJob::new(scene.settings);
-    let mut films = vec![("cpu", common::cpu_render(&rs, &job))];
-    if let Some(ctx) = common::gpu(name) {
-        films.push(("gpu", common::gpu_render(&ctx, &rs, &job)));
-    }
-    films
+    common::render_both(name, &scene)
         .into_iter()
         .map(|(device, film)| {
             let mean = film.mean();

@@ -12,8 +12,6 @@ mod common;
 use common::fs::TempDir;
 use common::gltf::Asset;
 use glam::Vec3;
-use meshtrace::bvh::BuildParams;
-use meshtrace::render::{RenderJob, RenderScene};
 use meshtrace::scene::load_scene;
 use serde_json::json;
 
@@ -49,13 +47,7 @@ fn scene_toml(object: &str, material: &str, light: Vec3) -> String {
 /// The radiance every pixel of `scene` sees, on each renderer (pixels must agree).
 fn radiance(name: &str, scene: &std::path::Path) -> Vec<(&'static str, f32)> {
     let scene = load_scene(scene).unwrap_or_else(|e| panic!("{name}: {e}"));
-    let rs = RenderScene::new(&scene, &BuildParams::default()).unwrap();
-    let job = RenderJob::new(scene.settings);
-    let mut films = vec![("cpu", common::cpu_render(&rs, &job))];
-    if let Some(ctx) = common::gpu(name) {
-        films.push(("gpu", common::gpu_render(&ctx, &rs, &job)));
-    }
-    films
+    common::render_both(name, &scene)
         .into_iter()
         .map(|(device, film)| {
             let mean = film.mean();

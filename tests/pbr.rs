@@ -458,10 +458,7 @@ fn gpu_matches_cpu() {
 #[test]
 fn lights_behind_a_transmitting_surface_are_sampled() {
     use common::scenes::{scene, square};
-    use meshtrace::bvh::BuildParams;
-    use meshtrace::render::{RenderJob, RenderScene};
     use meshtrace::scene::{Camera, Mesh, NO_NORMAL, NO_UV, Sky, Triangle};
-    let ctx = common::gpu("lights_behind_a_transmitting_surface_are_sampled");
     for c in cases()
         .iter()
         .filter(|c| c.m.transmission > 0.0 && c.m.roughness > 0.0)
@@ -496,12 +493,7 @@ fn lights_behind_a_transmitting_surface_are_sampled() {
         .unwrap();
         let settings = square(8, 512, 2, 5);
         let sc = scene(mesh, vec![m], camera, Sky::Constant(Vec3::ONE), settings);
-        let rs = RenderScene::new(&sc, &BuildParams::default()).unwrap();
-        let job = RenderJob::new(settings);
-        let mut films = vec![("cpu", common::cpu_render(&rs, &job))];
-        if let Some(ctx) = &ctx {
-            films.push(("gpu", common::gpu_render(ctx, &rs, &job)));
-        }
+        let films = common::render_both("lights_behind_a_transmitting_surface_are_sampled", &sc);
         for (device, film) in films {
             // Pixels are independent estimates; their spread gives the error of the mean.
             let values: Vec<f32> = film.mean().iter().map(|p| p.x).collect();

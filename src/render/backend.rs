@@ -5,8 +5,10 @@
 //! or `WGPU_ADAPTER_NAME`); with no adapter at all the CPU renders. On the GPU, `--accel`
 //! chooses between hardware ray queries and the software BVH ([`Accel`]).
 
+use super::cpu;
 use super::gpu::{self, Accel, GpuContext, GpuError, GpuRenderer};
-use super::{RenderJob, RenderScene, cpu};
+use super::job::RenderJob;
+use super::tables::RenderScene;
 use crate::film::Film;
 use crate::scene::camera::Camera;
 

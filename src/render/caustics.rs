@@ -51,118 +51,29 @@ use super::bsdf::{
     bsdf_draws_lobe, bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample, bsdf_transmits,
 };
 use super::camera::CameraRays;
-use super::integrator::{
-    ShadingFrame, SurfaceHit, geometry_agrees, offset_ray_origin, shading_frame, surface_at,
-};
 use super::lights::{LightPick, pick_light, spot_falloff, triangle_emission};
 use super::rng::{self, Rng};
 use super::sampling::{ONE_MINUS_EPSILON, sample_concentric_disk, sample_uniform_triangle};
+use super::surface::{
+    ShadingFrame, SurfaceHit, geometry_agrees, offset_ray_origin, shading_frame, surface_at,
+};
+/// A target's record, which lies with the other tables (`build.rs` lays them out).
+pub use super::tables::CausticTarget;
+use super::tables::{
+    LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_SPOT, Light, RenderScene, SKY_EMITTER,
+};
 use super::texture::{alpha_test, material_at};
-use super::{LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_SPOT, Light, RenderScene, SKY_EMITTER};
-use crate::geometry::{self, T_INF, TriVerts};
-use crate::math::{Aabb, Ray, onb_from_normal};
-use crate::scene::{Material, MaterialKind, NO_TEXTURE};
-use bytemuck::{Pod, Zeroable};
+use crate::geometry::{self, T_INF};
+use crate::math::{Ray, onb_from_normal};
+use crate::scene::Material;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
-
-/// A sphere around specular geometry, which light subpaths aim at (16 bytes).
-/// mirror: shaders/types.wgsl `CausticTarget`
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct CausticTarget {
-    pub center: [f32; 3],
-    pub radius: f32,
-}
-
-/// At most this many targets: objects beyond it share spheres.
-pub const MAX_CAUSTIC_TARGETS: usize = 8;
 
 /// The share of camera samples that trace a light subpath. The light subpath's vertices
 /// are few and bright, so that even this share makes their light nearly noise-free on the
 /// glass-and-mirror box, where each subpath costs about six rays (BENCHMARKS.md: 1/8 and
 /// 1/16 gave the best quality per second, 1 the least).
 pub const LIGHT_SUBPATH_RATE: f32 = 0.125;
-
-/// Whether a material may scatter through a delta lobe alone somewhere on its surface
-/// (where [`bsdf_is_delta`] may hold once its textures are applied).
-pub fn may_be_delta(m: &Material) -> bool {
-    match m.kind {
-        MaterialKind::CONDUCTOR | MaterialKind::DIELECTRIC => true,
-        MaterialKind::PBR => {
-            (m.roughness == 0.0 || m.roughness_texture != NO_TEXTURE)
-                && (m.metallic >= 1.0 || m.transmission >= 1.0)
-        }
-        _ => false,
-    }
-}
-
-/// The spheres that bound the triangles whose materials [`may_be_delta`]: one per object
-/// that has such triangles, centred on their box and reaching their farthest corner; with
-/// more than [`MAX_CAUSTIC_TARGETS`] objects, objects are grouped by halving them along
-/// their boxes' widest spread of centres. Empty when no material may be delta.
-pub fn caustic_targets(
-    tris: &[TriVerts],
-    materials: &[u32],
-    table: &[Material],
-) -> Vec<CausticTarget> {
-    let delta: Vec<bool> = table.iter().map(may_be_delta).collect();
-    // Each object's triangles with a delta material: (object, box, triangle indices).
-    let mut objects: std::collections::BTreeMap<u32, (Aabb, Vec<usize>)> = Default::default();
-    for (i, t) in tris.iter().enumerate() {
-        if delta[materials[i] as usize] {
-            let entry = objects
-                .entry(t.object())
-                .or_insert_with(|| (Aabb::EMPTY, Vec::new()));
-            entry.0 = entry.0.union(Aabb::from_points(&t.corners()));
-            entry.1.push(i);
-        }
-    }
-    let mut groups: Vec<(Aabb, Vec<usize>)> = objects.into_values().collect();
-    let mut out = Vec::new();
-    split_groups(&mut groups, MAX_CAUSTIC_TARGETS, &mut |part| {
-        let bounds = part.iter().fold(Aabb::EMPTY, |b, g| b.union(g.0));
-        let center = bounds.center();
-        let radius = part
-            .iter()
-            .flat_map(|g| g.1.iter())
-            .flat_map(|&i| tris[i].corners())
-            .map(|c| c.distance(center))
-            .fold(0.0f32, f32::max);
-        // A margin, so that rounding never leaves a specular point outside its cone.
-        let radius = radius * (1.0 + 1e-3) + 1e-6 * (1.0 + center.abs().max_element());
-        out.push(CausticTarget {
-            center: center.into(),
-            radius,
-        });
-    });
-    out
-}
-
-/// Calls `emit` with `groups` cut into at most `n` parts: halved at the median of their
-/// centres along the axis where the centres spread most.
-fn split_groups<T>(groups: &mut [(Aabb, T)], n: usize, emit: &mut impl FnMut(&[(Aabb, T)])) {
-    if groups.is_empty() {
-        return;
-    }
-    if groups.len() <= n || n == 1 {
-        if n == 1 {
-            emit(groups);
-        } else {
-            for g in groups.chunks(1) {
-                emit(g);
-            }
-        }
-        return;
-    }
-    let centres = groups.iter().fold(Aabb::EMPTY, |b, g| b.grow(g.0.center()));
-    let axis = centres.extent().max_position();
-    groups.sort_by(|a, b| a.0.center()[axis].total_cmp(&b.0.center()[axis]));
-    let half = groups.len() / 2;
-    let (lo, hi) = groups.split_at_mut(half);
-    split_groups(lo, n / 2, emit);
-    split_groups(hi, n - n / 2, emit);
-}
 
 /// The cone of directions from `p` that meet a target: its axis, the cosine of its half
 /// angle and one minus that cosine (computed without cancellation). From inside the

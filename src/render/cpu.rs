@@ -5,9 +5,10 @@
 
 use super::camera::{CameraRays, generate_camera_ray, pixel_centre_ray};
 use super::integrator::{FirstHit, first_hit, trace_path};
+use super::job::{Checkpoints, RenderJob};
 use super::rng::{Rng, SeedTable};
+use super::tables::RenderScene;
 use super::watch::Region;
-use super::{Checkpoints, RenderJob, RenderScene};
 use crate::film::{Aov, Film};
 use crate::fixed::{Texel, fixed_add, fixed_add3, texel_add, to_fixed, to_fixed3};
 use crate::scene::RenderSettings;

@@ -3,7 +3,8 @@
 
 use super::gpu::params::Params;
 use super::gpu::tables::TABLES;
-use super::{RenderJob, RenderScene};
+use super::job::RenderJob;
+use super::tables::RenderScene;
 use sha2::{Digest, Sha256};
 
 /// The digest, in hex, of `scene` as the renderers read it (every table in binding order,

@@ -1,8 +1,9 @@
 //! The environment map: radiance arriving from an equirectangular image around the scene,
 //! and its importance sampling: a cell of the image drawn from a piecewise-constant
-//! distribution over the cells, weighed by luminance × sin θ and built once on the host,
-//! then a point in the cell drawn in proportion to its bilinear luminance. Every function
-//! but the builder has a WGSL twin of the same name in `shaders/environment.wgsl`.
+//! distribution over the cells, weighed by luminance × sin θ and built once on the host
+//! with the scene's tables (`build.rs`), then a point in the cell drawn in proportion to
+//! its bilinear luminance. Every function has a WGSL twin of the same name in
+//! `shaders/environment.wgsl`.
 //!
 //! The image is read as Mitsuba 3's `envmap` reads it, so that the two agree pixel for
 //! pixel: bilinearly between texel centres along u (wrapping around), and along v between
@@ -10,66 +11,12 @@
 //! nadir. A cell spans the texel centres of two neighbouring columns and two neighbouring
 //! rows, over which the radiance is bilinear.
 
-use super::RenderScene;
 use super::sampling::ONE_MINUS_EPSILON;
+use super::tables::RenderScene;
 use super::texture::{texel, texel_span};
 use crate::scene::{Texture, Wrap};
 use glam::{Vec2, Vec3, Vec4};
 use std::f32::consts::PI;
-
-/// The environment's cells along u and v: one per column (between its texel centre and
-/// the next, around), and one between each two rows (one for an image of one row).
-pub fn env_cells(t: &Texture) -> [u32; 2] {
-    [t.width, t.height.saturating_sub(1).max(1)]
-}
-
-/// The sampling distribution of texture `index` as an environment map: for its
-/// [`env_cells`] [nx, ny], the inclusive
-/// CDF over the ny rows of cells, then each row's inclusive CDF over its nx cells, each
-/// normalised to end at 1; empty when the environment sends no light. A cell weighs the
-/// mean luminance of its four corners (the integral of their bilinear interpolation) times
-/// sin θ at its centre, which is positive wherever the radiance in the cell is.
-pub fn env_distribution(scene: &RenderScene, index: u32) -> Vec<f32> {
-    let t = &scene.textures[index as usize];
-    let [nx, ny] = env_cells(t);
-    let mut rows = Vec::with_capacity(ny as usize);
-    let mut cdf = vec![0.0f32; (ny + nx * ny) as usize];
-    for i in 0..ny {
-        let sin_theta = (std::f64::consts::PI * (i as f64 + 0.5) / ny as f64).sin();
-        let mut total = 0.0f64;
-        let sums: Vec<f64> = (0..nx)
-            .map(|j| {
-                let c = cell_corners(scene, t, i, j).as_dvec4();
-                total += 0.25 * (c.x + c.y + c.z + c.w) * sin_theta;
-                total
-            })
-            .collect();
-        let row = &mut cdf[(ny + i * nx) as usize..(ny + (i + 1) * nx) as usize];
-        for (c, s) in row.iter_mut().zip(&sums) {
-            // A row that sends nothing is never picked; a uniform CDF keeps it well formed.
-            *c = if total > 0.0 {
-                (s / total) as f32
-            } else {
-                (sums.len() as f64).recip() as f32
-            };
-        }
-        if let Some(last) = row.last_mut() {
-            *last = 1.0;
-        }
-        rows.push(total);
-    }
-    let all: f64 = rows.iter().sum();
-    if !(all > 0.0 && all.is_finite()) {
-        return Vec::new();
-    }
-    let mut running = 0.0f64;
-    for (c, r) in cdf.iter_mut().zip(&rows) {
-        running += r;
-        *c = (running / all) as f32;
-    }
-    cdf[ny as usize - 1] = 1.0;
-    cdf
-}
 
 /// The luminance of texel (`x`, `y`) of image `t`, or 0 where that is not positive: the
 /// environment's sampling weight.

@@ -3,13 +3,15 @@
 //! `shaders/lights.wgsl`.
 
 use super::environment::{env_pdf, env_radiance, sample_env};
-use super::integrator::offset_ray_origin;
 use super::sampling::{
     ONE_MINUS_EPSILON, UNIFORM_SPHERE_PDF, sample_cdf, sample_uniform_sphere,
     sample_uniform_triangle,
 };
+use super::surface::offset_ray_origin;
+use super::tables::{
+    LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_SPOT, Light, RenderScene, SKY_EMITTER,
+};
 use super::texture::{alpha_test, material_at, triangle_uv};
-use super::{LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_SPOT, Light, RenderScene, SKY_EMITTER};
 use crate::geometry::{self, T_INF};
 use crate::scene::{NO_TEXTURE, Sky};
 use glam::{Vec2, Vec3};

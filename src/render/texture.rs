@@ -4,7 +4,7 @@
 //! and materials whose textured parameters are evaluated at a surface point. Every
 //! function has a WGSL twin of the same name in `shaders/texture.wgsl`.
 
-use super::{RenderScene, TRI_UV};
+use super::tables::{RenderScene, TRI_UV};
 use crate::scene::material::MAT_ALPHA_MASK;
 use crate::scene::{Material, NO_TEXTURE, Texture, TextureFormat, Wrap};
 use glam::{Vec2, Vec3, Vec4};
@@ -188,17 +188,4 @@ pub fn alpha_test(scene: &RenderScene, tri: u32, b1: f32, b2: f32) -> bool {
         alpha *= texture_lookup(scene, m.albedo_texture, uv).w;
     }
     alpha >= m.alpha_cutoff
-}
-
-/// The mean colour of texture `index` over its texels, for weighing textured emitters by
-/// power (host only).
-pub fn texture_mean(scene: &RenderScene, index: u32) -> Vec3 {
-    let t = &scene.textures[index as usize];
-    let mut sum = glam::DVec3::ZERO;
-    for y in 0..t.height {
-        for x in 0..t.width {
-            sum += texel(scene, t, x, y).truncate().as_dvec3();
-        }
-    }
-    (sum / (t.width as f64 * t.height as f64)).as_vec3()
 }

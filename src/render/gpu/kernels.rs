@@ -6,7 +6,7 @@ use super::pipelines::Pipeline;
 use super::shader::{Module, ShaderChecks};
 use super::tables::params_buffer;
 use super::{GpuContext, GpuError, GpuRenderer, shader};
-use crate::render::RenderScene;
+use crate::render::tables::RenderScene;
 use crate::scene::RenderSettings;
 use std::time::Instant;
 use wgpu::util::DeviceExt;

@@ -3,9 +3,9 @@
 //! all against naga's layout.
 
 use super::layout::{StructLayout, struct_layout};
-use crate::render::RenderScene;
 use crate::render::camera::CameraRays;
 use crate::render::integrator::branch_weight;
+use crate::render::tables::RenderScene;
 use crate::scene::{Camera, RenderSettings, Sky};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;

@@ -17,7 +17,7 @@ use crate::render::caustics::{LIGHT_SUBPATH_RATE, MAX_CAUSTIC_HOPS};
 use crate::render::integrator::RR_DEPTH;
 use crate::render::rng;
 use crate::render::sampling::{ONE_MINUS_EPSILON, UNIFORM_SPHERE_PDF};
-use crate::render::{
+use crate::render::tables::{
     LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_POINT, LIGHT_SPOT, RenderScene, SKY_EMITTER,
     TRI_SMOOTH, TRI_TANGENT, TRI_UV,
 };
@@ -157,6 +157,7 @@ const SHADING: &[Source] = &[
     shader!("bsdf.wgsl"),
     shader!("camera.wgsl"),
     shader!("texture.wgsl"),
+    shader!("surface.wgsl"),
     shader!("environment.wgsl"),
     shader!("lights.wgsl"),
 ];

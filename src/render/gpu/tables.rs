@@ -10,8 +10,7 @@ use super::params::Params;
 use super::{GpuContext, GpuError};
 use crate::bvh::BvhNode;
 use crate::geometry::TriVerts;
-use crate::render::caustics::CausticTarget;
-use crate::render::{Light, RenderScene, TriShading, TriTangents, TriUvs};
+use crate::render::tables::{CausticTarget, Light, RenderScene, TriShading, TriTangents, TriUvs};
 use crate::scene::{Material, Texture};
 
 /// Texels per row of the table textures (the shaders get its log2 from `shader::shared_constants`).

@@ -1,0 +1,71 @@
+// The surface a ray finds, the origin of a ray leaving it and the frame its BSDF is
+// evaluated in. mirror: src/render/surface.rs — every function has a Rust twin of the same
+// name.
+
+// mirror: src/render/surface.rs `SurfaceHit`
+struct SurfaceHit {
+    p: vec3<f32>,
+    ng: vec3<f32>,
+    ns: vec3<f32>,
+    material: u32,
+    front_face: bool,
+    tri: u32,
+    uv: vec2<f32>,
+}
+
+// mirror: src/render/surface.rs `surface_at`
+fn surface_at(ray: Ray, hit: Hit) -> SurfaceHit {
+    let tri = load_tri(hit.tri);
+    let sh = load_shading(hit.tri);
+    let ng = geometric_normal(tri);
+    var ns = ng;
+    if (sh.flags & TRI_SMOOTH) != 0u {
+        let w = 1.0 - hit.u - hit.v;
+        let n = w * sh.n0 + hit.u * sh.n1 + hit.v * sh.n2;
+        let len2 = dot(n, n);
+        ns = select(vec3<f32>(0.0), n * inverseSqrt(len2), len2 > 0.0);
+        if dot(ns, ng) < 0.0 {
+            ns = -ns;
+        }
+        if all(ns == vec3<f32>(0.0)) {
+            ns = ng;
+        }
+    }
+    let uv = triangle_uv(hit.tri, hit.u, hit.v);
+    if (sh.flags & TRI_TANGENT) != 0u {
+        ns = normal_mapped(hit.tri, hit.u, hit.v, uv, ns, ng);
+    }
+    return SurfaceHit(ray.origin + hit.t * ray.dir, ng, ns, sh.material, dot(ray.dir, ng) < 0.0, hit.tri, uv);
+}
+
+// mirror: src/render/surface.rs `offset_ray_origin`
+fn offset_ray_origin(p: vec3<f32>, ng: vec3<f32>, w: vec3<f32>) -> vec3<f32> {
+    let ap = abs(p);
+    let eps = 1e-5 * (1.0 + max(max(ap.x, ap.y), ap.z));
+    return select(p - eps * ng, p + eps * ng, dot(w, ng) >= 0.0);
+}
+
+// The frame a BSDF is evaluated in at a hit, for light leaving along wo_world: m's columns
+// are the tangent, bitangent and shading normal; ng the geometric normal, turned as the
+// frame is. mirror: src/render/surface.rs `ShadingFrame`
+struct ShadingFrame {
+    m: mat3x3<f32>,
+    ng: vec3<f32>,
+}
+
+// mirror: src/render/surface.rs `shading_frame`
+fn shading_frame(mat: Material, si: SurfaceHit, wo_world: vec3<f32>) -> ShadingFrame {
+    let two_sided = bsdf_is_two_sided(mat);
+    let flip = two_sided && dot(wo_world, si.ng) < 0.0;
+    let ng = select(si.ng, -si.ng, flip);
+    var ns = select(si.ns, -si.ns, flip);
+    if two_sided && dot(ns, wo_world) <= 0.0 {
+        ns = ng;
+    }
+    return ShadingFrame(onb_from_normal(ns), ng);
+}
+
+// mirror: src/render/surface.rs `geometry_agrees`
+fn geometry_agrees(ng: vec3<f32>, wo_world: vec3<f32>, wi_world: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> bool {
+    return (dot(wi_world, ng) * dot(wo_world, ng) > 0.0) == (wi.z * wo.z > 0.0);
+}
