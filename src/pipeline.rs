@@ -56,12 +56,11 @@ pub fn load(input: &Path, request: &RenderRequest) -> Result<Scene, PipelineErro
         None => load::load_scene_with(input, &Fs, &request.bare_options())?,
     };
     if let Some(env) = &request.environment {
-        let texture = load::load_environment(env, &mut scene.textures, &Fs).map_err(|message| {
-            RequestError {
+        let texture = crate::scene::texture::load_environment(env, &mut scene.textures, &Fs)
+            .map_err(|message| RequestError {
                 field: "environment",
                 message,
-            }
-        })?;
+            })?;
         scene.sky = Sky::Environment {
             texture,
             strength: 1.0,

@@ -512,23 +512,26 @@ fn documented_struct_sizes_match_naga() {
     assert!(checked >= 5, "{checked}");
 }
 
-/// The twin files: each concept is one Rust file and one WGSL file of the same name.
-const TWINS: &[(&str, &str)] = &[
-    ("src/math.rs", "shaders/math.wgsl"),
-    ("src/geometry.rs", "shaders/geometry.wgsl"),
-    ("src/bvh/traverse.rs", "shaders/traverse.wgsl"),
-    ("src/scene/material.rs", "shaders/material.wgsl"),
-    ("src/render/rng.rs", "shaders/rng.wgsl"),
-    ("src/render/sampling.rs", "shaders/sampling.wgsl"),
-    ("src/render/bsdf.rs", "shaders/bsdf.wgsl"),
-    ("src/render/camera.rs", "shaders/camera.wgsl"),
-    ("src/render/texture.rs", "shaders/texture.wgsl"),
-    ("src/render/surface.rs", "shaders/surface.wgsl"),
-    ("src/render/environment.rs", "shaders/environment.wgsl"),
-    ("src/render/lights.rs", "shaders/lights.wgsl"),
-    ("src/render/caustics.rs", "shaders/caustics.wgsl"),
-    ("src/render/integrator.rs", "shaders/integrator.wgsl"),
-];
+/// The twin files ARCHITECTURE.md lists: its table between `<!-- twins -->` and
+/// `<!-- /twins -->`, whose second and third columns name a Rust file and its WGSL twin.
+fn twins() -> Vec<(String, String)> {
+    let text = std::fs::read_to_string(root().join("ARCHITECTURE.md")).unwrap();
+    let start = text
+        .find("<!-- twins -->")
+        .expect("ARCHITECTURE.md lists the twins");
+    let end = text.find("<!-- /twins -->").expect("the twin table ends");
+    text[start..end]
+        .lines()
+        .filter_map(|row| {
+            let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+            let file = |c: &str| c.strip_prefix('`')?.strip_suffix('`').map(String::from);
+            match cells.as_slice() {
+                ["", _, rust, wgsl, ""] => Some((file(rust)?, file(wgsl)?)),
+                _ => None,
+            }
+        })
+        .collect()
+}
 
 /// The name declared by the first `fn`, `struct` or `const` line at or after line `i`.
 fn declared_after(lines: &[&str], i: usize) -> Option<String> {
@@ -625,7 +628,17 @@ fn twin_problems(twins: &[(&str, &str)]) -> (usize, Vec<String>) {
 
 #[test]
 fn twin_files_hold_the_same_functions_under_the_same_names() {
-    let (checked, problems) = twin_problems(TWINS);
+    let twins = twins();
+    assert!(
+        twins.len() >= 15,
+        "ARCHITECTURE.md lists {} twin pairs",
+        twins.len()
+    );
+    let pairs: Vec<(&str, &str)> = twins
+        .iter()
+        .map(|(r, w)| (r.as_str(), w.as_str()))
+        .collect();
+    let (checked, problems) = twin_problems(&pairs);
     assert!(checked >= 60, "only {checked} tagged declarations");
     assert!(problems.is_empty(), "twin files:\n{}", problems.join("\n"));
     // The check can fail: pairing files with the wrong twins is caught.

@@ -10,13 +10,14 @@ use super::file::{
 };
 use super::gltf::{is_gltf, load_gltf};
 use super::light::PunctualLight;
-use super::load::load_environment;
 use super::material::MAT_ALPHA_MASK;
 use super::obj::load_obj;
 use super::part::{MeshPart, PartTriangle};
 use super::source::FileSource;
 use super::sphere::{default_subdivisions, icosphere};
-use super::texture::{TextureError, TextureRef, TextureSource, Textures, Usage, UvTransform, Wrap};
+use super::texture::{
+    TextureError, TextureRef, TextureSource, Textures, Usage, UvTransform, Wrap, load_environment,
+};
 use super::{
     Camera, Material, MaterialKind, NO_TANGENT, NO_TEXTURE, NO_UV, RenderSettings, SceneError, Sky,
 };

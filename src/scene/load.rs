@@ -8,24 +8,9 @@ use super::checks::Ctx;
 use super::file::SceneFile;
 use super::source::{FileSource, Fs};
 use super::studio::{BareOptions, load_bare_gltf, load_bare_obj};
-use super::texture::{TextureError, TextureRef, TextureSource, Textures};
+use super::texture::load_environment;
 use super::{Scene, SceneError, Sky};
 use std::path::Path;
-
-/// Adds the equirectangular image at `path` to `textures` as an environment map reads it
-/// (linear, or sRGB-decoded for an 8-bit image; repeating around, clamped at the poles);
-/// its record's index, or why it cannot be read.
-pub fn load_environment(
-    path: &Path,
-    textures: &mut Textures,
-    files: &dyn FileSource,
-) -> Result<u32, String> {
-    let r = TextureRef::environment(TextureSource::File(path.to_path_buf()));
-    textures.add(&r, files).map_err(|e| match e {
-        TextureError::Fatal(e) => e.to_string(),
-        TextureError::Missing(file) => format!("cannot read {file}"),
-    })
-}
 
 /// Lights `scene` with the equirectangular image at `path` (strength 1, not turned)
 /// instead of its own sky, as `--env` asks; why not, naming the file, when it cannot be

@@ -9,7 +9,7 @@ use super::source::FileSource;
 use bytemuck::{Pod, Zeroable};
 use image::ImageFormat;
 use std::collections::HashMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// How a texture's texels are stored and decoded: a `u32` code, as the shaders compare it.
@@ -502,4 +502,19 @@ fn srgb_to_linear(s: f32) -> f32 {
     } else {
         ((s + 0.055) / 1.055).powf(2.4)
     }
+}
+
+/// Adds the equirectangular image at `path` to `textures` as an environment map reads it
+/// (linear, or sRGB-decoded for an 8-bit image; repeating around, clamped at the poles);
+/// its record's index, or why it cannot be read.
+pub fn load_environment(
+    path: &Path,
+    textures: &mut Textures,
+    files: &dyn FileSource,
+) -> Result<u32, String> {
+    let r = TextureRef::environment(TextureSource::File(path.to_path_buf()));
+    textures.add(&r, files).map_err(|e| match e {
+        TextureError::Fatal(e) => e.to_string(),
+        TextureError::Missing(file) => format!("cannot read {file}"),
+    })
 }
