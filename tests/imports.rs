@@ -218,10 +218,10 @@ impl Crate {
                 }
                 for p in paths {
                     let last = p.rsplit("::").next().unwrap_or("").trim();
-                    if last == *item || last == "*" {
-                        if let Some(found) = self.resolve(&base, &p, depth + 1) {
-                            return Some(found);
-                        }
+                    if (last == *item || last == "*")
+                        && let Some(found) = self.resolve(&base, &p, depth + 1)
+                    {
+                        return Some(found);
                     }
                 }
             }
