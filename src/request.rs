@@ -170,7 +170,7 @@ impl RenderRequest {
         if self.device == Some(DeviceChoice::Cpu) && self.accel == Some(Accel::Hardware) {
             return Err(RequestError::new(
                 "accel",
-                "hardware needs the GPU renderer; use the device gpu or auto, or accel auto",
+                "--accel hardware needs the GPU renderer; drop --device cpu or use --accel auto",
             ));
         }
         #[cfg(not(feature = "denoise"))]

@@ -162,6 +162,9 @@ impl UpAxis {
 
 /// A request's error as the command line says it: the field as its flag (`--max-depth`).
 fn flag_error(e: RequestError) -> anyhow::Error {
+    if e.message.starts_with("--") {
+        return anyhow::anyhow!("{}", e.message);
+    }
     let flag = match e.field {
         "environment" => "env".to_string(),
         field => field.replace('_', "-"),
