@@ -8,9 +8,9 @@ use crate::geometry::{T_INF, geometric_normal};
 use crate::math::{Aabb, Ray, onb_from_normal};
 use crate::render::camera::{CameraRays, generate_camera_ray};
 use crate::render::gpu::{GpuContext, GpuError, GpuRenderer, kernels::Kernel, shader};
-use crate::render::integrator::offset_ray_origin;
 use crate::render::rng::Rng;
 use crate::render::sampling::{sample_cosine_hemisphere, sample_uniform_triangle};
+use crate::render::surface::offset_ray_origin;
 use crate::render::texture::alpha_test;
 use crate::render::{RenderJob, RenderScene, SKY_EMITTER, cpu};
 use crate::scene::{

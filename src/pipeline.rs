@@ -81,8 +81,6 @@ pub struct Prepared {
     pub part: Option<Part>,
     /// What a bare mesh's camera frames ([`Scene::framed`]), for other views framed alike.
     pub framed: Option<Aabb>,
-    /// The input's own camera.
-    pub camera: Camera,
     finish: Finish,
 }
 
@@ -123,14 +121,15 @@ impl Prepared {
         for w in &scene.warnings {
             warn(w);
         }
-        Self::from_scene(&scene, request)
+        Self::build(&scene, request)
     }
 
-    /// Prepares a loaded scene: resolves the settings over its own and builds its tables.
-    pub fn from_scene(scene: &Scene, request: &RenderRequest) -> Result<Self, PipelineError> {
-        request.validate()?;
+    /// Prepares a loaded scene for a validated request: resolves the settings over the
+    /// scene's own and builds its tables.
+    fn build(scene: &Scene, request: &RenderRequest) -> Result<Self, PipelineError> {
         let settings: RenderSettings = request.settings(scene.settings)?;
-        // The denoiser is made first, so that a missing Open Image Denoise fails at once.
+        // The denoiser is made before the tables are built, so that a missing Open Image
+        // Denoise fails before that work.
         #[cfg(feature = "denoise")]
         let denoiser = if request.denoise() {
             Some(Denoiser::with_threads(rayon::current_num_threads())?)
@@ -157,7 +156,6 @@ impl Prepared {
             job,
             part: request.part,
             framed: scene.framed,
-            camera: scene.camera.clone(),
             finish: Finish {
                 saved_aovs,
                 #[cfg(feature = "denoise")]
@@ -240,7 +238,7 @@ impl Views {
 /// Renders `input` as `request` asks, on the backend it asks for: the whole pipeline in
 /// one call, for library callers. Warnings are dropped; [`Prepared::new`] passes them on.
 pub fn render(input: &Path, request: &RenderRequest) -> Result<Film, PipelineError> {
-    request.validate()?;
+    let prepared = Prepared::new(input, request, &|_| {})?;
     let (backend, _) = request.backend()?;
-    Prepared::new(input, request, &|_| {})?.render(&backend, &|_| {})
+    prepared.render(&backend, &|_| {})
 }

@@ -288,7 +288,7 @@ fn run_input(
         e => pipeline_error(e),
     })?;
     let settings = prepared.job.settings;
-    let own = prepared.camera.clone();
+    let own = prepared.scene.camera.clone();
     let framed = prepared.framed;
     let mut views = prepared.views(backend).map_err(pipeline_error)?;
     views.job_mut().cancel = Some(cancel.clone());

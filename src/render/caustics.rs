@@ -57,10 +57,8 @@ use super::sampling::{ONE_MINUS_EPSILON, sample_concentric_disk, sample_uniform_
 use super::surface::{
     ShadingFrame, SurfaceHit, geometry_agrees, offset_ray_origin, shading_frame, surface_at,
 };
-/// A target's record, which lies with the other tables (`build.rs` lays them out).
-pub use super::tables::CausticTarget;
 use super::tables::{
-    LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_SPOT, Light, RenderScene, SKY_EMITTER,
+    CausticTarget, LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_SPOT, Light, RenderScene, SKY_EMITTER,
 };
 use super::texture::{alpha_test, material_at};
 use crate::geometry::{self, T_INF};

@@ -20,8 +20,9 @@ use super::lights::{light_pdf, sample_light, sky_pdf, sky_radiance};
 use super::rng::{self, Rng};
 use super::sampling::power_heuristic;
 /// Also reachable here, the path that callers outside the renderer (`crate::bench`) name.
-pub use super::surface::offset_ray_origin;
-use super::surface::{ShadingFrame, SurfaceHit, geometry_agrees, shading_frame, surface_at};
+use super::surface::{
+    ShadingFrame, SurfaceHit, geometry_agrees, offset_ray_origin, shading_frame, surface_at,
+};
 use super::tables::RenderScene;
 use super::texture::{alpha_test, material_at};
 use crate::bvh::traverse_closest_counted;

@@ -203,15 +203,7 @@ pub(super) fn load_bare_obj(
             bounds.min, bounds.max
         ))
     })?;
-    let sky = builder.light_the_studio(&bounds, files)?;
-    let mut scene = builder.finish(
-        Some(path.to_path_buf()),
-        camera,
-        sky,
-        RenderSettings::default(),
-    );
-    scene.framed = Some(bounds);
-    Ok(scene)
+    builder.finish_in_studio(path, camera, bounds, files)
 }
 
 /// A bare glTF file in the studio: its materials and lights, turned so that its up axis
@@ -263,22 +255,33 @@ pub(super) fn load_bare_gltf(
             ),
         )
     })?;
-    let sky = builder.light_the_studio(&bounds, files)?;
-    let mut scene = builder.finish(
-        Some(path.to_path_buf()),
-        camera,
-        sky,
-        RenderSettings::default(),
-    );
-    scene.framed = Some(bounds);
-    Ok(scene)
+    builder.finish_in_studio(path, camera, bounds, files)
 }
 
 impl Builder {
+    /// The bare mesh's scene: lit in the studio, seen by `camera`, `bounds` framed.
+    fn finish_in_studio(
+        mut self,
+        path: &Path,
+        camera: Camera,
+        bounds: Aabb,
+        files: &dyn FileSource,
+    ) -> Result<Scene, SceneError> {
+        let sky = self.light_the_studio(&bounds, files)?;
+        let mut scene = self.finish(
+            Some(path.to_path_buf()),
+            camera,
+            sky,
+            RenderSettings::default(),
+        );
+        scene.framed = Some(bounds);
+        Ok(scene)
+    }
+
     /// The lighting of a bare mesh of `bounds`: a file that brings its own light
     /// (emissive materials or punctual lights) is lit by that alone, under a black sky;
     /// any other gets the studio environment and a ground under it.
-    pub(super) fn light_the_studio(
+    fn light_the_studio(
         &mut self,
         bounds: &Aabb,
         files: &dyn FileSource,
