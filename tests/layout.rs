@@ -533,15 +533,18 @@ fn twins() -> Vec<(String, String)> {
         .collect()
 }
 
-/// The name declared by the first `fn`, `struct` or `const` line at or after line `i`.
+/// The name declared by the first `fn`, `struct`, `const`, `enum` or `type` line at or
+/// after line `i`.
 fn declared_after(lines: &[&str], i: usize) -> Option<String> {
     lines[i..].iter().find_map(|l| {
         let l = l.trim_start().trim_start_matches("pub ");
-        ["fn ", "struct ", "const ", "enum "].iter().find_map(|kw| {
-            let rest = l.strip_prefix(kw)?;
-            let name: String = rest.chars().take_while(|&c| is_ident(c)).collect();
-            (!name.is_empty()).then_some(name)
-        })
+        ["fn ", "struct ", "const ", "enum ", "type "]
+            .iter()
+            .find_map(|kw| {
+                let rest = l.strip_prefix(kw)?;
+                let name: String = rest.chars().take_while(|&c| is_ident(c)).collect();
+                (!name.is_empty()).then_some(name)
+            })
     })
 }
 
