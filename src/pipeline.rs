@@ -121,13 +121,15 @@ impl Prepared {
         for w in &scene.warnings {
             warn(w);
         }
-        Self::build(&scene, request)
+        Self::build(scene, request)
     }
 
     /// Prepares a loaded scene for a validated request: resolves the settings over the
     /// scene's own and builds its tables.
-    fn build(scene: &Scene, request: &RenderRequest) -> Result<Self, PipelineError> {
+    fn build(mut scene: Scene, request: &RenderRequest) -> Result<Self, PipelineError> {
         let settings: RenderSettings = request.settings(scene.settings)?;
+        // The tables follow the settings too: `caustics` decides the caustic targets.
+        scene.settings = settings;
         // The denoiser is made before the tables are built, so that a missing Open Image
         // Denoise fails before that work.
         #[cfg(feature = "denoise")]
@@ -152,7 +154,7 @@ impl Prepared {
             .with_aovs(saved_aovs | guides, request.transparent())
             .with_samples(samples);
         Ok(Self {
-            scene: RenderScene::new(scene, &BuildParams::default())?,
+            scene: RenderScene::new(&scene, &BuildParams::default())?,
             job,
             part: request.part,
             framed: scene.framed,
