@@ -88,8 +88,10 @@ pub struct Prepared {
 struct Finish {
     /// The AOVs the output holds ([`Aov::mask`]).
     saved_aovs: u32,
+    /// Behind a lock: an Open Image Denoise device may move between threads but not be
+    /// shared, and a prepared render is shared with the preview window's thread.
     #[cfg(feature = "denoise")]
-    denoiser: Option<Denoiser>,
+    denoiser: Option<std::sync::Mutex<Denoiser>>,
 }
 
 impl Finish {
@@ -101,7 +103,9 @@ impl Finish {
         if let Some(d) = &self.denoiser
             && film.samples == job.samples.end - job.samples.start
         {
-            d.denoise_film(film)?;
+            d.lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+                .denoise_film(film)?;
         }
         #[cfg(not(feature = "denoise"))]
         let _ = job;
@@ -134,7 +138,9 @@ impl Prepared {
         // Denoise fails before that work.
         #[cfg(feature = "denoise")]
         let denoiser = if request.denoise() {
-            Some(Denoiser::with_threads(rayon::current_num_threads())?)
+            Some(std::sync::Mutex::new(Denoiser::with_threads(
+                rayon::current_num_threads(),
+            )?))
         } else {
             None
         };
