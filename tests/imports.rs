@@ -352,19 +352,11 @@ fn layer_problems(
     problems
 }
 
-/// The one folder whose files still import each other in a loop: the GPU driver's
-/// context, accel, pipelines, tables and renderer. Its files are left out of the cycle
-/// check until the loop is broken; a loop anywhere else fails.
-const LOOPED_FOLDER: &str = "render::gpu";
-
 #[test]
 fn no_import_cycle_between_files() {
     for binary in [false, true] {
         let krate = read_crate(binary);
-        let mut edges = krate.edges();
-        edges.retain(|(a, b)| {
-            !(a.join("::").starts_with(LOOPED_FOLDER) && b.join("::").starts_with(LOOPED_FOLDER))
-        });
+        let edges = krate.edges();
         assert!(
             edges.len() > 100 || binary,
             "only {} imports read",

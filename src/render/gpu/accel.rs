@@ -1,34 +1,11 @@
-//! Hardware ray queries: the choice between them and the software BVH (`--accel`), and the
-//! scene's acceleration structure for them, one BLAS of the leaf-ordered triangles in one
+//! The scene's acceleration structure for hardware ray queries (`--accel`, chosen when
+//! the device is opened: [`super::Accel`]), one BLAS of the leaf-ordered triangles in one
 //! TLAS, which `shaders/ray_query.wgsl` walks in place of `shaders/traverse.wgsl`.
 
-use super::{GpuContext, GpuError};
+use super::device::GpuDevice;
+use super::error::GpuError;
 use crate::geometry::TriVerts;
 use wgpu::util::DeviceExt;
-
-/// How the GPU renderer finds the triangles a ray hits.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Accel {
-    /// Hardware ray queries where the adapter offers them, else the software BVH.
-    Auto,
-    /// The software BVH walk of `shaders/traverse.wgsl`, on any adapter.
-    Software,
-    /// Hardware ray queries (`shaders/ray_query.wgsl`); an error on an adapter without them.
-    Hardware,
-}
-
-impl Accel {
-    /// Whether a device on an adapter that does (`offered`) or does not offer ray queries
-    /// traces with them; `Hardware` without them is [`GpuError::NoRayQuery`].
-    pub fn resolve(self, adapter: &str, offered: bool) -> Result<bool, GpuError> {
-        match self {
-            Self::Auto => Ok(offered),
-            Self::Software => Ok(false),
-            Self::Hardware if offered => Ok(true),
-            Self::Hardware => Err(GpuError::NoRayQuery(adapter.to_string())),
-        }
-    }
-}
 
 /// The scene's acceleration structure on the device: one BLAS over every triangle, in the
 /// leaf order of the tables (no index buffer, so a hit's primitive index is the triangle's
@@ -43,7 +20,7 @@ impl SceneAccel {
     /// Builds the structures over `tris` and waits for the build. The geometry is opaque
     /// unless a triangle is masked: then every hit comes to the shader as a candidate, which
     /// confirms it where the alpha test passes.
-    pub fn new(ctx: &GpuContext, tris: &[TriVerts]) -> Result<Self, GpuError> {
+    pub fn new(ctx: &GpuDevice, tris: &[TriVerts]) -> Result<Self, GpuError> {
         let count = tris.len() as u64;
         let limit = ctx.limits.max_blas_primitive_count as u64;
         if count > limit {

@@ -4,7 +4,7 @@
 
 use super::pipelines::Pipeline;
 use super::shader::{Module, ShaderChecks};
-use super::tables::params_buffer;
+use super::upload::params_buffer;
 use super::{GpuContext, GpuError, GpuRenderer, shader};
 use crate::render::tables::RenderScene;
 use crate::scene::RenderSettings;

@@ -3,14 +3,19 @@
 //!
 //! The host uploads the tables of [`RenderScene`](crate::render::RenderScene) unchanged,
 //! so the GPU traces exactly the paths the CPU renderer traces for the same
-//! (pixel, sample, seed). `context` opens devices, `accel` builds the acceleration structure
-//! of hardware ray queries (`--accel`), `params` holds the uniform block,
-//! `layout` describes the host-shared structs, `shader` generates and joins the WGSL, `tables` uploads the scene, `pipelines` compiles entry
-//! points, `session` is the renderer ([`GpuRenderer`]) and `kernels` runs the shader
-//! unit-test and ray-throughput entry points against it.
+//! (pixel, sample, seed). From the bottom up: `error` says what went wrong, `layout`
+//! describes the host-shared structs, `params` holds the uniform block, `tables` lists the
+//! scene's tables and their bind group layout, `shader` generates and joins the WGSL,
+//! `device` opens adapters (with or without hardware ray queries, `--accel`), `accel`
+//! builds their acceleration structure, `upload` puts a scene on a device, `pipelines`
+//! compiles entry points, `context` keeps a device's render kernels, `session` is the
+//! renderer ([`GpuRenderer`]) and `kernels` runs the shader unit-test and ray-throughput
+//! entry points against it.
 
 mod accel;
 mod context;
+mod device;
+mod error;
 pub mod kernels;
 pub mod layout;
 pub mod params;
@@ -18,37 +23,10 @@ mod pipelines;
 mod session;
 pub mod shader;
 pub mod tables;
+mod upload;
 
-pub use accel::Accel;
-pub use context::{AdapterSummary, GpuContext, choose_adapter, list_adapters};
+pub use context::GpuContext;
+pub use device::{Accel, AdapterSummary, GpuDevice, choose_adapter, list_adapters};
+pub use error::GpuError;
 pub use session::{GpuRenderer, PATHS_PER_DISPATCH};
 pub use tables::TABLE_WIDTH;
-
-/// What can go wrong on the GPU path; each message says what to do about it.
-#[derive(Debug, thiserror::Error)]
-pub enum GpuError {
-    #[error(
-        "no Vulkan adapter found; install a Vulkan driver (for a CPU-only machine, Mesa's lavapipe: `apt-get install mesa-vulkan-drivers`) or use --device cpu"
-    )]
-    NoAdapter,
-    #[error("no adapter matches `{0}` (there are {1}); run `meshtrace adapters` to list them")]
-    NoSuchAdapter(String, usize),
-    #[error("cannot open the GPU device: {0}")]
-    Device(String),
-    #[error(
-        "the {what} need {bytes} bytes but this adapter holds at most {limit} ({rule}); use --device cpu or a smaller scene"
-    )]
-    TooLarge {
-        what: &'static str,
-        bytes: u64,
-        limit: u64,
-        /// The adapter limit that sets `limit`, as wgpu names it, with its value.
-        rule: String,
-    },
-    #[error(
-        "--accel hardware: the adapter {0} offers no hardware ray queries; use --accel auto or --accel software"
-    )]
-    NoRayQuery(String),
-    #[error("GPU error: {0}")]
-    Fault(String),
-}

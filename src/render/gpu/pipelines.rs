@@ -1,8 +1,9 @@
 //! Compute pipelines: a WGSL module compiled once for one entry point, over the scene's
 //! bind group (group 0) and one group of storage buffers of its own (group 1).
 
+use super::device::GpuDevice;
+use super::error::GpuError;
 use super::shader::{Features, Module, ShaderChecks};
-use super::{GpuContext, GpuError};
 
 /// A compiled entry point and the layout of its storage group.
 pub struct Pipeline {
@@ -16,7 +17,7 @@ impl Pipeline {
     /// `scene_layout` plus one group of storage buffers: `inputs` read-only ones, then
     /// `outputs` read-write ones.
     pub fn new(
-        ctx: &GpuContext,
+        ctx: &GpuDevice,
         scene_layout: &wgpu::BindGroupLayout,
         module: Module,
         entry: &str,
@@ -93,7 +94,7 @@ impl Pipeline {
     }
 
     /// A bind group for the storage group, binding `buffers` in order.
-    pub fn io_group(&self, ctx: &GpuContext, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+    pub fn io_group(&self, ctx: &GpuDevice, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
         let entries: Vec<_> = buffers
             .iter()
             .enumerate()

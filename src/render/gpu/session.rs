@@ -4,7 +4,7 @@
 use super::params::Params;
 use super::pipelines::Pipeline;
 use super::shader::Features;
-use super::tables::{SceneTables, params_buffer};
+use super::upload::{SceneTables, params_buffer};
 use super::{GpuContext, GpuError};
 use crate::film::{Aov, Film};
 use crate::fixed::{fixed_add3, from_words};

@@ -1,13 +1,12 @@
-//! The scene's tables on the device: each uploaded as it lies in memory into an
-//! Rgba32Uint texture, [`TABLE_WIDTH`] texels a row, and the bind group layout (group 0)
-//! that the shaders read them through (`shaders/bindings.wgsl`). A texel fetch is a
+//! What the scene's tables are on the device: each is uploaded (by `upload`) as it lies in
+//! memory into an Rgba32Uint texture, [`TABLE_WIDTH`] texels a row; here are the list of
+//! tables, the WGSL that loads their structs, and the bind group layout (group 0) that the
+//! shaders read them through (`shaders/bindings.wgsl`). A texel fetch is a
 //! gather on every device, and a texture of 4096 × 16384 texels holds 1 GiB, far beyond
 //! some drivers' limits on a storage binding.
 
-use super::accel::SceneAccel;
 use super::layout::{Member, StructLayout, struct_layout};
 use super::params::Params;
-use super::{GpuContext, GpuError};
 use crate::bvh::BvhNode;
 use crate::geometry::TriVerts;
 use crate::render::tables::{CausticTarget, Light, RenderScene, TriShading, TriTangents, TriUvs};
@@ -15,10 +14,6 @@ use crate::scene::{Material, Texture};
 
 /// Texels per row of the table textures (the shaders get its log2 from `shader::shared_constants`).
 pub const TABLE_WIDTH: u32 = 1 << 12;
-
-/// Rows of a table texture written per upload step: wgpu stages each write in memory of
-/// its own, so bounded steps keep the upload from doubling the scene's footprint.
-const UPLOAD_ROWS: usize = 256;
 
 /// What a table holds per element.
 pub enum Element {
@@ -305,7 +300,7 @@ fn struct_loader(t: &Table, layout: &StructLayout) -> String {
 
 /// The layout of the scene bind group (group 0): a parameter block, every table, and on a
 /// device that traces with ray queries the TLAS. The same for every scene on a device, so
-/// [`GpuContext`] makes it once and its pipelines serve every scene.
+/// [`GpuDevice`](super::GpuDevice) makes it once and its pipelines serve every scene.
 pub fn scene_layout(device: &wgpu::Device, ray_query: bool) -> wgpu::BindGroupLayout {
     let mut entries = vec![wgpu::BindGroupLayoutEntry {
         binding: 0,
@@ -343,148 +338,4 @@ pub fn scene_layout(device: &wgpu::Device, ray_query: bool) -> wgpu::BindGroupLa
         label: Some("scene"),
         entries: &entries,
     })
-}
-
-/// A scene uploaded to one device: its table textures, on a device that traces with ray
-/// queries its acceleration structure, and the layout of the bind group (group 0) that
-/// holds them with a parameter block (the device's [`scene_layout`]).
-pub struct SceneTables {
-    views: Vec<wgpu::TextureView>,
-    accel: Option<SceneAccel>,
-    pub layout: wgpu::BindGroupLayout,
-}
-
-impl SceneTables {
-    /// Uploads every table, checking each against the adapter's limits, and builds the
-    /// acceleration structure where `ctx` traces with ray queries.
-    pub fn new(ctx: &GpuContext, scene: &RenderScene) -> Result<Self, GpuError> {
-        let views = TABLES
-            .iter()
-            .map(|t| table_texture(ctx, t.what, (t.bytes)(scene)))
-            .collect::<Result<Vec<_>, _>>()?;
-        let accel = if ctx.ray_query {
-            Some(SceneAccel::new(ctx, &scene.tris)?)
-        } else {
-            None
-        };
-        let layout = ctx.scene_layout.clone();
-        ctx.check()?;
-        Ok(Self {
-            views,
-            accel,
-            layout,
-        })
-    }
-
-    /// The scene bind group: `params` (one [`Params`] block), the tables and the TLAS.
-    pub fn bind_group(&self, ctx: &GpuContext, params: &wgpu::Buffer) -> wgpu::BindGroup {
-        let mut entries = vec![wgpu::BindGroupEntry {
-            binding: 0,
-            resource: params.as_entire_binding(),
-        }];
-        entries.extend(
-            self.views
-                .iter()
-                .enumerate()
-                .map(|(i, v)| wgpu::BindGroupEntry {
-                    binding: i as u32 + 1,
-                    resource: wgpu::BindingResource::TextureView(v),
-                }),
-        );
-        if let Some(accel) = &self.accel {
-            entries.push(wgpu::BindGroupEntry {
-                binding: TLAS_BINDING,
-                resource: wgpu::BindingResource::AccelerationStructure(&accel.tlas),
-            });
-        }
-        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("scene"),
-            layout: &self.layout,
-            entries: &entries,
-        })
-    }
-}
-
-/// A uniform buffer holding one parameter block, rewritten before each dispatch.
-pub fn params_buffer(ctx: &GpuContext) -> wgpu::Buffer {
-    ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("dispatch parameters"),
-        size: size_of::<Params>() as u64,
-        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    })
-}
-
-/// Uploads a table of 16-byte texels as an Rgba32Uint texture `TABLE_WIDTH` texels wide.
-/// The table is written from where it lies, in steps of [`UPLOAD_ROWS`] rows, each
-/// finished before the next, so no copy of the whole table is ever made.
-fn table_texture(
-    ctx: &GpuContext,
-    what: &'static str,
-    data: &[u8],
-) -> Result<wgpu::TextureView, GpuError> {
-    let texels = (data.len() as u64).div_ceil(16);
-    let rows = texels.div_ceil(TABLE_WIDTH as u64).max(1);
-    let max_rows = ctx.limits.max_texture_dimension_2d as u64;
-    if rows > max_rows {
-        return Err(GpuError::TooLarge {
-            what,
-            bytes: data.len() as u64,
-            limit: max_rows * TABLE_WIDTH as u64 * 16,
-            rule: format!(
-                "a table is a texture of at most max_texture_dimension_2d = {max_rows} rows of {TABLE_WIDTH} 16-byte texels"
-            ),
-        });
-    }
-    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(what),
-        size: wgpu::Extent3d {
-            width: TABLE_WIDTH,
-            height: rows as u32,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba32Uint,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
-    let row_bytes = TABLE_WIDTH as usize * 16;
-    let write = |first_row: usize, bytes: &[u8]| {
-        let n = (bytes.len() / row_bytes) as u32;
-        let mut dst = texture.as_image_copy();
-        dst.origin.y = first_row as u32;
-        ctx.queue.write_texture(
-            dst,
-            bytes,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(row_bytes as u32),
-                rows_per_image: Some(n),
-            },
-            wgpu::Extent3d {
-                width: TABLE_WIDTH,
-                height: n,
-                depth_or_array_layers: 1,
-            },
-        );
-    };
-    let full = data.len() / row_bytes;
-    for (i, chunk) in data[..full * row_bytes]
-        .chunks(UPLOAD_ROWS * row_bytes)
-        .enumerate()
-    {
-        write(i * UPLOAD_ROWS, chunk);
-        ctx.queue.submit([]);
-        ctx.wait()?;
-    }
-    if full < rows as usize {
-        // The last row, zero-padded (an empty table is one row of zeros).
-        let mut last = vec![0u8; row_bytes];
-        let tail = &data[full * row_bytes..];
-        last[..tail.len()].copy_from_slice(tail);
-        write(full, &last);
-    }
-    Ok(texture.create_view(&Default::default()))
 }
