@@ -480,6 +480,7 @@ pub fn terrain(n: u32) -> Scene {
         lights: Vec::new(),
         mesh,
         warnings: Vec::new(),
+        notes: Vec::new(),
         framed: None,
     }
 }

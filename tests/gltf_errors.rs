@@ -72,13 +72,13 @@ fn versions_and_extensions_meshtrace_does_not_read() {
         &[": asset.version: glTF 1.0: meshtrace reads glTF 2.0"],
     );
     let mut a = triangle();
-    a.json["extensionsUsed"] = json!(["KHR_draco_mesh_compression", "KHR_texture_transform"]);
-    a.json["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
+    a.json["extensionsUsed"] = json!(["EXT_lights_image_based", "KHR_texture_transform"]);
+    a.json["extensionsRequired"] = json!(["EXT_lights_image_based"]);
     expect(
         "a.gltf",
         &a.embedded(),
         &[
-            ": extensionsRequired: the file requires KHR_draco_mesh_compression, which meshtrace does not support (it reads KHR_lights_punctual, ",
+            ": extensionsRequired: the file requires EXT_lights_image_based, which meshtrace does not support (it reads EXT_mesh_gpu_instancing, ",
         ],
     );
     // A glTF 1.0 file's JSON does not fit 2.0's types; the version is still what is said.

@@ -58,6 +58,9 @@ pub fn info(args: &InfoArgs) -> Result<()> {
     out!("triangles    {}", st.triangles);
     out!("vertices     {}", scene.mesh.positions.len());
     out!("materials    {}", scene.materials.len());
+    for note in &scene.notes {
+        out!("note         {note}");
+    }
     let bounds = rs.bvh.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds());
     if bounds.is_empty() {
         out!("bounds       empty");

@@ -27,6 +27,8 @@ pub(super) struct Builder {
     pub(super) lights: Vec<PunctualLight>,
     pub(super) degenerate: usize,
     pub(super) warnings: Vec<String>,
+    /// [`Scene::notes`] so far.
+    pub(super) notes: Vec<String>,
     /// [`Builder::obj_material`]'s answers so far.
     pub(super) obj_materials: HashMap<u32, u32>,
     /// The object index of the triangles appended now ([`Mesh::objects`]).
@@ -116,6 +118,7 @@ impl Builder {
         error: &dyn Fn(&str, String) -> SceneError,
     ) -> Result<(), SceneError> {
         self.warnings.extend(asset.warnings);
+        self.notes.extend(asset.notes);
         let local = match material {
             Some(_) => Vec::new(),
             None => self.append_materials(
@@ -349,6 +352,7 @@ impl Builder {
             lights: self.lights,
             mesh: self.mesh,
             warnings: self.warnings,
+            notes: self.notes,
             framed: None,
         }
     }

@@ -149,6 +149,10 @@ pub struct Scene {
     pub mesh: Mesh,
     /// Problems that did not stop loading (a missing MTL file, dropped degenerate triangles).
     pub warnings: Vec<String>,
+    /// What the input holds that a still render leaves out and that is no problem (a glTF
+    /// file's animations), each one line naming the file: `meshtrace info` shows them,
+    /// `render` does not.
+    pub notes: Vec<String>,
     /// For a bare mesh shown in the studio: the bounds of the mesh the studio camera frames
     /// (the ground left out), for other views framed alike (`meshtrace batch`'s turntables).
     /// `None` for a scene file.

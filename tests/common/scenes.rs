@@ -85,6 +85,7 @@ pub fn scene(
         lights: Vec::new(),
         mesh,
         warnings: Vec::new(),
+        notes: Vec::new(),
         framed: None,
     }
 }

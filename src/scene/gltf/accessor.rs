@@ -82,6 +82,39 @@ pub(super) fn texcoord(quantized: bool) -> Expect {
     }
 }
 
+/// A morph target's POSITION deltas: floats, or with KHR_mesh_quantization signed bytes
+/// and shorts, normalized or not.
+pub(super) fn delta(quantized: bool) -> Expect {
+    Expect {
+        name: "a POSITION delta",
+        ty: Type::Vec3,
+        components: if quantized {
+            &[
+                (C::F32, false),
+                (C::I8, false),
+                (C::I8, true),
+                (C::I16, false),
+                (C::I16, true),
+            ]
+        } else {
+            FLOAT
+        },
+    }
+}
+
+/// A morph target's NORMAL or TANGENT deltas (three components each).
+pub(super) fn normal_delta(quantized: bool) -> Expect {
+    Expect {
+        name: "a NORMAL or TANGENT delta",
+        ty: Type::Vec3,
+        components: if quantized {
+            QUANTIZED_SIGNED_NORMALIZED
+        } else {
+            FLOAT
+        },
+    }
+}
+
 const INDICES: Expect = Expect {
     name: "indices",
     ty: Type::Scalar,

@@ -1,12 +1,13 @@
 //! The bytes a glTF file refers to: its buffers (the GLB's BIN chunk, `data:` URIs, or files
-//! beside it) and its images (the same, or a buffer view), each read once, when first
+//! beside it), its buffer views (meshopt-compressed ones decoded) and its images (the same, or a buffer view), each read once, when first
 //! needed, through the scene's [`FileSource`](crate::scene::source::FileSource).
 
-use super::Doc;
+use super::{Doc, meshopt};
 use crate::scene::SceneError;
 use crate::scene::texture::TextureSource;
 use image::ImageFormat;
 use std::cell::RefCell;
+use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -18,6 +19,8 @@ pub(super) struct Buffers<'a> {
     loaded: RefCell<Vec<Option<Arc<[u8]>>>>,
     /// The images read so far: `None` for an external file that could not be read.
     images: RefCell<Vec<Option<Option<TextureSource>>>>,
+    /// The meshopt-compressed buffer views decoded so far, by index.
+    decoded: RefCell<HashMap<usize, Arc<[u8]>>>,
 }
 
 /// Bytes of a buffer view: the buffer, and the range within it.
@@ -45,6 +48,7 @@ impl<'a> Buffers<'a> {
             blob: RefCell::new(blob),
             loaded: RefCell::new(vec![None; doc.root.buffers.len()]),
             images: RefCell::new(vec![None; doc.root.images.len()]),
+            decoded: RefCell::default(),
         }
     }
 
@@ -122,6 +126,15 @@ impl<'a> Buffers<'a> {
                 ),
             ));
         };
+        if let Some(decoded) = self.decompressed(index, view)? {
+            let len = decoded.len();
+            return Ok(ViewBytes {
+                data: decoded,
+                start: 0,
+                len,
+                stride: view.byte_stride.map(|s| s.0),
+            });
+        }
         let b = view.buffer.value();
         let data = self.buffer(b)?;
         let start = view.byte_offset.map_or(0, |o| o.0);
@@ -142,6 +155,61 @@ impl<'a> Buffers<'a> {
             len: len as usize,
             stride: view.byte_stride.map(|s| s.0),
         })
+    }
+
+    /// Buffer view `index`'s bytes decoded, where meshopt compression holds them
+    /// (EXT_ or KHR_meshopt_compression), decoded once; `None` for a plain view.
+    fn decompressed(
+        &self,
+        index: usize,
+        view: &gltf::json::buffer::View,
+    ) -> Result<Option<Arc<[u8]>>, SceneError> {
+        let doc = self.doc;
+        let Some((name, value)) = view.extensions.as_ref().and_then(|e| {
+            meshopt::EXTENSIONS
+                .iter()
+                .find_map(|name| e.others.get(*name).map(|v| (*name, v)))
+        }) else {
+            return Ok(None);
+        };
+        if let Some(done) = self.decoded.borrow().get(&index) {
+            return Ok(Some(done.clone()));
+        }
+        let at = format!("bufferViews[{index}].extensions.{name}");
+        let c: meshopt::Compressed = serde_json::from_value(value.clone())
+            .map_err(|e| doc.error(&at, format!("is not a meshopt object: {e}")))?;
+        let data = self.buffer(c.buffer)?;
+        let encoded = c
+            .byte_offset
+            .checked_add(c.byte_length)
+            .and_then(|end| data.get(c.byte_offset..end))
+            .ok_or_else(|| {
+                doc.error(
+                    &at,
+                    format!(
+                        "bytes {} to {} lie past the end of buffer {} ({} bytes)",
+                        c.byte_offset,
+                        c.byte_offset.saturating_add(c.byte_length),
+                        c.buffer,
+                        data.len()
+                    ),
+                )
+            })?;
+        let decoded =
+            meshopt::decode(&c, encoded, name.starts_with("KHR")).map_err(|m| doc.error(&at, m))?;
+        let length = view.byte_length.0;
+        if (decoded.len() as u64) < length {
+            return Err(doc.error(
+                &at,
+                format!(
+                    "decodes to {} bytes, fewer than the view's byteLength {length}",
+                    decoded.len()
+                ),
+            ));
+        }
+        let decoded: Arc<[u8]> = decoded[..length as usize].into();
+        self.decoded.borrow_mut().insert(index, decoded.clone());
+        Ok(Some(decoded))
     }
 
     /// Image `index` as a texture source, read on first use: `None` (with a warning) for

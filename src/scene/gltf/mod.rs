@@ -7,7 +7,8 @@
 //! binary data is meshtrace's own, so that every offset, count and index is checked before
 //! it is followed: `container` (GLB chunks, JSON, extensions, validation), `buffers`
 //! (buffers and images: GLB, data URIs, files through the [`FileSource`]), `accessor`
-//! (typed, strided and sparse accessors), `primitive` (attributes and topology), `material`
+//! (typed, strided and sparse accessors), `primitive` (attributes and topology), `deform`
+//! (morph targets and skins), `instancing` (EXT_mesh_gpu_instancing), `material`
 //! and `nodes` (the node tree, cameras and lights). Each error is one line naming the file
 //! and the JSON path at fault, such as
 //! `room.gltf: meshes[2].primitives[0].indices: accessor 7 reads past the end of bufferView 3 …`.
@@ -15,7 +16,10 @@
 mod accessor;
 mod buffers;
 mod container;
+mod deform;
+mod instancing;
 mod material;
+mod meshopt;
 mod nodes;
 mod primitive;
 
@@ -46,6 +50,9 @@ pub struct GltfAsset {
     pub camera: Option<Camera>,
     /// Problems that did not stop loading, each one line naming the file.
     pub warnings: Vec<String>,
+    /// What the file holds that a still render leaves out and that is no problem
+    /// (animations), each one line naming the file: `meshtrace info` shows them.
+    pub notes: Vec<String>,
 }
 
 /// One triangle primitive placed by a node.

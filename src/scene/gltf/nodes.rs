@@ -1,8 +1,11 @@
 //! The default scene's node tree: world matrices composed from the root down (TRS or
-//! `matrix`), each node's mesh instanced with its matrix, its first perspective camera,
-//! and its KHR_lights_punctual lights.
+//! `matrix`), each node's mesh instanced with its matrix (once per instance under
+//! EXT_mesh_gpu_instancing), morphed by its default weights and bent by its skin, its
+//! first perspective camera, and its KHR_lights_punctual lights.
 
 use super::buffers::Buffers;
+use super::deform::{Deform, inverse_bind_matrices};
+use super::instancing::instances;
 use super::material::Materials;
 use super::primitive::read_primitive;
 use super::{Doc, GltfAsset, GltfPart};
@@ -39,7 +42,9 @@ pub(super) fn load_scene(doc: &Doc, buffers: &Buffers) -> Result<GltfAsset, Scen
     let mut asset = GltfAsset::default();
     let mut materials = Materials::new(buffers);
     // Each mesh's triangle primitives, read once however many nodes use the mesh.
-    let mut meshes: HashMap<usize, Vec<(usize, MeshPart)>> = HashMap::new();
+    let mut meshes: HashMap<usize, Vec<(usize, MeshPart, Deform)>> = HashMap::new();
+    // Every node's global transform, for skins' joints (made when a skin is first met).
+    let mut globals: Option<Vec<Option<Mat4>>> = None;
     let mut visited = vec![false; root.nodes.len()];
     // Depth first, children in order: a stack of (node, parent's world matrix, where).
     let mut stack: Vec<(usize, Mat4, String)> = scene
@@ -72,26 +77,71 @@ pub(super) fn load_scene(doc: &Doc, buffers: &Buffers) -> Result<GltfAsset, Scen
         let world = parent * local_matrix(doc, node, &at)?;
         if let Some(mesh) = node.mesh {
             let m = mesh.value();
-            if node.skin.is_some() {
-                doc.warn(
-                    &at,
-                    "skinning is not applied; the mesh is drawn in its bind pose",
-                );
-            }
             if let Entry::Vacant(e) = meshes.entry(m) {
                 e.insert(read_mesh(buffers, m, &mut materials, &at)?);
             }
+            let skin = match node.skin {
+                Some(s) => {
+                    let globals = match &mut globals {
+                        Some(g) => g,
+                        None => globals.insert(global_matrices(doc)?),
+                    };
+                    Some(joint_matrices(buffers, s.value(), globals, &at)?)
+                }
+                None => None,
+            };
+            let placements = instances(buffers, node, &at)?;
+            let primitives = meshes.get(&m).map_or(&[][..], Vec::as_slice);
+            let weights = morph_weights(doc, node, m, primitives, &at)?;
             // A node that mirrors (negative determinant) turns its faces' winding, which
             // the loader undoes for every transform (`Builder::append_geometry`), as glTF
             // asks: the faces authored counter-clockwise stay the front ones.
-            for (p, part) in meshes.get(&m).into_iter().flatten() {
-                let part = clone_part(part);
-                asset.parts.push(GltfPart {
-                    part,
-                    matrix: world,
-                    node: n as u32,
-                    at: format!("meshes[{m}].primitives[{p}]"),
-                });
+            for (p, part, deform) in primitives {
+                let mut part = clone_part(part);
+                deform.morph(&mut part, &weights);
+                let mut matrix = world;
+                match &skin {
+                    Some(joints) if deform.is_skinned() => {
+                        if let Some(j) = deform.max_joint().filter(|&j| j as usize >= joints.len())
+                        {
+                            return Err(doc.error(
+                                format!("meshes[{m}].primitives[{p}].attributes[\"JOINTS_0\"]"),
+                                format!(
+                                    "names joint {j}, but the skin of {at} has {}",
+                                    super::count(joints.len(), "joint")
+                                ),
+                            ));
+                        }
+                        // A skinned mesh is placed by its joints alone: the node's own
+                        // transform is ignored, as the specification says.
+                        deform.skin(&mut part, joints);
+                        matrix = Mat4::IDENTITY;
+                    }
+                    Some(_) => doc.warn(
+                        format!("meshes[{m}].primitives[{p}]"),
+                        "has no JOINTS_0 and WEIGHTS_0 for its node's skin; it is drawn unskinned",
+                    ),
+                    None => {}
+                }
+                let at = format!("meshes[{m}].primitives[{p}]");
+                match &placements {
+                    None => asset.parts.push(GltfPart {
+                        part,
+                        matrix,
+                        node: n as u32,
+                        at,
+                    }),
+                    Some(placements) => {
+                        for instance in placements {
+                            asset.parts.push(GltfPart {
+                                part: clone_part(&part),
+                                matrix: matrix * *instance,
+                                node: n as u32,
+                                at: at.clone(),
+                            });
+                        }
+                    }
+                }
             }
         }
         if let Some(c) = node.camera {
@@ -110,19 +160,29 @@ pub(super) fn load_scene(doc: &Doc, buffers: &Buffers) -> Result<GltfAsset, Scen
             stack.push((child.value(), world, format!("{at}.children[{k}]")));
         }
     }
+    let animations = root.animations.len();
+    if animations > 0 {
+        let are = if animations == 1 { "is" } else { "are" };
+        asset.notes.push(format!(
+            "{}: {} {are} not played; the nodes' own transforms and default morph weights are drawn",
+            doc.shown,
+            super::count(animations, "animation")
+        ));
+    }
     asset.materials = materials.materials;
     asset.material_names = materials.names;
     asset.textures = materials.textures;
     Ok(asset)
 }
 
-/// The triangle primitives of mesh `m`, by primitive index; `at` is the node that uses it.
+/// The triangle primitives of mesh `m`, by primitive index, each with its morph targets
+/// and skin attributes; `at` is the node that uses it.
 fn read_mesh(
     buffers: &Buffers,
     m: usize,
     materials: &mut Materials,
     at: &str,
-) -> Result<Vec<(usize, MeshPart)>, SceneError> {
+) -> Result<Vec<(usize, MeshPart, Deform)>, SceneError> {
     let doc = buffers.doc();
     let Some(mesh) = doc.root.meshes.get(m) else {
         return Err(doc.error(
@@ -136,12 +196,12 @@ fn read_mesh(
     let mut parts = Vec::new();
     for (p, primitive) in mesh.primitives.iter().enumerate() {
         let at = format!("meshes[{m}].primitives[{p}]");
-        if let Some(mut part) = read_primitive(buffers, (m, p), primitive)? {
+        if let Some((mut part, deform)) = read_primitive(buffers, (m, p), primitive)? {
             let material = materials.index(primitive.material.map(|i| i.value()), &at)?;
             for t in &mut part.triangles {
                 t.material = Some(material);
             }
-            parts.push((p, part));
+            parts.push((p, part, deform));
         }
     }
     Ok(parts)
@@ -157,6 +217,126 @@ fn clone_part(part: &MeshPart) -> MeshPart {
         triangles: part.triangles.clone(),
         ..MeshPart::default()
     }
+}
+
+/// The morph weights node `node` (at `at`) draws mesh `m` with: the node's `weights`, else
+/// the mesh's, else zeros; one per morph target of the mesh's primitives.
+fn morph_weights(
+    doc: &Doc,
+    node: &json::Node,
+    m: usize,
+    primitives: &[(usize, MeshPart, Deform)],
+    at: &str,
+) -> Result<Vec<f32>, SceneError> {
+    let targets = primitives
+        .iter()
+        .map(|(_, _, d)| d.target_count())
+        .max()
+        .unwrap_or(0);
+    if let Some((p, _, d)) = primitives
+        .iter()
+        .find(|(_, _, d)| d.target_count() != targets)
+    {
+        return Err(doc.error(
+            format!("meshes[{m}].primitives[{p}].targets"),
+            format!(
+                "has {}, but another primitive of the mesh has {targets}; every primitive \
+                 of a mesh has the same number",
+                super::count(d.target_count(), "target")
+            ),
+        ));
+    }
+    let mesh_weights = doc
+        .root
+        .meshes
+        .get(m)
+        .and_then(|mesh| mesh.weights.as_ref());
+    let (weights, field) = match (&node.weights, mesh_weights) {
+        (Some(w), _) => (w.clone(), format!("{at}.weights")),
+        (None, Some(w)) => (w.clone(), format!("meshes[{m}].weights")),
+        (None, None) => return Ok(vec![0.0; targets]),
+    };
+    if weights.len() != targets {
+        return Err(doc.error(
+            field,
+            format!(
+                "has {}, but the mesh's primitives have {}",
+                super::count(weights.len(), "weight"),
+                super::count(targets, "morph target")
+            ),
+        ));
+    }
+    if let Some(w) = weights.iter().find(|w| !w.is_finite()) {
+        return Err(doc.error(field, format!("{w} is not finite")));
+    }
+    Ok(weights)
+}
+
+/// Every node's global transform (its ancestors' transforms times its own), found from the
+/// nodes that are no node's child; `None` for a node on a cycle, which no root reaches.
+fn global_matrices(doc: &Doc) -> Result<Vec<Option<Mat4>>, SceneError> {
+    let nodes = &doc.root.nodes;
+    let mut child = vec![false; nodes.len()];
+    for node in nodes {
+        for c in node.children.iter().flatten() {
+            if let Some(slot) = child.get_mut(c.value()) {
+                *slot = true;
+            }
+        }
+    }
+    let mut globals = vec![None; nodes.len()];
+    let mut stack: Vec<(usize, Mat4)> = (0..nodes.len())
+        .filter(|&n| !child[n])
+        .map(|n| (n, Mat4::IDENTITY))
+        .collect();
+    while let Some((n, parent)) = stack.pop() {
+        let Some(node) = nodes.get(n) else { continue };
+        if globals[n].is_some() {
+            continue;
+        }
+        let world = parent * local_matrix(doc, node, &format!("nodes[{n}]"))?;
+        globals[n] = Some(world);
+        for c in node.children.iter().flatten() {
+            stack.push((c.value(), world));
+        }
+    }
+    Ok(globals)
+}
+
+/// Skin `s`'s joint matrices, for the node at `at`: each joint node's global transform
+/// times its inverse bind matrix.
+fn joint_matrices(
+    buffers: &Buffers,
+    s: usize,
+    globals: &[Option<Mat4>],
+    at: &str,
+) -> Result<Vec<Mat4>, SceneError> {
+    let doc = buffers.doc();
+    let Some(skin) = doc.root.skins.get(s) else {
+        return Err(doc.error(
+            format!("{at}.skin"),
+            format!(
+                "skin {s} does not exist (the file has {})",
+                super::count(doc.root.skins.len(), "skin")
+            ),
+        ));
+    };
+    let inverse_binds = inverse_bind_matrices(buffers, s, skin)?;
+    skin.joints
+        .iter()
+        .zip(inverse_binds)
+        .enumerate()
+        .map(|(k, (joint, inverse_bind))| {
+            let j = joint.value();
+            match globals.get(j).copied().flatten() {
+                Some(global) => Ok(global * inverse_bind),
+                None => Err(doc.error(
+                    format!("skins[{s}].joints[{k}]"),
+                    format!("node {j} does not exist or lies on a cycle of children"),
+                )),
+            }
+        })
+        .collect()
 }
 
 /// A node's own transform: its `matrix` (column-major), or translation × rotation × scale.

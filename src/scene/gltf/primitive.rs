@@ -1,22 +1,24 @@
-//! Mesh primitives: their attributes (POSITION, NORMAL, TEXCOORD_0, TANGENT) and their
+//! Mesh primitives: their attributes (POSITION, NORMAL, TEXCOORD_0, TANGENT; morph targets
+//! and skin attributes are `deform`'s) and their
 //! topology (triangle lists, strips and fans, indexed or not) as a [`MeshPart`] whose
 //! corners all index one vertex table.
 
 use super::accessor::{self, read_floats, read_indices};
 use super::buffers::Buffers;
+use super::deform::Deform;
 use crate::scene::part::{MeshPart, PartTriangle};
 use crate::scene::{NO_NORMAL, NO_TANGENT, NO_UV, SceneError};
 use glam::{Vec2, Vec3, Vec4};
 use gltf::json::mesh::{Mode, Primitive, Semantic};
 use gltf::json::validation::Checked;
 
-/// Reads primitive `p` of mesh `m`, its triangles without a material yet; `None`, with a
-/// warning, for a primitive of points or lines.
+/// Reads primitive `p` of mesh `m`, its triangles without a material yet, and its morph
+/// targets and skin attributes; `None`, with a warning, for a primitive of points or lines.
 pub(super) fn read_primitive(
     buffers: &Buffers,
     (m, p): (usize, usize),
     primitive: &Primitive,
-) -> Result<Option<MeshPart>, SceneError> {
+) -> Result<Option<(MeshPart, Deform)>, SceneError> {
     let doc = buffers.doc();
     let at = format!("meshes[{m}].primitives[{p}]");
     let Checked::Valid(mode) = primitive.mode else {
@@ -133,12 +135,7 @@ pub(super) fn read_primitive(
     if attribute(Semantic::Colors(0)).is_some() {
         doc.warn(&at, "vertex colours (COLOR_0) are ignored");
     }
-    if primitive.targets.as_ref().is_some_and(|t| !t.is_empty()) {
-        doc.warn(
-            &at,
-            "morph targets are not applied; the base shape is drawn",
-        );
-    }
+    let deform = Deform::read(buffers, primitive, &at, n, quantized)?;
 
     let vertices: Vec<u32> = match primitive.indices {
         Some(index) => {
@@ -185,7 +182,7 @@ pub(super) fn read_primitive(
             material: None,
         })
         .collect();
-    Ok(Some(part))
+    Ok(Some((part, deform)))
 }
 
 /// The triangles a primitive's vertex sequence makes, as the specification orders their

@@ -1,0 +1,233 @@
+"""Writes the glTF corpus files that Blender's exporter makes, and what Blender's importer
+sees in each: `tests/data/gltf/corpus/NAME.glb` and `NAME.expected.json`.
+
+Run with Blender 5 as a Python module (`pip install bpy==5.0.0`, Python 3.11):
+
+    python tools/gltf_corpus/blender_corpus.py tests/data/gltf/corpus
+
+Each file is exported, then imported into an empty scene, and the importer's evaluated
+meshes (modifiers, armatures and shape keys applied), world-space triangles in glTF's frame
+(Y up), are summarised in `NAME.expected.json` (`shape`): the shape a correct reader draws
+at the file's static pose.
+"""
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import bpy
+
+
+def empty_scene():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+
+
+def export(path, **options):
+    """A GLB of the scene at its current frame, without animations."""
+    bpy.ops.export_scene.gltf(
+        filepath=str(path),
+        export_format="GLB",
+        export_animations=False,
+        export_yup=True,
+        **options,
+    )
+
+
+def evaluated_triangles():
+    """Every mesh object's evaluated triangles, world space, glTF frame (x, z, -y)."""
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    # The importer draws bones with a mesh of its own (an icosphere), which is no part of
+    # the file's geometry.
+    bone_shapes = {
+        bone.custom_shape.name
+        for obj in bpy.context.scene.objects
+        if obj.type == "ARMATURE"
+        for bone in obj.pose.bones
+        if bone.custom_shape is not None
+    }
+    triangles = []
+    for obj in bpy.context.scene.objects:
+        if obj.type != "MESH" or obj.name in bone_shapes:
+            continue
+        evaluated = obj.evaluated_get(depsgraph)
+        mesh = evaluated.to_mesh()
+        mesh.calc_loop_triangles()
+        world = evaluated.matrix_world
+        for tri in mesh.loop_triangles:
+            corners = []
+            for v in tri.vertices:
+                p = world @ mesh.vertices[v].co
+                corners.append([p.x, p.z, -p.y])
+            triangles.append(corners)
+        evaluated.to_mesh_clear()
+    return triangles
+
+
+def shape(triangles):
+    """What tests compare, independent of vertex order: the triangle count, the total area,
+    the bounds, and the area-weighted mean and covariance of the triangles' centroids."""
+    count, area = len(triangles), 0.0
+    lo, hi = [math.inf] * 3, [-math.inf] * 3
+    first, second = [0.0] * 3, [[0.0] * 3 for _ in range(3)]
+    for a, b, c in triangles:
+        e1 = [b[i] - a[i] for i in range(3)]
+        e2 = [c[i] - a[i] for i in range(3)]
+        cross = [
+            e1[1] * e2[2] - e1[2] * e2[1],
+            e1[2] * e2[0] - e1[0] * e2[2],
+            e1[0] * e2[1] - e1[1] * e2[0],
+        ]
+        w = 0.5 * math.sqrt(sum(x * x for x in cross))
+        centroid = [(a[i] + b[i] + c[i]) / 3.0 for i in range(3)]
+        area += w
+        for i in range(3):
+            lo[i] = min(lo[i], a[i], b[i], c[i])
+            hi[i] = max(hi[i], a[i], b[i], c[i])
+            first[i] += w * centroid[i]
+            for j in range(3):
+                second[i][j] += w * centroid[i] * centroid[j]
+    mean = [x / area for x in first]
+    covariance = [[second[i][j] / area - mean[i] * mean[j] for j in range(3)] for i in range(3)]
+    return {
+        "triangles": count,
+        "area": area,
+        "min": lo,
+        "max": hi,
+        "mean": mean,
+        "covariance": covariance,
+    }
+
+
+def write_expected(glb, out_json):
+    empty_scene()
+    bpy.ops.import_scene.gltf(filepath=str(glb))
+    triangles = evaluated_triangles()
+    out_json.write_text(json.dumps(shape(triangles), indent=1) + "\n")
+    return len(triangles)
+
+
+def skinned_arm(path):
+    """A cylinder along +X with two bones; the forearm bone bent 90 degrees in the pose."""
+    empty_scene()
+    bpy.ops.mesh.primitive_cylinder_add(
+        vertices=12, radius=0.1, depth=2.0, location=(1.0, 0.0, 0.0), rotation=(0.0, math.pi / 2, 0.0)
+    )
+    arm = bpy.context.active_object
+    arm.name = "Arm"
+    # Cuts along the length so the bend has vertices to move.
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.mesh.select_all(action="SELECT")
+    bpy.ops.mesh.subdivide(number_cuts=7)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    bpy.ops.object.armature_add(location=(0.0, 0.0, 0.0))
+    rig = bpy.context.active_object
+    rig.name = "Rig"
+    bpy.ops.object.mode_set(mode="EDIT")
+    bones = rig.data.edit_bones
+    upper = bones[0]
+    upper.name = "Upper"
+    upper.head = (0.0, 0.0, 0.0)
+    upper.tail = (1.0, 0.0, 0.0)
+    fore = bones.new("Fore")
+    fore.head = (1.0, 0.0, 0.0)
+    fore.tail = (2.0, 0.0, 0.0)
+    fore.parent = upper
+    fore.use_connect = True
+    bpy.ops.object.mode_set(mode="OBJECT")
+    arm.select_set(True)
+    rig.select_set(True)
+    bpy.context.view_layer.objects.active = rig
+    bpy.ops.object.parent_set(type="ARMATURE_AUTO")
+    bpy.ops.object.mode_set(mode="POSE")
+    pose = rig.pose.bones["Fore"]
+    pose.rotation_mode = "XYZ"
+    pose.rotation_euler = (0.0, 0.0, math.radians(90.0))
+    bpy.ops.object.mode_set(mode="OBJECT")
+    export(path, export_skins=True, export_rest_position_armature=False)
+
+
+def morph_box(path):
+    """A cube with two shape keys at 0.7 and 0.25: the top pulled up, one side pushed in."""
+    empty_scene()
+    bpy.ops.mesh.primitive_cube_add(size=1.0)
+    cube = bpy.context.active_object
+    cube.name = "Morphed"
+    cube.shape_key_add(name="Basis")
+    up = cube.shape_key_add(name="Up")
+    for v in up.data:
+        if v.co.z > 0:
+            v.co.z += 1.0
+    up.value = 0.7
+    side = cube.shape_key_add(name="Side")
+    for v in side.data:
+        if v.co.x > 0:
+            v.co.x -= 0.4
+    side.value = 0.25
+    export(path, export_morph=True, export_morph_normal=True)
+
+
+def crowd(path):
+    """Twenty linked duplicates of one mesh (a monkey) on a 5 x 4 grid, turned and scaled."""
+    empty_scene()
+    bpy.ops.mesh.primitive_monkey_add(size=0.5)
+    first = bpy.context.active_object
+    first.name = "Monkey0"
+    for i in range(20):
+        obj = first if i == 0 else first.copy()
+        if i:
+            obj.name = f"Monkey{i}"
+            bpy.context.collection.objects.link(obj)
+        obj.location = ((i % 5) * 1.2, (i // 5) * 1.2, 0.0)
+        obj.rotation_euler = (0.0, 0.0, math.radians(18.0 * i))
+        obj.scale = (1.0 + 0.05 * i,) * 3
+    export(path)
+
+
+def draco(path):
+    """The crowd's monkey alone, compressed with Blender's Draco library."""
+    empty_scene()
+    bpy.ops.mesh.primitive_monkey_add(size=1.0)
+    bpy.ops.object.shade_smooth()
+    export(
+        path,
+        export_draco_mesh_compression_enable=True,
+        export_draco_mesh_compression_level=6,
+        export_draco_position_quantization=14,
+        export_draco_normal_quantization=10,
+        export_draco_texcoord_quantization=12,
+    )
+
+
+def animated(path):
+    """A cube that slides along X between frames 1 and 24: one animation, not played."""
+    empty_scene()
+    bpy.ops.mesh.primitive_cube_add(size=1.0)
+    cube = bpy.context.active_object
+    cube.keyframe_insert(data_path="location", frame=1)
+    cube.location = (2.0, 0.0, 0.0)
+    cube.keyframe_insert(data_path="location", frame=24)
+    bpy.context.scene.frame_set(1)
+    bpy.ops.export_scene.gltf(
+        filepath=str(path), export_format="GLB", export_animations=True, export_yup=True
+    )
+
+
+def main():
+    out = Path(sys.argv[1])
+    out.mkdir(parents=True, exist_ok=True)
+    for name, make in [
+        ("skinned_arm", skinned_arm),
+        ("morph_box", morph_box),
+        ("crowd", crowd),
+        ("draco_monkey", draco),
+        ("animated_cube", animated),
+    ]:
+        glb = out / f"{name}.glb"
+        make(glb)
+        n = write_expected(glb, out / f"{name}.expected.json")
+        print(f"{glb}: {n} triangles as Blender imports it")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Rebuilds tests/data/gltf/corpus from third-party writers, then validates every file:
+# Blender 5's glTF exporter (the PyPI package bpy, with its Draco library) writes the
+# originals and what Blender's importer sees in each (blender_corpus.py); gltf-transform
+# derives the compressed and instanced forms; Khronos' glTF-Validator must report no errors.
+#
+#   TOOLS=/path/with/node_modules PYTHON=/path/to/venv/bin/python tools/gltf_corpus/make.sh
+#
+# TOOLS holds `npm install @gltf-transform/cli@4.5.1 gltf-validator@2.0.0-dev.3.10`; PYTHON
+# has `pip install bpy==5.0.0` (Python 3.11).
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+out=$(realpath "$here/../../tests/data/gltf/corpus")
+: "${TOOLS:?set TOOLS to the folder holding node_modules}"
+: "${PYTHON:?set PYTHON to a Python with bpy}"
+mkdir -p "$out"
+"$PYTHON" "$here/blender_corpus.py" "$out" | grep "triangles as"
+transform() { (cd "$TOOLS" && npx gltf-transform "$@" >/dev/null); }
+transform instance "$out/crowd.glb" "$out/crowd_instanced.glb"
+transform meshopt "$out/skinned_arm.glb" "$out/skinned_arm_meshopt.glb"
+transform meshopt "$out/morph_box.glb" "$out/morph_box_meshopt.glb"
+transform meshopt "$out/crowd.glb" "$out/crowd_meshopt.glb"
+transform draco "$out/crowd.glb" "$out/crowd_draco.glb"
+transform draco "$out/skinned_arm.glb" "$out/skinned_arm_draco.glb"
+(cd "$TOOLS" && node "$here/validate.mjs" "$out"/*.glb)
