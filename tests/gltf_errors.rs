@@ -78,7 +78,7 @@ fn versions_and_extensions_meshtrace_does_not_read() {
         "a.gltf",
         &a.embedded(),
         &[
-            ": extensionsRequired: the file requires KHR_draco_mesh_compression, which meshtrace does not support (it reads KHR_lights_punctual, ",
+            ": extensionsRequired: the file requires KHR_draco_mesh_compression, which meshtrace does not support (it reads EXT_texture_webp, KHR_lights_punctual, ",
         ],
     );
     // A glTF 1.0 file's JSON does not fit 2.0's types; the version is still what is said.
@@ -244,6 +244,36 @@ fn images_that_cannot_be_decoded() {
         &a.embedded(),
         &[": images[0]: has neither a uri nor a bufferView"],
     );
+}
+
+/// A texture must name an image, in `source` or in EXT_texture_webp's `source`, and the
+/// extension's must be an index of an image the file has.
+#[test]
+fn textures_without_an_image() {
+    let mut a = textured(
+        json!({ "uri": format!("data:image/png;base64,{}", base64(&png(1, 1, &[[9; 4]]))) }),
+    );
+    for (texture, needle) in [
+        (
+            json!({}),
+            ": textures[0].source: is missing, and the texture names no EXT_texture_webp image instead",
+        ),
+        (
+            json!({ "extensions": { "EXT_texture_webp": { "source": -1 } } }),
+            ": textures[0].extensions.EXT_texture_webp.source: must be an image index",
+        ),
+        (
+            json!({ "extensions": { "EXT_texture_webp": {} } }),
+            ": textures[0].extensions.EXT_texture_webp.source: is required but missing",
+        ),
+        (
+            json!({ "source": 0, "extensions": { "EXT_texture_webp": { "source": 3 } } }),
+            ": textures[0].extensions.EXT_texture_webp.source: image 3 does not exist (the file has 1 image)",
+        ),
+    ] {
+        a.json["textures"] = json!([texture]);
+        expect("a.gltf", &a.embedded(), &[needle]);
+    }
 }
 
 #[test]

@@ -10,6 +10,7 @@ use gltf::json::validation::{Error as Invalid, Validate};
 
 /// The extensions meshtrace reads; a file that requires any other is refused.
 pub(super) const SUPPORTED_EXTENSIONS: &[&str] = &[
+    "EXT_texture_webp",
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
