@@ -39,8 +39,9 @@ pub enum PipelineError {
 }
 
 /// Loads `input` as `request` stages it: a path, or `builtin:NAME`; a bare mesh turned to
-/// the requested up axis; the sky replaced by the requested environment. The scene's
-/// warnings are in [`Scene::warnings`].
+/// the requested up axis; the sky replaced by the requested environment; textures larger
+/// than the requested maximum scaled down (each with a warning). The scene's warnings are
+/// in [`Scene::warnings`].
 pub fn load(input: &Path, request: &RenderRequest) -> Result<Scene, PipelineError> {
     let text = input.to_string_lossy();
     let mut scene = match text.strip_prefix("builtin:") {
@@ -66,6 +67,15 @@ pub fn load(input: &Path, request: &RenderRequest) -> Result<Scene, PipelineErro
             strength: 1.0,
             rotation: 0.0,
         };
+    }
+    if let Some(max) = request.max_texture_size {
+        for t in scene.textures.limit_size(max) {
+            let ((w, h), (w2, h2)) = (t.from, t.to);
+            scene.warnings.push(format!(
+                "{}: {w}×{h} texels exceed max_texture_size = {max}; scaled down to {w2}×{h2}",
+                t.name
+            ));
+        }
     }
     Ok(scene)
 }

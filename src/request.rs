@@ -1,7 +1,7 @@
 //! A render request: everything that decides an image beyond the input itself — size,
 //! samples, depth, seed, branches, caustics, the device, adapter and accel, the AOVs,
-//! transparency, a bare mesh's up axis, an environment that replaces the sky, the part of a
-//! split render and denoising. Every source fills the same type: command-line flags, a
+//! transparency, a bare mesh's up axis, an environment that replaces the sky, the largest
+//! texture size, the part of a split render and denoising. Every source fills the same type: command-line flags, a
 //! batch manifest's `[render]` table (deserialised straight into it) and library callers.
 //! A field left `None` keeps what the input says (a scene file's own `[render]` table), or
 //! the default. [`RenderRequest::validate`] is the one check, and its errors name the field
@@ -48,6 +48,10 @@ pub struct RenderRequest {
     pub up: Option<Up>,
     /// An equirectangular image (.hdr, .exr) that lights the scene instead of its sky.
     pub environment: Option<PathBuf>,
+    /// The most texels a texture may have along its larger side: larger images are scaled
+    /// down once loaded ([`Textures::limit_size`](crate::scene::Textures::limit_size)), so
+    /// that a scene whose texel table is too large for a GPU renders on it.
+    pub max_texture_size: Option<u32>,
     /// Part `index` of `count` of the samples, for a render split across processes
     /// (`render --part`); a batch splits by `--shard` instead.
     #[serde(skip)]
@@ -107,6 +111,7 @@ impl RenderRequest {
             transparent: r.transparent.or(u.transparent),
             up: r.up.or(u.up),
             environment: r.environment.or(u.environment),
+            max_texture_size: r.max_texture_size.or(u.max_texture_size),
             part: r.part.or(u.part),
             denoise: r.denoise.or(u.denoise),
         }
@@ -159,6 +164,12 @@ impl RenderRequest {
             return Err(RequestError::new(
                 "part",
                 format!("{index}/{count}: K must be below N, and N at least 1"),
+            ));
+        }
+        if self.max_texture_size == Some(0) {
+            return Err(RequestError::new(
+                "max_texture_size",
+                "must be at least 1 (texels along a texture's larger side), got 0",
             ));
         }
         if self.part.is_some() && self.denoise() {
@@ -290,6 +301,14 @@ mod tests {
         assert_eq!(bad(with(|r| r.branches = Some(65))), "branches");
         assert_eq!(bad(with(|r| r.width = Some(0))), "width");
         assert_eq!(
+            bad(with(|r| r.max_texture_size = Some(0))),
+            "max_texture_size"
+        );
+        assert!(
+            with(|r| r.max_texture_size = Some(1)).validate().is_ok(),
+            "1 texel is a size"
+        );
+        assert_eq!(
             bad(with(|r| r.part = Some(Part { index: 2, count: 2 }))),
             "part"
         );
@@ -306,7 +325,7 @@ mod tests {
     #[test]
     fn a_manifest_table_fills_it() {
         let r: RenderRequest = toml::from_str(
-            "spp = 4\ncaustics = false\nbranches = 2\ndevice = \"cpu\"\naccel = \"software\"\naov = [\"normal\", \"depth\"]\nup = \"z\"\nenvironment = \"sky.hdr\"\n",
+            "spp = 4\ncaustics = false\nbranches = 2\ndevice = \"cpu\"\naccel = \"software\"\naov = [\"normal\", \"depth\"]\nup = \"z\"\nenvironment = \"sky.hdr\"\nmax_texture_size = 2048\n",
         )
         .unwrap();
         assert_eq!(r.spp, Some(4));
@@ -315,6 +334,7 @@ mod tests {
         assert_eq!(r.accel, Some(Accel::Software));
         assert_eq!(r.aov, Some(vec![Aov::Depth, Aov::Normal]));
         assert_eq!(r.up, Some(Up::Z));
+        assert_eq!(r.max_texture_size, Some(2048));
         let unknown = toml::from_str::<RenderRequest>("sp = 4").unwrap_err();
         assert!(unknown.message().contains("unknown field"), "{unknown}");
         let bad = toml::from_str::<RenderRequest>("device = \"tpu\"").unwrap_err();

@@ -195,6 +195,11 @@ fn bad_arguments_and_outputs_fail_cleanly() {
         &["render", "builtin:nope", "-o", "out.png"],
         &["builtin:nope", "cornell"],
     );
+    assert_fails(
+        &dir,
+        &["render", "-o", "out.png", "--max-texture-size", "0"],
+        &["--max-texture-size", "at least 1"],
+    );
 }
 
 #[test]

@@ -842,3 +842,63 @@ fn other_extensions_say_which_inputs_are_read() {
         );
     }
 }
+
+/// A WebP file's bytes (lossless): `width` × `height` texels of one colour.
+fn webp(width: u32, height: u32, colour: [u8; 4]) -> Vec<u8> {
+    let image = image::RgbaImage::from_pixel(width, height, image::Rgba(colour));
+    let mut bytes = Vec::new();
+    image::codecs::webp::WebPEncoder::new_lossless(&mut bytes)
+        .encode(&image, width, height, image::ExtendedColorType::Rgba8)
+        .unwrap();
+    bytes
+}
+
+/// EXT_texture_webp: a texture whose extension names a WebP image reads it, not the PNG
+/// its `source` keeps as a fallback; a texture with the extension alone reads it too; the
+/// WebP may come as a `data:` URI of type image/webp or a buffer view; the extension,
+/// required or used, gives no warning.
+#[test]
+fn ext_texture_webp_is_preferred_over_the_fallback_source() {
+    let red = [255, 0, 0, 255];
+    let blue = [0, 0, 255, 255];
+    let mut a = Asset::new();
+    let t = a.floats(&[0.0; 6], "VEC2");
+    a.triangle(json!({ "attributes": { "TEXCOORD_0": t }, "material": 0 }));
+    let view = a.view(&webp(2, 2, blue), None);
+    a.json["images"] = json!([
+        { "uri": format!("data:image/png;base64,{}", base64(&png(2, 2, &[red; 4]))) },
+        { "uri": format!("data:image/webp;base64,{}", base64(&webp(2, 1, blue))) },
+        { "bufferView": view, "mimeType": "image/webp" },
+    ]);
+    a.json["extensionsUsed"] = json!(["EXT_texture_webp"]);
+    a.json["extensionsRequired"] = json!(["EXT_texture_webp"]);
+    a.json["materials"] =
+        json!([{ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }]);
+    for (texture, size) in [
+        (
+            json!({ "source": 0, "extensions": { "EXT_texture_webp": { "source": 1 } } }),
+            (2, 1),
+        ),
+        (
+            json!({ "extensions": { "EXT_texture_webp": { "source": 2 } } }),
+            (2, 2),
+        ),
+        (json!({ "source": 0 }), (2, 2)),
+    ] {
+        a.json["textures"] = json!([texture]);
+        let s = load(&a);
+        assert!(s.warnings.is_empty(), "{texture}: {:?}", s.warnings);
+        let t = s.textures.records[s.materials[0].albedo_texture as usize];
+        assert_eq!((t.width, t.height), size, "{texture}");
+        let want = if texture.get("extensions").is_some() {
+            blue
+        } else {
+            red
+        };
+        assert_eq!(
+            s.textures.texels[t.offset as usize].to_le_bytes(),
+            want,
+            "{texture}"
+        );
+    }
+}

@@ -246,6 +246,36 @@ fn images_that_cannot_be_decoded() {
     );
 }
 
+/// A texture must name an image, in `source` or in EXT_texture_webp's `source`, and the
+/// extension's must be an index of an image the file has.
+#[test]
+fn textures_without_an_image() {
+    let mut a = textured(
+        json!({ "uri": format!("data:image/png;base64,{}", base64(&png(1, 1, &[[9; 4]]))) }),
+    );
+    for (texture, needle) in [
+        (
+            json!({}),
+            ": textures[0].source: is missing, and the texture names no EXT_texture_webp image instead",
+        ),
+        (
+            json!({ "extensions": { "EXT_texture_webp": { "source": -1 } } }),
+            ": textures[0].extensions.EXT_texture_webp.source: must be an image index",
+        ),
+        (
+            json!({ "extensions": { "EXT_texture_webp": {} } }),
+            ": textures[0].extensions.EXT_texture_webp.source: is required but missing",
+        ),
+        (
+            json!({ "source": 0, "extensions": { "EXT_texture_webp": { "source": 3 } } }),
+            ": textures[0].extensions.EXT_texture_webp.source: image 3 does not exist (the file has 1 image)",
+        ),
+    ] {
+        a.json["textures"] = json!([texture]);
+        expect("a.gltf", &a.embedded(), &[needle]);
+    }
+}
+
 #[test]
 fn a_texture_on_a_primitive_without_texture_coordinates() {
     let mut a = textured(

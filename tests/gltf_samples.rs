@@ -163,3 +163,90 @@ fn primitive_modes_strips_fans_and_lines() {
         "{err}"
     );
 }
+
+/// The albedo texture's size and texels (8-bit, sRGB) of a one-material scene.
+fn albedo_texels(scene: &Scene) -> (u32, u32, Vec<[u8; 4]>) {
+    let t = scene.textures.records[scene.materials[0].albedo_texture as usize];
+    assert_eq!(t.format, meshtrace::scene::TextureFormat::RGBA8_SRGB);
+    let n = (t.width * t.height) as usize;
+    let texels = scene.textures.texels[t.offset as usize..][..n]
+        .iter()
+        .map(|w| w.to_le_bytes())
+        .collect();
+    (t.width, t.height, texels)
+}
+
+/// Mean absolute difference of two images' RGB values, in [0, 1].
+fn texel_difference(a: &[[u8; 4]], b: &[[u8; 4]]) -> f64 {
+    let sum: u64 = a
+        .iter()
+        .zip(b)
+        .flat_map(|(p, q)| (0..3).map(move |c| p[c].abs_diff(q[c]) as u64))
+        .sum();
+    sum as f64 / (a.len() * 3) as f64 / 255.0
+}
+
+/// Mean absolute difference of two renders' pixels, relative to the first's mean.
+fn render_difference(a: &Scene, b: &Scene) -> f64 {
+    let render = |s: &Scene| {
+        let settings = meshtrace::scene::RenderSettings {
+            width: 48,
+            height: 48,
+            spp: 8,
+            ..s.settings
+        };
+        let rs = meshtrace::render::RenderScene::new(s, &Default::default()).unwrap();
+        common::cpu_render(&rs, &meshtrace::render::RenderJob::new(settings)).mean()
+    };
+    let (a, b) = (render(a), render(b));
+    let diff: f64 = a
+        .iter()
+        .zip(&b)
+        .map(|(p, q)| f64::from((*p - *q).abs().element_sum()))
+        .sum();
+    let total: f64 = a.iter().map(|p| f64::from(p.element_sum())).sum();
+    diff / total
+}
+
+/// BoxTextured with its PNG made a lossy WebP by glTF-Transform 4.5.1, named by the
+/// texture's EXT_texture_webp alone (see tests/data/gltf/README.md): the extension is
+/// required and read, the WebP image has the PNG's size and nearly its texels, and the box
+/// renders as the PNG original does. The bounds are set by a wrong texture: the PNG
+/// mirrored left to right differs from the PNG many times more, texels and render alike.
+#[test]
+fn box_textured_webp_reads_the_ext_texture_webp_image() {
+    let png = sample("BoxTextured/BoxTextured.glb");
+    let webp = sample("BoxTexturedWebp/BoxTexturedWebp.glb");
+    assert!(webp.warnings.is_empty(), "{:?}", webp.warnings);
+    let (w, h, png_texels) = albedo_texels(&png);
+    let (w2, h2, webp_texels) = albedo_texels(&webp);
+    assert_eq!((w, h), (w2, h2));
+    let mirrored: Vec<[u8; 4]> = (0..w * h)
+        .map(|i| png_texels[((i / w) * w + (w - 1 - i % w)) as usize])
+        .collect();
+    let own = texel_difference(&png_texels, &webp_texels);
+    let wrong = texel_difference(&png_texels, &mirrored);
+    eprintln!("texels: WebP against PNG {own:.4}, mirrored PNG against PNG {wrong:.4}");
+    assert!(
+        own < 0.015,
+        "the WebP's texels differ from the PNG's by {own}"
+    );
+    assert!(wrong > 0.05, "a mirrored texture differs by {wrong} only");
+
+    let mut wrong_scene = sample("BoxTextured/BoxTextured.glb");
+    let t = wrong_scene.textures.records[wrong_scene.materials[0].albedo_texture as usize];
+    for (k, p) in mirrored.iter().enumerate() {
+        wrong_scene.textures.texels[t.offset as usize + k] = u32::from_le_bytes(*p);
+    }
+    let own = render_difference(&png, &webp);
+    let wrong = render_difference(&png, &wrong_scene);
+    eprintln!("renders: WebP against PNG {own:.4}, mirrored PNG against PNG {wrong:.4}");
+    assert!(
+        own < 0.02,
+        "the WebP render differs from the PNG's by {own}"
+    );
+    assert!(
+        wrong > 0.03,
+        "a mirrored texture's render differs by {wrong} only"
+    );
+}

@@ -1,6 +1,8 @@
 //! Image textures end to end, through scene files written for each test: a textured
 //! emitter seen directly renders its texture's mean (sRGB-decoded), the image's corners land
-//! where the scene format says OBJ texture coordinates put them, and both renderers agree.
+//! where the scene format says OBJ texture coordinates put them, both renderers agree,
+//! Radiance HDR files read with either signature, and `max_texture_size` scales textures
+//! down.
 
 mod common;
 
@@ -9,6 +11,7 @@ use common::rand::SplitMix;
 use meshtrace::bvh::BuildParams;
 use meshtrace::film::srgb8_to_linear;
 use meshtrace::render::RenderScene;
+use meshtrace::request::RenderRequest;
 use meshtrace::scene::{Scene, load_scene};
 
 /// A quad over [-1, 1]² at z = 0 facing +Z, OBJ texture coordinate (0, 0) at its
@@ -534,12 +537,223 @@ fn textures_beyond_the_adapter_limits_are_an_error_naming_the_limit() {
     for needle in [
         "texels need 262144 bytes",
         "max_texture_dimension_2d = 2",
+        "--max-texture-size",
         "--device cpu",
     ] {
         assert!(err.contains(needle), "{err:?} lacks {needle:?}");
     }
-    // With the adapter's own limits it fits.
+    // With the adapter's own limits it fits, and so it does on the small adapter once the
+    // texture is scaled down to 64² (16 KiB) as the message says.
     assert!(meshtrace::render::gpu::GpuRenderer::new(&ctx, &rs).is_ok());
+    let request = RenderRequest {
+        max_texture_size: Some(64),
+        ..Default::default()
+    };
+    let scene = meshtrace::pipeline::load(&dir.join("scene.toml"), &request).unwrap();
+    let rs = RenderScene::new(&scene, &BuildParams::default()).unwrap();
+    assert!(meshtrace::render::gpu::GpuRenderer::new(&small, &rs).is_ok());
+}
+
+/// A Radiance HDR file may begin `#?RGBE` instead of `#?RADIANCE`, as stb_image accepts
+/// (and Bruce Walter's rgbe.c writes). The `#?RGBE` file here is `assets/env/test_16x8.hdr`
+/// with its first line changed and nothing else: read as an environment and as a texture,
+/// with the `.hdr` extension and with none that names a format, it gives the very texels of
+/// its `#?RADIANCE` twin. Any other first line is a one-line error naming the file.
+#[test]
+fn radiance_hdr_files_read_with_either_signature() {
+    let radiance = std::fs::read(common::fs::root().join("assets/env/test_16x8.hdr")).unwrap();
+    let body = radiance
+        .strip_prefix(b"#?RADIANCE\n")
+        .expect("the test map starts with #?RADIANCE");
+    let dir = TempDir::new("rgbe-signature");
+    dir.write("radiance.hdr", &radiance);
+    dir.write("rgbe.hdr", [&b"#?RGBE\n"[..], body].concat());
+    dir.write("rgbe.map", [&b"#?RGBE\n"[..], body].concat());
+    dir.write("other.hdr", [&b"#?RADIANT\n"[..], body].concat());
+    dir.write("quad.obj", QUAD);
+    let load = |image: &str| {
+        let toml = format!(
+            "[camera]\nposition = [0.0, 0.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\n\
+             [sky]\nenvironment = \"{image}\"\n\
+             [materials.m]\ntype = \"diffuse\"\nemission = {{ texture = \"{image}\" }}\n\
+             [[objects]]\nmesh = \"quad.obj\"\nmaterial = \"m\"\n"
+        );
+        load_scene(&dir.write("scene.toml", toml))
+    };
+    let twin = load("radiance.hdr").unwrap();
+    assert_eq!(twin.textures.texels.len(), 16 * 8 * 4, "one float image");
+    for image in ["rgbe.hdr", "rgbe.map"] {
+        let s = load(image).unwrap_or_else(|e| panic!("{image}: {e}"));
+        assert_eq!(s.textures.records, twin.textures.records, "{image}");
+        assert_eq!(s.textures.texels, twin.textures.texels, "{image}");
+    }
+    let message = load("other.hdr").unwrap_err().to_string();
+    assert!(!message.contains('\n'), "{message}");
+    for needle in ["sky.environment", "other.hdr", "#?RADIANT", "#?RGBE"] {
+        assert!(message.contains(needle), "{message:?} lacks {needle:?}");
+    }
+}
+
+/// A scene of `files` in `dir` whose emitting quad reads `texture`, with an environment,
+/// loaded as a request of `max_texture_size` = `max` asks.
+fn limited(dir: &TempDir, texture: &str, max: Option<u32>) -> Scene {
+    dir.write("quad.obj", QUAD);
+    let distance = 1.0 / 20f64.to_radians().tan();
+    let env = common::fs::root().join("assets/env/test_16x8.exr");
+    let toml = format!(
+        "[camera]\nposition = [0.0, 0.0, {distance}]\nlook_at = [0.0, 0.0, 0.0]\nvfov = 40.0\n\
+         [render]\nwidth = 32\nheight = 32\nspp = 16\nmax_depth = 1\n\
+         [sky]\nenvironment = {:?}\n\
+         [materials.light]\ntype = \"diffuse\"\nalbedo = [0.0, 0.0, 0.0]\n\
+         emission = {{ texture = \"{texture}\" }}\n\
+         [[objects]]\nmesh = \"quad.obj\"\nmaterial = \"light\"\n",
+        env.display().to_string()
+    );
+    let request = RenderRequest {
+        max_texture_size: max,
+        ..Default::default()
+    };
+    meshtrace::pipeline::load(&dir.write("scene.toml", toml), &request)
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// `max_texture_size` scales a texture whose larger side exceeds it down to it, the aspect
+/// kept, with the `image` crate's triangle filter (the texels are the crate's own resize of
+/// the image), and the environment map too, each with a warning giving both sizes; images
+/// within the limit are left as they are. Both renderers read the scaled texels: the emitter
+/// renders their mean on each.
+#[test]
+fn max_texture_size_scales_large_textures_down() {
+    let dir = TempDir::new("max-texture-size");
+    let mut r = SplitMix::new(0x5ca1_0001);
+    let texels: Vec<[u8; 4]> = (0..64 * 32)
+        .map(|_| [0; 4].map(|_| (r.u32() >> 24) as u8))
+        .collect();
+    dir.write_png("big.png", 64, 32, &texels);
+    let full = limited(&dir, "big.png", None);
+    assert!(full.warnings.is_empty(), "{:?}", full.warnings);
+    let within = limited(&dir, "big.png", Some(64));
+    assert_eq!(within.textures.texels, full.textures.texels);
+    assert!(within.warnings.is_empty(), "{:?}", within.warnings);
+
+    let scene = limited(&dir, "big.png", Some(16));
+    let t = scene.textures.records[scene.materials[0].emission_texture as usize];
+    assert_eq!((t.width, t.height), (16, 8));
+    let image =
+        image::RgbaImage::from_fn(64, 32, |x, y| image::Rgba(texels[(y * 64 + x) as usize]));
+    let want = image::imageops::resize(&image, 16, 8, image::imageops::FilterType::Triangle);
+    let got = &scene.textures.texels[t.offset as usize..][..16 * 8];
+    let want: Vec<u32> = want.pixels().map(|p| u32::from_le_bytes(p.0)).collect();
+    assert_eq!(got, &want[..]);
+    let env = scene
+        .textures
+        .records
+        .iter()
+        .find(|r| r.format == meshtrace::scene::TextureFormat::RGBA32F)
+        .unwrap();
+    assert_eq!(
+        (env.width, env.height),
+        (16, 8),
+        "the environment is within 16"
+    );
+    let warned = |needles: &[&str]| {
+        scene
+            .warnings
+            .iter()
+            .any(|w| needles.iter().all(|n| w.contains(n)))
+    };
+    assert!(
+        warned(&["big.png", "64×32", "max_texture_size = 16", "16×8"]),
+        "{:?}",
+        scene.warnings
+    );
+    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
+    let small = limited(&dir, "big.png", Some(8));
+    assert!(
+        small
+            .warnings
+            .iter()
+            .any(|w| w.contains("test_16x8.exr") && w.contains("16×8") && w.contains("8×4")),
+        "{:?}",
+        small.warnings
+    );
+    // Texels of 64 × 32 = 2048 + the environment's 16 × 8 × 4 = 512 words, then 128 + 512.
+    assert_eq!(full.textures.texels.len(), 2048 + 512);
+    assert_eq!(scene.textures.texels.len(), 128 + 512);
+
+    let mut expect = [0.0f64; 3];
+    for &w in &want {
+        let t = w.to_le_bytes();
+        for c in 0..3 {
+            expect[c] += srgb8_to_linear(t[c]) as f64 / want.len() as f64;
+        }
+    }
+    let films = common::render_both("max_texture_size", &scene);
+    for (device, film) in &films {
+        let mean = film.mean();
+        for c in 0..3 {
+            let m = mean.iter().map(|p| p[c] as f64).sum::<f64>() / mean.len() as f64;
+            eprintln!(
+                "{device}: channel {c}: mean {m:.5}, expected {:.5}",
+                expect[c]
+            );
+            assert!(
+                (m - expect[c]).abs() / expect[c] < 0.01,
+                "{device}: channel {c}: mean {m}, expected {}",
+                expect[c]
+            );
+        }
+    }
+    if let [(_, cpu), (_, gpu)] = &films[..] {
+        let (a, b) = (cpu.mean(), gpu.mean());
+        let worst = a
+            .iter()
+            .zip(&b)
+            .map(|(p, q)| (*p - *q).abs().max_element())
+            .fold(0.0f32, f32::max);
+        eprintln!("largest pixel difference, CPU against GPU: {worst}");
+        assert!(worst < 1e-3, "the renderers read different texels: {worst}");
+    }
+}
+
+/// Float images keep their range when scaled: a constant HDR texture of 3000 stays 3000
+/// (the `image` crate alone would clamp it to 1), and a random one keeps its mean to within
+/// a few per cent.
+#[test]
+fn max_texture_size_keeps_the_range_of_float_images() {
+    let dir = TempDir::new("max-texture-size-float");
+    dir.write_exr("flat.exr", 8, 4, &[[3000.0, 0.5, 0.0, 1.0]; 32]);
+    let scene = limited(&dir, "flat.exr", Some(4));
+    let t = scene.textures.records[scene.materials[0].emission_texture as usize];
+    assert_eq!((t.width, t.height), (4, 2));
+    for texel in scene.textures.texels[t.offset as usize..][..4 * 2 * 4].chunks(4) {
+        let [r, g, b, a] = [0, 1, 2, 3].map(|c| f32::from_bits(texel[c]));
+        assert!((r - 3000.0).abs() < 3000.0 * 1e-5, "{r}");
+        assert!(
+            (g - 0.5).abs() < 1e-5 && b == 0.0 && (a - 1.0).abs() < 1e-5,
+            "{texel:?}"
+        );
+    }
+    let mut r = SplitMix::new(0x5ca1_0002);
+    let texels: Vec<[f32; 4]> = (0..64 * 64)
+        .map(|_| [r.range(0.0, 5000.0), r.range(0.0, 1.0), 0.25, 1.0])
+        .collect();
+    dir.write_exr("noisy.exr", 64, 64, &texels);
+    let scene = limited(&dir, "noisy.exr", Some(16));
+    let t = scene.textures.records[scene.materials[0].emission_texture as usize];
+    assert_eq!((t.width, t.height), (16, 16));
+    let mean = |values: &mut dyn Iterator<Item = f32>, n: usize| {
+        values.map(f64::from).sum::<f64>() / n as f64
+    };
+    let before = mean(&mut texels.iter().map(|t| t[0]), texels.len());
+    let after = mean(
+        &mut scene.textures.texels[t.offset as usize..][..16 * 16 * 4]
+            .chunks(4)
+            .map(|t| f32::from_bits(t[0])),
+        256,
+    );
+    eprintln!("mean red before {before:.2}, after {after:.2}");
+    assert!((after - before).abs() / before < 0.03, "{before} → {after}");
 }
 
 /// The wrap modes along u, on a 4 × 1 float image of texels 0, 1, 2, 3 (texel centres at

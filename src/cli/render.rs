@@ -83,6 +83,11 @@ pub struct RenderArgs {
     /// instead of its own sky.
     #[arg(long, value_name = "FILE")]
     pub env: Option<PathBuf>,
+    /// Scale every texture (environment maps included) whose larger side exceeds N texels
+    /// down to N on that side, keeping its aspect ratio, with a warning for each: for a
+    /// scene whose textures are too large for the GPU, or to save memory.
+    #[arg(long, value_name = "N")]
+    pub max_texture_size: Option<u32>,
     /// Denoise the image with Intel Open Image Denoise before writing it (checkpoints are
     /// written as rendered). Needs a build with `--features denoise`.
     #[arg(long)]
@@ -133,6 +138,7 @@ impl RenderArgs {
             transparent: Some(self.transparent),
             up: self.up.map(UpAxis::up),
             environment: self.env.clone(),
+            max_texture_size: self.max_texture_size,
             part: part.map(|(index, count)| Part { index, count }),
             denoise: Some(self.denoise),
             ..self.on.request()

@@ -342,6 +342,122 @@ impl Textures {
     pub fn bytes(&self) -> usize {
         self.texels.len() * 4
     }
+
+    /// Scales every image whose larger side exceeds `max` texels down to `max` on that side
+    /// (the aspect ratio kept, the other side rounded, at least 1), and packs the table again
+    /// without the space they gave up, so both renderers read the smaller images. The filter
+    /// is the `image` crate's triangle filter widened to the scale (each new texel a tent-
+    /// weighted mean of the old ones it covers): it has no negative lobes, so an HDR sun
+    /// does not ring into negative radiance, and a map's mean is kept. 8-bit images are
+    /// filtered in the values they store (sRGB-encoded for colour), as image editors do;
+    /// float texels below 0 become 0. Returns the images scaled, in table order.
+    pub fn limit_size(&mut self, max: u32) -> Vec<Scaled> {
+        // Each image once, by where it lies: (offset, width, height, words a texel), and
+        // the first record that reads it, for its name.
+        let mut images: Vec<(u32, u32, u32, usize, usize)> = self
+            .records
+            .iter()
+            .enumerate()
+            .map(|(i, t)| (t.offset, t.width, t.height, t.format.words_per_texel(), i))
+            .collect();
+        images.sort_unstable();
+        images.dedup_by_key(|image| image.0);
+        let mut scaled = Vec::new();
+        // Old offset → new (offset, width, height). Images are moved in table order, each
+        // to at or before where it was, and none grows, so the table is packed in place.
+        let mut moved = HashMap::new();
+        let mut at = 0;
+        for (offset, width, height, words, record) in images {
+            let start = offset as usize;
+            let len = width as usize * height as usize * words;
+            let (w, h) = fitted(width, height, max);
+            if (w, h) == (width, height) {
+                self.texels.copy_within(start..start + len, at);
+            } else {
+                let image = &self.texels[start..start + len];
+                let smaller = resize(image, (width, height), words, (w, h));
+                self.texels[at..at + smaller.len()].copy_from_slice(&smaller);
+                scaled.push(Scaled {
+                    name: self.names[record].clone(),
+                    from: (width, height),
+                    to: (w, h),
+                });
+            }
+            moved.insert(offset, (at as u32, w, h));
+            at += w as usize * h as usize * words;
+        }
+        self.texels.truncate(at);
+        if !scaled.is_empty() {
+            self.texels.shrink_to_fit();
+        }
+        for t in &mut self.records {
+            (t.offset, t.width, t.height) = moved[&t.offset];
+        }
+        for place in self.packed.values_mut() {
+            if let Some(&now) = moved.get(&place.0) {
+                *place = now;
+            }
+        }
+        scaled
+    }
+}
+
+/// An image [`Textures::limit_size`] scaled down: its file or name, and its size (width,
+/// height) before and after.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Scaled {
+    pub name: String,
+    pub from: (u32, u32),
+    pub to: (u32, u32),
+}
+
+/// The size of a `width` × `height` image whose larger side is at most `max`: its own, or
+/// scaled to `max` along the larger side and the other side in proportion (at least 1).
+fn fitted(width: u32, height: u32, max: u32) -> (u32, u32) {
+    let long = width.max(height);
+    if long <= max {
+        return (width, height);
+    }
+    let side = |s: u32| {
+        let scaled = (u64::from(s) * u64::from(max) + u64::from(long) / 2) / u64::from(long);
+        (scaled as u32).max(1)
+    };
+    (side(width), side(height))
+}
+
+/// `texels` (a packed image of `words` words a texel) resized from `from` to `to` with the
+/// triangle filter; the packed texels of the result.
+fn resize(texels: &[u32], from: (u32, u32), words: usize, to: (u32, u32)) -> Vec<u32> {
+    use image::imageops::{FilterType, resize};
+    let (width, height) = from;
+    let index = |x: u32, y: u32| (y as usize * width as usize + x as usize) * words;
+    if words == 1 {
+        let image = image::RgbaImage::from_fn(width, height, |x, y| {
+            image::Rgba(texels[index(x, y)].to_le_bytes())
+        });
+        let small = resize(&image, to.0, to.1, FilterType::Triangle);
+        return small.pixels().map(|p| u32::from_le_bytes(p.0)).collect();
+    }
+    // The crate clamps a float image's values to [0, 1] as it filters: they are divided by
+    // the power of two at or above the largest one first, and multiplied by it after, which
+    // is exact (powers of two change only the exponent).
+    let peak = texels
+        .iter()
+        .map(|&b| f32::from_bits(b))
+        .filter(|x| x.is_finite())
+        .fold(1.0f32, f32::max);
+    let scale = 2f32.powi(peak.log2().ceil().min(127.0) as i32);
+    let image = image::Rgba32FImage::from_fn(width, height, |x, y| {
+        let i = index(x, y);
+        image::Rgba(std::array::from_fn(|c| {
+            f32::from_bits(texels[i + c]) / scale
+        }))
+    });
+    let small = resize(&image, to.0, to.1, FilterType::Triangle);
+    small
+        .pixels()
+        .flat_map(|p| p.0.map(|c| (c * scale).to_bits()))
+        .collect()
 }
 
 /// What an image file holds: 8-bit channels, or more precise ones that are sRGB-encoded
@@ -432,20 +548,28 @@ fn check_exr_compression(bytes: &[u8]) -> Result<(), String> {
 /// image that cannot fit is an error that says how much it needs and how much there is.
 fn decode(format: Option<ImageFormat>, bytes: &[u8]) -> Result<(Kind, Decoded), String> {
     use image::ImageDecoder;
-    let format = format
-        .map_or_else(|| image::guess_format(bytes), Ok)
-        .map_err(|_| {
-            "not an image format meshtrace reads (PNG, JPEG, BMP, TGA, HDR, EXR)".to_string()
-        })?;
-    let cannot = |e: image::ImageError| format!("cannot decode the image: {e}");
-    if format == ImageFormat::OpenExr {
-        check_exr_compression(bytes)?;
+    let format = match format {
+        Some(format) => Ok(format),
+        None if bytes.starts_with(RGBE_SIGNATURE) => Ok(ImageFormat::Hdr),
+        None => image::guess_format(bytes),
     }
-    let mut reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
-    // The image crate's default cap (512 MiB) would refuse an 16384² texture that fits;
-    // the check below against the free memory replaces it.
-    reader.no_limits();
-    let decoder = reader.into_decoder().map_err(cannot)?;
+    .map_err(|_| {
+        "not an image format meshtrace reads (PNG, JPEG, BMP, TGA, WebP, HDR, EXR)".to_string()
+    })?;
+    let cannot = |e: image::ImageError| format!("cannot decode the image: {e}");
+    let decoder: Box<dyn ImageDecoder + '_> = match format {
+        ImageFormat::Hdr => hdr_decoder(bytes)?,
+        _ => {
+            if format == ImageFormat::OpenExr {
+                check_exr_compression(bytes)?;
+            }
+            let mut reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
+            // The image crate's default cap (512 MiB) would refuse an 16384² texture that
+            // fits; the check below against the free memory replaces it.
+            reader.no_limits();
+            Box::new(reader.into_decoder().map_err(cannot)?)
+        }
+    };
     let (width, height) = decoder.dimensions();
     if width == 0 || height == 0 {
         return Err("the image has no pixels".into());
@@ -480,6 +604,36 @@ fn decode(format: Option<ImageFormat>, bytes: &[u8]) -> Result<(Kind, Decoded), 
         }
         other => (Kind::FloatSrgb, Decoded::Float(other.to_rgba32f())),
     })
+}
+
+/// The signature line of a Radiance HDR file as the `image` crate's decoder knows it.
+const RADIANCE_SIGNATURE: &[u8] = b"#?RADIANCE";
+
+/// The other signature line stb_image accepts (its `stbi__hdr_test`), with its line end:
+/// the program type that Bruce Walter's rgbe.c, and the tools built on it, write.
+const RGBE_SIGNATURE: &[u8] = b"#?RGBE\n";
+
+/// A decoder of a Radiance HDR file, with either signature stb_image accepts. A file that
+/// starts `#?RGBE` is read as a chain of `#?RADIANCE` and the bytes after its first line,
+/// so the `image` crate's decoder (which knows only `#?RADIANCE`) reads it without a copy
+/// of the file. Any other first line is an error that quotes it.
+fn hdr_decoder(bytes: &[u8]) -> Result<Box<dyn image::ImageDecoder + '_>, String> {
+    use image::codecs::hdr::HdrDecoder;
+    use std::io::Read;
+    let cannot = |e: image::ImageError| format!("cannot decode the image: {e}");
+    if let Some(rest) = bytes.strip_prefix(RGBE_SIGNATURE) {
+        let reader = Read::chain(&b"#?RADIANCE\n"[..], rest);
+        return Ok(Box::new(HdrDecoder::new(reader).map_err(cannot)?));
+    }
+    if !bytes.starts_with(RADIANCE_SIGNATURE) {
+        let line = bytes.split(|&b| b == b'\n').next().unwrap_or_default();
+        let line: String = String::from_utf8_lossy(line).chars().take(40).collect();
+        return Err(format!(
+            "not a Radiance HDR file: its first line is `{}`, not #?RADIANCE or #?RGBE",
+            line.escape_debug()
+        ));
+    }
+    Ok(Box::new(HdrDecoder::new(bytes).map_err(cannot)?))
 }
 
 /// Memory the system can give without swapping (Linux's MemAvailable), in bytes; `None`

@@ -12,7 +12,8 @@ pub enum GpuError {
     #[error("cannot open the GPU device: {0}")]
     Device(String),
     #[error(
-        "the {what} need {bytes} bytes but this adapter holds at most {limit} ({rule}); use --device cpu or a smaller scene"
+        "the {what} need {bytes} bytes but this adapter holds at most {limit} ({rule}); {}",
+        too_large_fix(what)
     )]
     TooLarge {
         what: &'static str,
@@ -27,4 +28,18 @@ pub enum GpuError {
     NoRayQuery(String),
     #[error("GPU error: {0}")]
     Fault(String),
+}
+
+/// The texel table's name in [`GpuError::TooLarge`] (its `what`).
+pub const TEXEL_TABLE: &str = "texels";
+
+/// What [`GpuError::TooLarge`] advises for the table it names: the texel table shrinks when
+/// textures are scaled down on load; anything else fits only on the CPU or in a smaller scene.
+fn too_large_fix(what: &str) -> &'static str {
+    if what == TEXEL_TABLE {
+        "scale the textures down with --max-texture-size N (a manifest's max_texture_size; \
+         N = 4096 or 2048, say), or use --device cpu"
+    } else {
+        "use --device cpu or a smaller scene"
+    }
 }

@@ -5,6 +5,7 @@
 //! gather on every device, and a texture of 4096 × 16384 texels holds 1 GiB, far beyond
 //! some drivers' limits on a storage binding.
 
+use super::error::TEXEL_TABLE;
 use super::layout::{Member, StructLayout, struct_layout};
 use super::params::Params;
 use crate::bvh::BvhNode;
@@ -146,7 +147,7 @@ pub const TABLES: &[Table] = &[
         bytes: |s| bytemuck::cast_slice(&s.textures),
     },
     Table {
-        what: "texels",
+        what: TEXEL_TABLE,
         texture: "texels_tex",
         loader: "load_texel",
         element: || Element::U32,

@@ -1,7 +1,8 @@
 //! glTF materials as meshtrace `pbr` materials: the metallic-roughness factors and
 //! textures, the normal and emissive maps, the alpha mode, and KHR_materials_ior,
 //! _specular, _transmission, _volume and _emissive_strength; texture references with
-//! KHR_texture_transform. Each material is converted when a primitive first uses it.
+//! KHR_texture_transform, and images from EXT_texture_webp. Each material is converted
+//! when a primitive first uses it.
 
 use super::buffers::Buffers;
 use crate::scene::material::{MAT_ALPHA_MASK, MAT_THIN_WALLED};
@@ -309,11 +310,9 @@ impl<'b, 'a> Materials<'b, 'a> {
                 format!("TEXCOORD_{tex_coord} is not supported; TEXCOORD_0 is used"),
             );
         }
-        let source = texture.source.value();
-        let Some(source) = self
-            .buffers
-            .image(source, &format!("textures[{}].source", info.index))?
-        else {
+        let (source, source_at) =
+            image_of(texture, info.index).map_err(|(at, m)| doc.error(at, m))?;
+        let Some(source) = self.buffers.image(source, &source_at)? else {
             return Ok(NO_TEXTURE);
         };
         self.textures.push(TextureRef {
@@ -339,6 +338,35 @@ impl<'b, 'a> Materials<'b, 'a> {
             _ => Wrap::REPEAT,
         })
     }
+}
+
+/// The image texture `index` reads, with the JSON path that names it: the WebP image of
+/// its `EXT_texture_webp` extension where it has one (preferred over the fallback `source`
+/// that the extension lets a file keep for viewers without WebP), else its own `source`.
+/// A texture with neither is an error.
+fn image_of(texture: &json::Texture, index: usize) -> Result<(usize, String), (String, String)> {
+    let at = format!("textures[{index}]");
+    let webp = texture
+        .extensions
+        .as_ref()
+        .and_then(|e| e.others.get("EXT_texture_webp"));
+    if let Some(webp) = webp {
+        let at = format!("{at}.extensions.EXT_texture_webp.source");
+        return match webp.get("source").map(|s| s.as_u64().map(usize::try_from)) {
+            Some(Some(Ok(source))) => Ok((source, at)),
+            Some(_) => Err((at, "must be an image index (an integer ≥ 0)".into())),
+            None => Err((at, "is required but missing".into())),
+        };
+    }
+    // The `gltf` crate's mark of a texture without `source` (its `allow_empty_texture`).
+    let source = texture.source.value();
+    if source == u32::MAX as usize {
+        return Err((
+            format!("{at}.source"),
+            "is missing, and the texture names no EXT_texture_webp image instead".into(),
+        ));
+    }
+    Ok((source, format!("{at}.source")))
 }
 
 /// A normal texture's KHR_texture_transform, which the `gltf` crate leaves as JSON.
