@@ -158,6 +158,13 @@ fn meshopt_compression_is_decoded() {
 }
 
 #[test]
+fn draco_compression_is_decoded() {
+    check("draco_monkey", "draco_monkey", QUANTISED);
+    check("crowd_draco", "crowd", QUANTISED);
+    check("skinned_arm_draco", "skinned_arm", QUANTISED);
+}
+
+#[test]
 fn animations_are_noted_not_warned() {
     let scene = load_scene(&data("gltf/corpus/animated_cube.glb")).expect("loads");
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);

@@ -132,6 +132,12 @@ pub(super) fn read_floats(
     read(buffers, index, at, expect, decode_f32)
 }
 
+/// Index accessor `index` checked as [`read_indices`] checks it, its count returned, for
+/// indices a decoder gives instead.
+pub(super) fn index_count(buffers: &Buffers, index: usize, at: &str) -> Result<u64, SceneError> {
+    checked(buffers, index, at, &INDICES).map(|(a, ..)| a.count.0)
+}
+
 /// Index accessor `index` (unsigned bytes, shorts or ints).
 pub(super) fn read_indices(
     buffers: &Buffers,
@@ -141,14 +147,14 @@ pub(super) fn read_indices(
     read(buffers, index, at, &INDICES, decode_u32)
 }
 
-/// Reads an accessor's elements, each component through `decode`.
-fn read<T: Copy + Default>(
-    buffers: &Buffers,
+/// Accessor `index` checked against `expect`: the accessor, its type, component type and
+/// whether it is normalized.
+fn checked<'r>(
+    buffers: &Buffers<'r>,
     index: usize,
     at: &str,
     expect: &Expect,
-    decode: fn(&[u8], C, bool) -> T,
-) -> Result<Vec<T>, SceneError> {
+) -> Result<(&'r gltf::json::Accessor, Type, C, bool), SceneError> {
     let doc = buffers.doc();
     let root = doc.root;
     let error = |message: String| doc.error(at, format!("accessor {index}{message}"));
@@ -179,6 +185,61 @@ fn read<T: Copy + Default>(
             allowed.join(" or ")
         )));
     }
+    Ok((accessor, ty, c, normalized))
+}
+
+/// Accessor `index` as floats whose values a decoder gave (`values`: a Draco stream's
+/// attribute, each component as its integer or float value) rather than a buffer view:
+/// checked against `expect` as [`read_floats`] checks it, with as many elements as the
+/// accessor's count, and normalized integers mapped as the specification maps them.
+pub(super) fn decoded_floats(
+    buffers: &Buffers,
+    index: usize,
+    at: &str,
+    expect: &Expect,
+    mut values: Vec<f32>,
+) -> Result<Vec<f32>, SceneError> {
+    let (accessor, ty, c, normalized) = checked(buffers, index, at, expect)?;
+    let want = accessor.count.0 as usize * ty.multiplicity();
+    if values.len() != want {
+        return Err(buffers.doc().error(
+            at,
+            format!(
+                "accessor {index} has {} elements, but the compressed stream decodes to {}",
+                accessor.count.0,
+                values.len() / ty.multiplicity()
+            ),
+        ));
+    }
+    if normalized {
+        let scale = match c {
+            C::I8 | C::U8 => [127.0, 255.0],
+            C::I16 | C::U16 => [32767.0, 65535.0],
+            _ => [1.0, 1.0],
+        };
+        let signed = matches!(c, C::I8 | C::I16);
+        for v in &mut values {
+            *v = if signed {
+                (*v / scale[0]).max(-1.0)
+            } else {
+                *v / scale[1]
+            };
+        }
+    }
+    Ok(values)
+}
+
+/// Reads an accessor's elements, each component through `decode`.
+fn read<T: Copy + Default>(
+    buffers: &Buffers,
+    index: usize,
+    at: &str,
+    expect: &Expect,
+    decode: fn(&[u8], C, bool) -> T,
+) -> Result<Vec<T>, SceneError> {
+    let doc = buffers.doc();
+    let error = |message: String| doc.error(at, format!("accessor {index}{message}"));
+    let (accessor, ty, c, normalized) = checked(buffers, index, at, expect)?;
     let comps = ty.multiplicity();
     let size = c.size();
     let element = comps * size;

@@ -6,12 +6,12 @@
 
 use super::accessor::{self, Expect, read_floats};
 use super::buffers::Buffers;
+use super::draco::Source;
 use crate::scene::SceneError;
 use crate::scene::part::MeshPart;
 use glam::{Mat3, Mat4, Vec3, Vec4};
 use gltf::json::accessor::{ComponentType as C, Type};
 use gltf::json::mesh::{Primitive, Semantic};
-use gltf::json::validation::Checked;
 
 /// A primitive's morph targets and skin attributes, read once with its mesh and applied to
 /// each node's copy.
@@ -55,15 +55,16 @@ const INVERSE_BIND_MATRICES: Expect = Expect {
 };
 
 impl Deform {
-    /// Reads primitive `primitive`'s morph targets and skin attributes; `n` is its vertex
-    /// count and `at` its JSON path.
+    /// Reads primitive `primitive`'s morph targets and skin attributes (from `source`,
+    /// its accessors or Draco stream); `n` is its vertex count and `at` its JSON path.
     pub fn read(
-        buffers: &Buffers,
+        source: &Source,
         primitive: &Primitive,
         at: &str,
         n: usize,
         quantized: bool,
     ) -> Result<Self, SceneError> {
+        let buffers = source.buffers();
         let doc = buffers.doc();
         let vectors = |index: usize, at: String, expect: &Expect| {
             let values = read_floats(buffers, index, &at, expect)?;
@@ -102,18 +103,20 @@ impl Deform {
             });
         }
         for set in 0.. {
-            let attribute = |s: Semantic| primitive.attributes.get(&Checked::Valid(s));
             let (Some(j), Some(w)) = (
-                attribute(Semantic::Joints(set)),
-                attribute(Semantic::Weights(set)),
+                source.has(Semantic::Joints(set)),
+                source.has(Semantic::Weights(set)),
             ) else {
                 break;
             };
-            let (j, w) = (j.value(), w.value());
-            let at_j = format!("{at}.attributes[\"JOINTS_{set}\"]");
-            let at_w = format!("{at}.attributes[\"WEIGHTS_{set}\"]");
-            let joints = read_floats(buffers, j, &at_j, &JOINTS)?;
-            let weights = read_floats(buffers, w, &at_w, &WEIGHTS)?;
+            let at_j = source.attribute_at(&format!("JOINTS_{set}"));
+            let at_w = source.attribute_at(&format!("WEIGHTS_{set}"));
+            let joints = source
+                .floats(Semantic::Joints(set), &JOINTS)?
+                .unwrap_or_default();
+            let weights = source
+                .floats(Semantic::Weights(set), &WEIGHTS)?
+                .unwrap_or_default();
             for (values, index, at) in [(&joints, j, &at_j), (&weights, w, &at_w)] {
                 if values.len() != 4 * n {
                     return Err(doc.error(

@@ -7,8 +7,8 @@
 //! binary data is meshtrace's own, so that every offset, count and index is checked before
 //! it is followed: `container` (GLB chunks, JSON, extensions, validation), `buffers`
 //! (buffers and images: GLB, data URIs, files through the [`FileSource`]), `accessor`
-//! (typed, strided and sparse accessors), `primitive` (attributes and topology), `deform`
-//! (morph targets and skins), `instancing` (EXT_mesh_gpu_instancing), `material`
+//! (typed, strided and sparse accessors), `primitive` (attributes and topology), `draco`
+//! (KHR_draco_mesh_compression), `deform` (morph targets and skins), `instancing` (EXT_mesh_gpu_instancing), `material`
 //! and `nodes` (the node tree, cameras and lights). Each error is one line naming the file
 //! and the JSON path at fault, such as
 //! `room.gltf: meshes[2].primitives[0].indices: accessor 7 reads past the end of bufferView 3 …`.
@@ -17,6 +17,7 @@ mod accessor;
 mod buffers;
 mod container;
 mod deform;
+mod draco;
 mod instancing;
 mod material;
 mod meshopt;

@@ -3,9 +3,10 @@
 //! topology (triangle lists, strips and fans, indexed or not) as a [`MeshPart`] whose
 //! corners all index one vertex table.
 
-use super::accessor::{self, read_floats, read_indices};
+use super::accessor::{self, read_indices};
 use super::buffers::Buffers;
 use super::deform::Deform;
+use super::draco::Source;
 use crate::scene::part::{MeshPart, PartTriangle};
 use crate::scene::{NO_NORMAL, NO_TANGENT, NO_UV, SceneError};
 use glam::{Vec2, Vec3, Vec4};
@@ -43,19 +44,17 @@ pub(super) fn read_primitive(
         .extensions_used
         .iter()
         .any(|e| e == "KHR_mesh_quantization");
-    let attribute = |s: Semantic| {
-        primitive
-            .attributes
-            .get(&Checked::Valid(s))
-            .map(|i| i.value())
-    };
-    let attribute_at = |name: &str| format!("{at}.attributes[\"{name}\"]");
+    let source = Source::new(buffers, primitive, &at)?;
+    let attribute = |s: Semantic| source.has(s);
+    let attribute_at = |name: &str| source.attribute_at(name);
 
     let Some(position) = attribute(Semantic::Positions) else {
         return Err(doc.error(format!("{at}.attributes"), "has no POSITION"));
     };
     let at_p = attribute_at("POSITION");
-    let values = read_floats(buffers, position, &at_p, &accessor::position(quantized))?;
+    let values = source
+        .floats(Semantic::Positions, &accessor::position(quantized))?
+        .unwrap_or_default();
     let positions: Vec<Vec3> = values.chunks_exact(3).map(Vec3::from_slice).collect();
     if let Some((i, v)) = positions.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(doc.error(
@@ -86,12 +85,9 @@ pub(super) fn read_primitive(
         ..MeshPart::default()
     };
     if let Some(index) = attribute(Semantic::Normals) {
-        let values = read_floats(
-            buffers,
-            index,
-            &attribute_at("NORMAL"),
-            &accessor::normal(quantized),
-        )?;
+        let values = source
+            .floats(Semantic::Normals, &accessor::normal(quantized))?
+            .unwrap_or_default();
         // A non-finite normal becomes zero, which the scene builder reads as none.
         part.normals = values
             .chunks_exact(3)
@@ -102,7 +98,9 @@ pub(super) fn read_primitive(
     }
     if let Some(index) = attribute(Semantic::TexCoords(0)) {
         let at_t = attribute_at("TEXCOORD_0");
-        let values = read_floats(buffers, index, &at_t, &accessor::texcoord(quantized))?;
+        let values = source
+            .floats(Semantic::TexCoords(0), &accessor::texcoord(quantized))?
+            .unwrap_or_default();
         // glTF's (0, 0) is the image's top-left corner, as meshtrace's.
         part.texcoords = values.chunks_exact(2).map(Vec2::from_slice).collect();
         same_count("TEXCOORD_0", index, part.texcoords.len())?;
@@ -119,12 +117,9 @@ pub(super) fn read_primitive(
         }
     }
     if let Some(index) = attribute(Semantic::Tangents) {
-        let values = read_floats(
-            buffers,
-            index,
-            &attribute_at("TANGENT"),
-            &accessor::tangent(quantized),
-        )?;
+        let values = source
+            .floats(Semantic::Tangents, &accessor::tangent(quantized))?
+            .unwrap_or_default();
         part.tangents = values
             .chunks_exact(4)
             .map(Vec4::from_slice)
@@ -135,10 +130,22 @@ pub(super) fn read_primitive(
     if attribute(Semantic::Colors(0)).is_some() {
         doc.warn(&at, "vertex colours (COLOR_0) are ignored");
     }
-    let deform = Deform::read(buffers, primitive, &at, n, quantized)?;
+    let deform = Deform::read(&source, primitive, &at, n, quantized)?;
 
-    let vertices: Vec<u32> = match primitive.indices {
-        Some(index) => {
+    let draco = source.draco_indices()?;
+    let vertices: Vec<u32> = match (draco, primitive.indices) {
+        (Some(indices), _) => {
+            if let Some((k, &i)) = indices.iter().enumerate().find(|&(_, &i)| i as usize >= n) {
+                return Err(doc.error(
+                    format!("{at}.extensions.KHR_draco_mesh_compression"),
+                    format!(
+                        "the Draco stream's corner {k} is point {i}, but POSITION has {n} vertices"
+                    ),
+                ));
+            }
+            indices
+        }
+        (None, Some(index)) => {
             let at_i = format!("{at}.indices");
             let indices = read_indices(buffers, index.value(), &at_i)?;
             if let Some((k, &i)) = indices.iter().enumerate().find(|&(_, &i)| i as usize >= n) {
@@ -152,7 +159,7 @@ pub(super) fn read_primitive(
             }
             indices
         }
-        None => (0..n as u32).collect(),
+        (None, None) => (0..n as u32).collect(),
     };
     let corners = triangles(mode, &vertices);
     let leftover = match mode {
