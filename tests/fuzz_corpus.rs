@@ -1,4 +1,4 @@
-//! Replays the fuzz corpora (`fuzz/corpus/{scene_file,obj_mtl,gltf}`) through the fuzz targets'
+//! Replays the fuzz corpora (`fuzz/corpus/{scene_file,obj_mtl,gltf,draco,meshopt}`) through the fuzz targets'
 //! own harnesses, without libFuzzer: every input must load or fail with an error, never
 //! panic, and whatever loads must build a valid BVH. A failure names the corpus file.
 
@@ -60,6 +60,47 @@ fn obj_mtl_corpus_never_panics() {
 #[test]
 fn gltf_corpus_never_panics() {
     replay_all("gltf", harness::gltf, 20);
+}
+
+#[test]
+fn draco_corpus_never_panics() {
+    replay_all("draco", harness::draco, 3);
+}
+
+#[test]
+fn meshopt_corpus_never_panics() {
+    replay_all("meshopt", harness::meshopt, 3);
+}
+
+/// The decoder targets' seeds, made from the glTF corpus's real files
+/// (`tools/gltf_corpus/fuzz_seeds.py`), load as the meshes they came from: a fuzzer that
+/// starts from them starts inside the decoders, not at the harness's first error.
+#[test]
+fn decoder_seeds_load() {
+    use meshtrace::scene::load_scene_from;
+    for (target, make) in [
+        ("draco", harness::draco_glb as fn(&[u8]) -> Option<Vec<u8>>),
+        ("meshopt", harness::meshopt_glb),
+    ] {
+        let seeds: Vec<PathBuf> = corpus(target)
+            .into_iter()
+            .filter(|p| p.file_name().is_some_and(|n| n.to_string_lossy().starts_with("seed-")))
+            .collect();
+        assert!(seeds.len() >= 3, "{target}: {} seeds", seeds.len());
+        for seed in seeds {
+            let data = std::fs::read(&seed).expect("a seed");
+            let glb = make(&data).unwrap_or_else(|| panic!("{}: no GLB", seed.display()));
+            let files = harness::MemFiles::new(&[("fuzz.glb", &glb)]);
+            let scene = load_scene_from(Path::new("fuzz.glb"), &files)
+                .unwrap_or_else(|e| panic!("{}: {e}", seed.display()));
+            assert!(
+                scene.mesh.triangles.len() > 12,
+                "{}: {} triangles",
+                seed.display(),
+                scene.mesh.triangles.len()
+            );
+        }
+    }
 }
 
 /// The harness's own plumbing: a panic inside it is reported, not propagated.

@@ -155,6 +155,156 @@ pub fn gltf(data: &[u8]) {
     }
 }
 
+/// A GLB file of `json` and the BIN chunk `bin`.
+pub fn glb(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
+    let mut text = json.to_string().into_bytes();
+    text.resize(text.len().next_multiple_of(4), b' ');
+    let mut bin = bin.to_vec();
+    bin.resize(bin.len().next_multiple_of(4), 0);
+    let length = 12 + 8 + text.len() + 8 + bin.len();
+    let mut out = Vec::with_capacity(length);
+    out.extend(b"glTF");
+    out.extend(2u32.to_le_bytes());
+    out.extend((length as u32).to_le_bytes());
+    out.extend((text.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(text);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(b"BIN\0");
+    out.extend(bin);
+    out
+}
+
+/// Loads `glb` as a bare glTF scene; a loaded scene must be well formed.
+pub fn load_glb(glb: &[u8]) {
+    let files = MemFiles::new(&[("fuzz.glb", glb)]);
+    if let Ok(scene) = load_scene_from(Path::new("fuzz.glb"), &files) {
+        check_scene(&scene);
+        check_gltf_scene(&scene);
+    }
+}
+
+/// Bounds wide enough for any decoded position (glTF requires POSITION's min and max).
+const WIDE: [f32; 3] = [1e30, 1e30, 1e30];
+
+/// Fuzz target `draco`: the input is a 4-byte header, the vertex and index counts (u16,
+/// little-endian) that the accessors declare, then a Draco stream, served as the one
+/// buffer view of a KHR_draco_mesh_compression primitive whose POSITION (attribute 0),
+/// NORMAL (1) and TEXCOORD_0 (2) come from the stream.
+pub fn draco(data: &[u8]) {
+    if let Some(glb) = draco_glb(data) {
+        load_glb(&glb);
+    }
+}
+
+/// The GLB file the `draco` target loads for `data`; `None` for an input too short.
+pub fn draco_glb(data: &[u8]) -> Option<Vec<u8>> {
+    let (head, stream) = (data.get(..4)?, data.get(4..)?);
+    let points = u16::from_le_bytes([head[0], head[1]]);
+    let corners = u16::from_le_bytes([head[2], head[3]]);
+    let accessor = |ty: &str, component: u32, count: u16| {
+        serde_json::json!({"componentType": component, "type": ty, "count": count})
+    };
+    let mut position = accessor("VEC3", 5126, points);
+    position["min"] = serde_json::json!(WIDE.map(|x| -x));
+    position["max"] = serde_json::json!(WIDE);
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_draco_mesh_compression"],
+        "extensionsRequired": ["KHR_draco_mesh_compression"],
+        "buffers": [{"byteLength": stream.len().next_multiple_of(4)}],
+        "bufferViews": [{"buffer": 0, "byteLength": stream.len()}],
+        "accessors": [
+            position,
+            accessor("VEC3", 5126, points),
+            accessor("VEC2", 5126, points),
+            accessor("SCALAR", 5125, corners),
+        ],
+        "meshes": [{"primitives": [{
+            "attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2},
+            "indices": 3,
+            "extensions": {"KHR_draco_mesh_compression": {
+                "bufferView": 0,
+                "attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}
+            }}
+        }]}],
+        "nodes": [{"mesh": 0}],
+        "scenes": [{"nodes": [0]}]
+    });
+    Some(glb(&json, stream))
+}
+
+/// Fuzz target `meshopt`: the input is a 7-byte header, then a vertex stream and an index
+/// stream, served as two EXT_ or KHR_meshopt_compression buffer views of one primitive
+/// (over a fallback buffer that is never read). The header: flags (bit 0 positions as
+/// 16-bit integers with KHR_mesh_quantization, stride 8, rather than floats, stride 12;
+/// bit 1 the EXPONENTIAL filter, on floats; bit 2 the INDICES mode rather than TRIANGLES;
+/// bit 3 16-bit indices rather than 32-bit; bit 4 KHR_ rather than EXT_), the vertex count
+/// and the index count (u16 each) and the vertex stream's length (u16), all little-endian.
+pub fn meshopt(data: &[u8]) {
+    if let Some(glb) = meshopt_glb(data) {
+        load_glb(&glb);
+    }
+}
+
+/// The GLB file the `meshopt` target loads for `data`; `None` for an input whose header
+/// is cut short or whose vertex stream runs past its end.
+pub fn meshopt_glb(data: &[u8]) -> Option<Vec<u8>> {
+    let head = data.get(..7)?;
+    let u16_at = |i: usize| u16::from_le_bytes([head[i], head[i + 1]]) as usize;
+    let (flags, points, corners, split) = (head[0], u16_at(1), u16_at(3), u16_at(5));
+    let rest = &data[7..];
+    let (vertices, indices) = (split <= rest.len()).then(|| rest.split_at(split))?;
+    let quantized = flags & 1 != 0;
+    let (stride, component) = if quantized { (8, 5122) } else { (12, 5126) };
+    let filter = if flags & 2 != 0 && !quantized {
+        "EXPONENTIAL"
+    } else {
+        "NONE"
+    };
+    let mode = if flags & 4 != 0 { "INDICES" } else { "TRIANGLES" };
+    let (index_stride, index_component) = if flags & 8 != 0 { (2, 5123) } else { (4, 5125) };
+    let name = if flags & 16 != 0 {
+        "KHR_meshopt_compression"
+    } else {
+        "EXT_meshopt_compression"
+    };
+    let mut used = vec![name];
+    if quantized {
+        used.push("KHR_mesh_quantization");
+    }
+    let fallback = points * stride + corners * index_stride;
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": used,
+        "extensionsRequired": used,
+        "buffers": [
+            {"byteLength": data.len() - 7},
+            {"byteLength": fallback.max(4), "extensions": {name: {"fallback": true}}}
+        ],
+        "bufferViews": [
+            {"buffer": 1, "byteLength": points * stride, "byteStride": stride, "extensions": {name: {
+                "buffer": 0, "byteLength": vertices.len(), "byteStride": stride,
+                "count": points, "mode": "ATTRIBUTES", "filter": filter
+            }}},
+            {"buffer": 1, "byteOffset": points * stride, "byteLength": corners * index_stride,
+             "extensions": {name: {
+                "buffer": 0, "byteOffset": vertices.len(), "byteLength": indices.len(),
+                "byteStride": index_stride, "count": corners, "mode": mode
+            }}}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": component, "type": "VEC3", "count": points,
+             "min": WIDE.map(|x| -x), "max": WIDE},
+            {"bufferView": 1, "componentType": index_component, "type": "SCALAR", "count": corners}
+        ],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "nodes": [{"mesh": 0}],
+        "scenes": [{"nodes": [0]}]
+    });
+    Some(glb(&json, rest))
+}
+
 /// What a glTF scene adds to [`check_scene`]: texture coordinates and tangents in range,
 /// texture slots that name records, finite lights.
 fn check_gltf_scene(scene: &Scene) {
