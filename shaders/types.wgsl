@@ -123,9 +123,10 @@ struct Params {
     scene_center: vec3<f32>,
     scene_radius: f32,
     branch_weight: f32,
+    // Half an orthographic camera's view height; 0 for a perspective camera.
+    ortho_half_height: f32,
     _pad0: u32,
     _pad1: u32,
-    _pad2: u32,
 }
 
 

@@ -199,10 +199,15 @@ fn project(camera: &Camera, p: Vec3, width: u32, height: u32, near: f32) -> Opti
     if z < near {
         return None;
     }
-    let tan = (0.5 * camera.vfov.to_radians()).tan();
     let aspect = width as f32 / height as f32;
-    let x = d.dot(camera.right) / (z * tan * aspect);
-    let y = d.dot(camera.up) / (z * tan);
+    // The view's half height at the point's depth: fixed for an orthographic camera.
+    let half = if camera.is_orthographic() {
+        0.5 * camera.ortho_height
+    } else {
+        z * (0.5 * camera.vfov.to_radians()).tan()
+    };
+    let x = d.dot(camera.right) / (half * aspect);
+    let y = d.dot(camera.up) / half;
     Some((
         0.5 * (x + 1.0) * width as f32,
         0.5 * (1.0 - y) * height as f32,

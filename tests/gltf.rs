@@ -12,7 +12,7 @@ use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use meshtrace::scene::material::{MAT_ALPHA_MASK, MAT_THIN_WALLED};
 use meshtrace::scene::studio;
 use meshtrace::scene::{
-    Camera, MaterialKind, NO_TANGENT, NO_TEXTURE, PunctualLight, Scene, Sky, TextureFormat, Wrap,
+    MaterialKind, NO_TANGENT, NO_TEXTURE, PunctualLight, Scene, Sky, TextureFormat, Wrap,
     load_scene,
 };
 use serde_json::json;
@@ -602,11 +602,11 @@ fn gltf_with_embedded_or_external_buffers_and_glb_load_the_same() {
 }
 
 #[test]
-fn the_first_perspective_camera_in_the_node_tree() {
+fn the_first_camera_in_the_node_tree() {
     let mut a = Asset::new();
     let mesh = a.triangle(json!({}));
     a.json["cameras"] = json!([
-        { "type": "orthographic", "orthographic": { "xmag": 1, "ymag": 1, "zfar": 10, "znear": 0.1 } },
+        { "type": "orthographic", "orthographic": { "xmag": 1, "ymag": 0.75, "zfar": 10, "znear": 0.1 } },
         { "type": "perspective", "perspective": { "yfov": 0.5, "znear": 0.1, "aspectRatio": 3.0 } },
         { "type": "perspective", "perspective": { "yfov": 1.0, "znear": 0.1 } },
     ]);
@@ -619,30 +619,34 @@ fn the_first_perspective_camera_in_the_node_tree() {
     a.scene(&[0, ortho, later]);
     let _ = mesh;
     let scene = load(&a);
-    let world = Mat4::from_rotation_translation(q, Vec3::new(1.0, 2.0, 3.0))
-        * Mat4::from_translation(Vec3::new(0.0, 0.0, 5.0));
-    let position = world.transform_point3(Vec3::ZERO);
-    let expected = Camera::new(
-        position,
-        position + Vec3::NEG_X,
-        Vec3::Y,
-        0.5f32.to_degrees(),
-        0.0,
-        None,
-    )
-    .unwrap();
     let c = &scene.camera;
-    assert!(close(c.position, expected.position), "{}", c.position);
+    assert!(
+        close(c.position, Vec3::new(1.0, 2.0, 3.0)),
+        "{}",
+        c.position
+    );
     assert!(
         close(c.forward, Vec3::NEG_X) && close(c.up, Vec3::Y),
         "{c:?}"
     );
+    assert!(c.is_orthographic() && c.ortho_height == 1.5, "{c:?}");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+
+    // Without it, the perspective camera of the child, placed by both nodes' transforms.
+    a.json["nodes"][ortho]["camera"] = json!(null);
+    a.json["nodes"][ortho]
+        .as_object_mut()
+        .expect("a node")
+        .remove("camera");
+    let scene = load(&a);
+    let world = Mat4::from_rotation_translation(q, Vec3::new(1.0, 2.0, 3.0))
+        * Mat4::from_translation(Vec3::new(0.0, 0.0, 5.0));
+    let position = world.transform_point3(Vec3::ZERO);
+    let c = &scene.camera;
+    assert!(close(c.position, position), "{}", c.position);
+    assert!(close(c.forward, Vec3::NEG_X), "{c:?}");
+    assert!(!c.is_orthographic());
     assert!((c.vfov - 0.5f32.to_degrees()).abs() < 1e-4);
-    let w = scene.warnings.join("\n");
-    assert!(
-        w.contains("cameras[0]: orthographic cameras are not supported"),
-        "{w}"
-    );
 }
 
 #[test]

@@ -946,7 +946,21 @@ fn camera_ray_matches() {
         Some(3.0),
     )
     .unwrap();
-    for (name, cam) in [("pinhole", pinhole), ("thin lens", lens)] {
+    let ortho = Camera::new(
+        Vec3::new(0.5, 2.0, 3.0),
+        Vec3::new(0.0, 0.0, -1.0),
+        Vec3::Y,
+        40.0,
+        0.0,
+        None,
+    )
+    .unwrap()
+    .orthographic(2.5);
+    for (name, cam) in [
+        ("pinhole", pinhole),
+        ("thin lens", lens),
+        ("orthographic", ortho),
+    ] {
         rs.camera = cam.clone();
         let mut r = SplitMix::new(9);
         let mut cases: Vec<Case> = Vec::new();

@@ -180,6 +180,10 @@ pub fn view_camera(
                 own.aperture,
                 Some(own.focus_distance),
             )
+            .map(|view| Camera {
+                ortho_height: own.ortho_height,
+                ..view
+            })
         }
     }
 }

@@ -118,7 +118,10 @@ impl RenderScene {
             let c = scene_bounds.center();
             (c, (scene_bounds.max - c).length() * (1.0 + 1e-3))
         };
-        let caustic_targets = if scene.settings.caustics {
+        // Light subpaths reach the film through the camera's lens or pinhole; no light
+        // path meets an orthographic camera's parallel rays, so with one the render is
+        // the path tracer's alone (the same image in expectation).
+        let caustic_targets = if scene.settings.caustics && !scene.camera.is_orthographic() {
             let tri_materials: Vec<u32> = shading.iter().map(|s| s.material).collect();
             caustic_targets(&tris, &tri_materials, &scene.materials)
         } else {

@@ -1,5 +1,5 @@
 //! Primary rays: the mapping from a pixel sample to a camera ray, through a pinhole or a
-//! thin lens. Every function has a WGSL twin of the same name in `shaders/camera.wgsl`.
+//! thin lens, or along parallel rays for an orthographic camera. Every function has a WGSL twin of the same name in `shaders/camera.wgsl`.
 
 use super::rng::{self, Rng};
 use super::sampling::sample_concentric_disk;
@@ -22,6 +22,8 @@ pub struct CameraRays {
     pub aspect: f32,
     pub aperture: f32,
     pub focus_distance: f32,
+    /// Half an orthographic camera's view height in world units; 0 for a perspective one.
+    pub ortho_half_height: f32,
     pub width: u32,
     pub height: u32,
 }
@@ -37,6 +39,7 @@ impl CameraRays {
             aspect: width as f32 / height as f32,
             aperture: camera.aperture,
             focus_distance: camera.focus_distance,
+            ortho_half_height: 0.5 * camera.ortho_height,
             width,
             height,
         }
@@ -48,6 +51,9 @@ impl CameraRays {
 /// mirror: shaders/camera.wgsl `generate_camera_ray`
 pub fn generate_camera_ray(cam: &CameraRays, px: u32, py: u32, rng: &Rng) -> Ray {
     let Vec2 { x: jx, y: jy } = rng.rng_2d(0, rng::DIM_PIXEL_X);
+    if cam.ortho_half_height > 0.0 {
+        return orthographic_ray(cam, px as f32 + jx, py as f32 + jy);
+    }
     let sx = (2.0 * (px as f32 + jx) / cam.width as f32 - 1.0) * cam.tan_half_vfov * cam.aspect;
     let sy = (1.0 - 2.0 * (py as f32 + jy) / cam.height as f32) * cam.tan_half_vfov;
     let dir = cam.forward + sx * cam.right + sy * cam.up;
@@ -65,10 +71,23 @@ pub fn generate_camera_ray(cam: &CameraRays, px: u32, py: u32, rng: &Rng) -> Ray
 /// AOVs (object and material ids) see. Draws no random numbers.
 /// mirror: shaders/camera.wgsl `pixel_centre_ray`
 pub fn pixel_centre_ray(cam: &CameraRays, px: u32, py: u32) -> Ray {
+    if cam.ortho_half_height > 0.0 {
+        return orthographic_ray(cam, px as f32 + 0.5, py as f32 + 0.5);
+    }
     let sx = (2.0 * (px as f32 + 0.5) / cam.width as f32 - 1.0) * cam.tan_half_vfov * cam.aspect;
     let sy = (1.0 - 2.0 * (py as f32 + 0.5) / cam.height as f32) * cam.tan_half_vfov;
     Ray::new(
         cam.position,
         (cam.forward + sx * cam.right + sy * cam.up).normalize(),
     )
+}
+
+/// An orthographic camera's ray through image point (`x`, `y`) (in pixels from the top-left
+/// corner): it starts on the plane through the camera's position across its view, and runs
+/// along `forward`.
+/// mirror: shaders/camera.wgsl `orthographic_ray`
+pub fn orthographic_ray(cam: &CameraRays, x: f32, y: f32) -> Ray {
+    let sx = (2.0 * x / cam.width as f32 - 1.0) * cam.ortho_half_height * cam.aspect;
+    let sy = (1.0 - 2.0 * y / cam.height as f32) * cam.ortho_half_height;
+    Ray::new(cam.position + sx * cam.right + sy * cam.up, cam.forward)
 }

@@ -1,4 +1,5 @@
-//! The camera: where it stands, where it looks, and its lens. Ray generation from it is
+//! The camera: where it stands, where it looks, and its projection (a pinhole or thin lens
+//! with a field of view, or orthographic with a view height). Ray generation from it is
 //! `render::camera`.
 
 use glam::Vec3;
@@ -19,6 +20,9 @@ pub struct Camera {
     pub aperture: f32,
     /// Distance along `forward` of the plane in focus.
     pub focus_distance: f32,
+    /// An orthographic camera's view height in world units (its width follows the image's
+    /// aspect); 0 for a perspective camera, which `vfov` describes.
+    pub ortho_height: f32,
 }
 
 impl Camera {
@@ -42,7 +46,23 @@ impl Camera {
             vfov,
             aperture,
             focus_distance: focus_distance.unwrap_or((look_at - position).length()),
+            ortho_height: 0.0,
         })
+    }
+
+    /// This camera made orthographic, seeing a view `height` world units high (and as wide
+    /// as the image's aspect makes it) along parallel rays: no field of view, no lens.
+    pub fn orthographic(self, height: f32) -> Self {
+        Self {
+            ortho_height: height,
+            aperture: 0.0,
+            ..self
+        }
+    }
+
+    /// Whether the camera is orthographic.
+    pub fn is_orthographic(&self) -> bool {
+        self.ortho_height > 0.0
     }
 
     /// A pinhole camera (vertical field of view 40 degrees) that frames `bounds` from the

@@ -5,8 +5,8 @@
 
 use super::builder::Builder;
 use super::file::{
-    ColorFile, LightFile, LightType, MaterialFile, MaterialType, ObjectFile, ScalarFile, ScaleFile,
-    SceneFile, TextureFile, WrapFile,
+    ColorFile, LightFile, LightType, MaterialFile, MaterialType, ObjectFile, Projection,
+    ScalarFile, ScaleFile, SceneFile, TextureFile, WrapFile,
 };
 use super::gltf::{is_gltf, load_gltf};
 use super::light::PunctualLight;
@@ -122,12 +122,44 @@ impl Ctx<'_> {
         if position == look_at {
             return Err(self.invalid("camera.look_at", "must differ from camera.position"));
         }
-        Camera::new(position, look_at, up, vfov, aperture, focus).ok_or_else(|| {
-            self.invalid(
-                "camera.up",
-                "must not be zero or parallel to the view direction",
-            )
-        })
+        let camera =
+            Camera::new(position, look_at, up, vfov, aperture, focus).ok_or_else(|| {
+                self.invalid(
+                    "camera.up",
+                    "must not be zero or parallel to the view direction",
+                )
+            })?;
+        match c.projection.unwrap_or(Projection::Perspective) {
+            Projection::Perspective => match c.height {
+                Some(_) => Err(self.invalid(
+                    "camera.height",
+                    "is an orthographic camera's; add `projection = \"orthographic\"` or use `vfov`",
+                )),
+                None => Ok(camera),
+            },
+            Projection::Orthographic => {
+                for (field, given) in [
+                    ("vfov", c.vfov.is_some()),
+                    ("aperture", c.aperture.is_some()),
+                    ("focus_distance", c.focus_distance.is_some()),
+                ] {
+                    if given {
+                        return Err(self.invalid(
+                            format!("camera.{field}"),
+                            "does not apply to an orthographic camera, which sees `height` world units along parallel rays",
+                        ));
+                    }
+                }
+                let Some(height) = c.height else {
+                    return Err(self.invalid(
+                        "camera.height",
+                        "is required for an orthographic camera: the view's height in world units",
+                    ));
+                };
+                let height = self.scalar("camera.height", height, |v| v > 0.0, "positive")?;
+                Ok(camera.orthographic(height))
+            }
+        }
     }
 
     pub(super) fn settings(&self, file: &SceneFile) -> Result<RenderSettings, SceneError> {

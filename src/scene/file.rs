@@ -64,6 +64,18 @@ pub struct CameraFile {
     pub vfov: Option<f32>,
     pub aperture: Option<f32>,
     pub focus_distance: Option<f32>,
+    /// `perspective` (the default) or `orthographic`.
+    pub projection: Option<Projection>,
+    /// An orthographic camera's view height in world units.
+    pub height: Option<f32>,
+}
+
+/// A camera's projection, as a scene file names it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Projection {
+    Perspective,
+    Orthographic,
 }
 
 #[derive(Debug, Default, Deserialize)]

@@ -243,7 +243,11 @@ pub(super) fn load_bare_gltf(
             c.vfov,
             c.aperture,
             Some(c.focus_distance),
-        ),
+        )
+        .map(|turned| Camera {
+            ortho_height: c.ortho_height,
+            ..turned
+        }),
         None => camera(&bounds),
     }
     .ok_or_else(|| {

@@ -65,7 +65,9 @@ pub struct Params {
     pub scene_center: [f32; 3],
     pub scene_radius: f32,
     pub branch_weight: f32,
-    pub _pad: [u32; 3],
+    /// Half an orthographic camera's view height; 0 for a perspective camera.
+    pub ortho_half_height: f32,
+    pub _pad: [u32; 2],
 }
 
 impl Params {
@@ -105,6 +107,7 @@ impl Params {
             scene_center,
             scene_radius,
             branch_weight,
+            ortho_half_height,
             _pad,
         })
     }
@@ -160,6 +163,7 @@ impl Params {
             aspect: c.aspect,
             aperture: c.aperture,
             focus_distance: c.focus_distance,
+            ortho_half_height: c.ortho_half_height,
             sample_start: 0,
             sample_end: 0,
             row_start: 0,

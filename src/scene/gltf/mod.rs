@@ -1,7 +1,7 @@
 //! glTF 2.0 files (`.gltf` with external or embedded data, and `.glb`) read into the
 //! pieces a scene is built from: one [`MeshPart`] per triangle primitive instance with its
 //! node's world matrix, the materials (`pbr`) with their textures, the punctual lights and
-//! the first perspective camera of the default scene.
+//! the first camera of the default scene.
 //!
 //! The `gltf` crate parses the JSON and validates its references; everything that reads
 //! binary data is meshtrace's own, so that every offset, count and index is checked before
@@ -47,7 +47,8 @@ pub struct GltfAsset {
     pub parts: Vec<GltfPart>,
     /// KHR_lights_punctual lights, in world space, in radiometric units.
     pub lights: Vec<PunctualLight>,
-    /// The first perspective camera of the default scene's node tree (depth first).
+    /// The first camera (perspective or orthographic) of the default scene's node tree
+    /// (depth first).
     pub camera: Option<Camera>,
     /// Problems that did not stop loading, each one line naming the file.
     pub warnings: Vec<String>,

@@ -1,7 +1,7 @@
 //! The default scene's node tree: world matrices composed from the root down (TRS or
 //! `matrix`), each node's mesh instanced with its matrix (once per instance under
 //! EXT_mesh_gpu_instancing), morphed by its default weights and bent by its skin, its
-//! first perspective camera, and its KHR_lights_punctual lights.
+//! first camera, and its KHR_lights_punctual lights.
 
 use super::buffers::Buffers;
 use super::deform::{Deform, inverse_bind_matrices};
@@ -373,8 +373,8 @@ fn local_matrix(doc: &Doc, node: &json::Node, at: &str) -> Result<Mat4, SceneErr
     ))
 }
 
-/// Sets `found` to camera `c` placed by `world`, if it is the first perspective camera;
-/// an orthographic one is skipped with a warning.
+/// Sets `found` to camera `c` placed by `world`, if it is the first camera: perspective
+/// (`yfov`) or orthographic (`ymag`, half the view's height).
 fn camera(
     doc: &Doc,
     c: usize,
@@ -395,21 +395,29 @@ fn camera(
         return Ok(());
     }
     let cam_at = format!("cameras[{c}]");
-    let perspective = match (cam.type_, &cam.perspective) {
-        (Checked::Valid(json::camera::Type::Perspective), Some(p)) => p,
-        (Checked::Valid(json::camera::Type::Orthographic), _) => {
-            doc.warn(cam_at, "orthographic cameras are not supported; skipped");
-            return Ok(());
+    // A perspective camera's field of view, or an orthographic camera's view height.
+    let (vfov, ortho_height) = match (cam.type_, &cam.perspective, &cam.orthographic) {
+        (Checked::Valid(json::camera::Type::Perspective), Some(p), _) => {
+            let vfov = p.yfov.to_degrees();
+            if !(vfov > 0.0 && vfov < 180.0) {
+                return Err(doc.error(
+                    format!("{cam_at}.perspective.yfov"),
+                    format!("must be in (0, pi) radians, got {}", p.yfov),
+                ));
+            }
+            (vfov, None)
         }
-        _ => return Err(doc.error(cam_at, "is not a valid perspective camera")),
+        (Checked::Valid(json::camera::Type::Orthographic), _, Some(o)) => {
+            if !(o.ymag.is_finite() && o.ymag > 0.0) {
+                return Err(doc.error(
+                    format!("{cam_at}.orthographic.ymag"),
+                    format!("must be positive, got {}", o.ymag),
+                ));
+            }
+            (40.0, Some(2.0 * o.ymag))
+        }
+        _ => return Err(doc.error(cam_at, "is not a valid perspective or orthographic camera")),
     };
-    let vfov = perspective.yfov.to_degrees();
-    if !(vfov > 0.0 && vfov < 180.0) {
-        return Err(doc.error(
-            format!("{cam_at}.perspective.yfov"),
-            format!("must be in (0, pi) radians, got {}", perspective.yfov),
-        ));
-    }
     // The camera looks down its node's -Z, with +Y up.
     let position = world.transform_point3(Vec3::ZERO);
     let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
@@ -417,6 +425,10 @@ fn camera(
     let camera = (position.is_finite() && forward != Vec3::ZERO)
         .then(|| Camera::new(position, position + forward, up, vfov, 0.0, None))
         .flatten()
+        .map(|c| match ortho_height {
+            Some(h) => c.orthographic(h),
+            None => c,
+        })
         .ok_or_else(|| {
             doc.error(
                 at,
