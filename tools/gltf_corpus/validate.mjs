@@ -1,11 +1,13 @@
 // Runs Khronos' glTF-Validator (npm `gltf-validator`) on each file named, and fails where it
 // reports an error. Usage: node tools/gltf_corpus/validate.mjs FILE...
+// The package is the one MESHTRACE_GLTF_VALIDATOR names (its folder), else the one
+// node_modules in the working directory holds.
 import { readFile } from "node:fs/promises";
 import { createRequire } from "node:module";
 import path from "node:path";
 
 const require = createRequire(path.join(process.cwd(), "package.json"));
-const validator = require("gltf-validator");
+const validator = require(process.env.MESHTRACE_GLTF_VALIDATOR ?? "gltf-validator");
 
 let failed = 0;
 for (const file of process.argv.slice(2)) {
