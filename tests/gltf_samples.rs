@@ -255,8 +255,8 @@ fn box_textured_webp_reads_the_ext_texture_webp_image() {
 /// (Zstandard-supercompressed), named by the texture's KHR_texture_basisu alone and written
 /// by glTF-Transform 4.5.1 (see tests/data/gltf/README.md): the extension is required and
 /// read, and the transcoded image has the PNG's size (211², not a multiple of the 4×4
-/// blocks) and nearly its texels: ETC1S, the lossier, within 4 % on average, UASTC within
-/// 1.5 %. A wrong decode (the PNG mirrored) differs by more than 5 %.
+/// blocks) and nearly its texels: ETC1S, the lossier, within 2 % on average (measured
+/// 0.63 %), UASTC within 0.5 % (0.03 %). A wrong decode (the PNG mirrored) differs by 10 %.
 #[test]
 fn box_textured_basisu_reads_the_khr_texture_basisu_image() {
     let png = sample("BoxTextured/BoxTextured.glb");
@@ -266,7 +266,7 @@ fn box_textured_basisu_reads_the_khr_texture_basisu_image() {
         .collect();
     let wrong = texel_difference(&png_texels, &mirrored);
     assert!(wrong > 0.05, "a mirrored texture differs by {wrong} only");
-    for (file, bound) in [("Etc1s", 0.04), ("Uastc", 0.015)] {
+    for (file, bound) in [("Etc1s", 0.02), ("Uastc", 0.005)] {
         let ktx2 = sample(&format!("BoxTexturedBasisu/BoxTextured{file}.glb"));
         assert!(ktx2.warnings.is_empty(), "{file}: {:?}", ktx2.warnings);
         let (w2, h2, texels) = albedo_texels(&ktx2);
