@@ -1,4 +1,4 @@
-//! Replays the fuzz corpora (`fuzz/corpus/{scene_file,obj_mtl,gltf,draco,meshopt}`) through the fuzz targets'
+//! Replays the fuzz corpora (`fuzz/corpus/{scene_file,obj_mtl,gltf,draco,meshopt,ktx2}`) through the fuzz targets'
 //! own harnesses, without libFuzzer: every input must load or fail with an error, never
 //! panic, and whatever loads must build a valid BVH. A failure names the corpus file.
 
@@ -70,6 +70,42 @@ fn draco_corpus_never_panics() {
 #[test]
 fn meshopt_corpus_never_panics() {
     replay_all("meshopt", harness::meshopt, 3);
+}
+
+#[test]
+fn ktx2_corpus_never_panics() {
+    replay_all("ktx2", harness::ktx2, 3);
+}
+
+/// The `ktx2` target's seeds, KTX2 files written by Binomial's basisu encoder (ETC1S, and
+/// UASTC with and without Zstandard), load as the textured triangle with their image's size:
+/// a fuzzer that starts from them starts inside the transcoder.
+#[test]
+fn ktx2_seeds_load() {
+    use meshtrace::scene::load_scene_from;
+    let seeds: Vec<PathBuf> = corpus("ktx2")
+        .into_iter()
+        .filter(|p| {
+            p.file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with("seed-"))
+        })
+        .collect();
+    assert!(seeds.len() >= 3, "ktx2: {} seeds", seeds.len());
+    for seed in seeds {
+        let data = std::fs::read(&seed).expect("a seed");
+        let size = |at: usize| u32::from_le_bytes(data[at..at + 4].try_into().expect("4 bytes"));
+        let glb = harness::ktx2_glb(&data).expect("a seed within the texel budget");
+        let files = harness::MemFiles::new(&[("fuzz.glb", &glb)]);
+        let scene = load_scene_from(Path::new("fuzz.glb"), &files)
+            .unwrap_or_else(|e| panic!("{}: {e}", seed.display()));
+        let t = scene.textures.records[scene.materials[0].albedo_texture as usize];
+        assert_eq!(
+            (t.width, t.height),
+            (size(20), size(24)),
+            "{}",
+            seed.display()
+        );
+    }
 }
 
 /// The decoder targets' seeds, made from the glTF corpus's real files

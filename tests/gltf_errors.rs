@@ -86,11 +86,12 @@ fn versions_and_extensions_meshtrace_does_not_read() {
     expect("a.gltf", v1, &[": asset.version: glTF 1.0"]);
     // Required, and the JSON does not parse as 2.0 without it (a texture without source is
     // not enough: that is a validation error): still the extension is named.
-    let basisu = br#"{"asset": {"version": "2.0"}, "extensionsRequired": ["KHR_texture_basisu"], "nodes": 5}"#;
+    let avif =
+        br#"{"asset": {"version": "2.0"}, "extensionsRequired": ["EXT_texture_avif"], "nodes": 5}"#;
     expect(
         "a.gltf",
-        basisu,
-        &["extensionsRequired: the file requires KHR_texture_basisu"],
+        avif,
+        &["extensionsRequired: the file requires EXT_texture_avif"],
     );
 }
 
@@ -246,8 +247,9 @@ fn images_that_cannot_be_decoded() {
     );
 }
 
-/// A texture must name an image, in `source` or in EXT_texture_webp's `source`, and the
-/// extension's must be an index of an image the file has.
+/// A texture must name an image, in `source` or in EXT_texture_webp's or
+/// KHR_texture_basisu's `source`, and the extension's must be an index of an image the file
+/// has.
 #[test]
 fn textures_without_an_image() {
     let mut a = textured(
@@ -256,7 +258,15 @@ fn textures_without_an_image() {
     for (texture, needle) in [
         (
             json!({}),
-            ": textures[0].source: is missing, and the texture names no EXT_texture_webp image instead",
+            ": textures[0].source: is missing, and the texture names no EXT_texture_webp or KHR_texture_basisu image instead",
+        ),
+        (
+            json!({ "extensions": { "KHR_texture_basisu": { "source": "0" } } }),
+            ": textures[0].extensions.KHR_texture_basisu.source: must be an image index",
+        ),
+        (
+            json!({ "source": 0, "extensions": { "KHR_texture_basisu": { "source": 2 } } }),
+            ": textures[0].extensions.KHR_texture_basisu.source: image 2 does not exist (the file has 1 image)",
         ),
         (
             json!({ "extensions": { "EXT_texture_webp": { "source": -1 } } }),
@@ -274,6 +284,50 @@ fn textures_without_an_image() {
         a.json["textures"] = json!([texture]);
         expect("a.gltf", &a.embedded(), &[needle]);
     }
+}
+
+/// A KTX2 image that cannot be transcoded is one line naming the file, the image and why:
+/// bytes that are not KTX2 under its MIME type or file name, a KTX2 file cut short, and a
+/// KTX2 file whose data is not Basis Universal (KHR_texture_basisu allows nothing else).
+#[test]
+fn ktx2_images_that_cannot_be_decoded() {
+    let ktx2 = std::fs::read(common::fs::data("gltf/BoxTexturedBasisu/Uastc.ktx2")).unwrap();
+    // A KTX2 header (identifier, then vkFormat 37, R8G8B8A8_UNORM) with no Basis data.
+    let mut plain = ktx2[..80].to_vec();
+    plain[12..16].copy_from_slice(&37u32.to_le_bytes());
+    for (image, bytes, needle) in [
+        (
+            json!({ "bufferView": 0, "mimeType": "image/ktx2" }),
+            b"not a texture".to_vec(),
+            ": images[0]: not a KTX2 file",
+        ),
+        (
+            json!({ "bufferView": 0, "mimeType": "image/ktx2" }),
+            ktx2[..ktx2.len() / 2].to_vec(),
+            ": images[0]: cannot transcode the KTX2 image: the data of its level 0 is corrupt or truncated",
+        ),
+        (
+            json!({ "bufferView": 0, "mimeType": "image/ktx2" }),
+            plain,
+            ": images[0]: cannot read the KTX2 file: ",
+        ),
+    ] {
+        let mut a = textured(image);
+        a.json["textures"] = json!([{ "extensions": { "KHR_texture_basisu": { "source": 0 } } }]);
+        let v = a.view(&bytes, None);
+        a.json["images"][0]["bufferView"] = json!(v);
+        expect("a.glb", &a.glb(), &[needle]);
+    }
+    let dir = TempDir::new("gltf-bad-ktx2");
+    dir.write("bad.ktx2", b"garbage");
+    let mut a = textured(json!({ "uri": "bad.ktx2" }));
+    a.json["textures"] = json!([{ "extensions": { "KHR_texture_basisu": { "source": 0 } } }]);
+    let path = dir.write("a.gltf", a.embedded());
+    let message = load_scene(&path).unwrap_err().to_string();
+    assert!(
+        message.contains("a.gltf: images[0] (") && message.contains("bad.ktx2): not a KTX2 file"),
+        "{message}"
+    );
 }
 
 #[test]

@@ -1,6 +1,6 @@
 //! Every glTF file the tests read as a third-party writer's output passes Khronos'
-//! glTF-Validator with no errors: the corpus (`tests/data/gltf/corpus`) and the WebP
-//! sample. Needs Node.js and the npm package `gltf-validator` (2.0.0-dev.3.10), found where
+//! glTF-Validator with no errors: the corpus (`tests/data/gltf/corpus`) and the WebP and
+//! KTX2 samples. Needs Node.js and the npm package `gltf-validator` (2.0.0-dev.3.10), found where
 //! MESHTRACE_GLTF_VALIDATOR says (.ci/run installs it); skipped without them unless
 //! MESHTRACE_REQUIRE_GLTF_VALIDATOR=1.
 
@@ -29,6 +29,8 @@ fn third_party_files_pass_gltf_validator() {
         .collect();
     files.sort();
     files.push(data("gltf/BoxTexturedWebp/BoxTexturedWebp.glb"));
+    files.push(data("gltf/BoxTexturedBasisu/BoxTexturedEtc1s.glb"));
+    files.push(data("gltf/BoxTexturedBasisu/BoxTexturedUastc.glb"));
     assert!(files.len() >= 12, "{} files", files.len());
     let out = Command::new("node")
         .arg(root().join("tools/gltf_corpus/validate.mjs"))

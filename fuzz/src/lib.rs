@@ -232,6 +232,74 @@ pub fn draco_glb(data: &[u8]) -> Option<Vec<u8>> {
     Some(glb(&json, stream))
 }
 
+/// Texels a fuzzed KTX2 header may declare: the format allows 2^32 × 2^32, which the loader
+/// refuses or allocates as the memory free allows, by design; inputs declaring more than
+/// this are skipped so that the fuzzer spends its time in the transcoder, not in allocation.
+pub const KTX2_TEXEL_BUDGET: u64 = 1 << 20;
+
+/// Fuzz target `ktx2`: the input is a KTX2 file, served as the image (a buffer view of
+/// MIME type image/ktx2) that a textured triangle's KHR_texture_basisu extension names;
+/// loading it must succeed or fail with an error, and a loaded scene must be well formed.
+pub fn ktx2(data: &[u8]) {
+    if let Some(glb) = ktx2_glb(data) {
+        load_glb(&glb);
+    }
+}
+
+/// The GLB file the `ktx2` target loads for `data`; `None` for an input whose header (the
+/// width and height after the 12-byte identifier and two u32s) declares more than
+/// [`KTX2_TEXEL_BUDGET`] texels.
+pub fn ktx2_glb(data: &[u8]) -> Option<Vec<u8>> {
+    let u32_at = |at: usize| {
+        data.get(at..at + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    if let (Some(width), Some(height)) = (u32_at(20), u32_at(24))
+        && u64::from(width) * u64::from(height) > KTX2_TEXEL_BUDGET
+    {
+        return None;
+    }
+    let mut bin = gltf_bin();
+    bin.truncate(42);
+    bin.extend([0, 0]);
+    bin.extend(
+        [0.0f32, 0.0, 1.0, 0.0, 0.0, 1.0]
+            .iter()
+            .flat_map(|x| x.to_le_bytes()),
+    );
+    let image_at = bin.len();
+    bin.extend(data);
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_texture_basisu"],
+        "extensionsRequired": ["KHR_texture_basisu"],
+        "buffers": [{"byteLength": bin.len().next_multiple_of(4)}],
+        "bufferViews": [
+            {"buffer": 0, "byteLength": 36},
+            {"buffer": 0, "byteOffset": 36, "byteLength": 6},
+            {"buffer": 0, "byteOffset": 44, "byteLength": 24},
+            {"buffer": 0, "byteOffset": image_at, "byteLength": data.len()}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "type": "VEC3", "count": 3,
+             "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5123, "type": "SCALAR", "count": 3},
+            {"bufferView": 2, "componentType": 5126, "type": "VEC2", "count": 3}
+        ],
+        "images": [{"bufferView": 3, "mimeType": "image/ktx2"}],
+        "textures": [{"extensions": {"KHR_texture_basisu": {"source": 0}}}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+        "meshes": [{"primitives": [{
+            "attributes": {"POSITION": 0, "TEXCOORD_0": 2},
+            "indices": 1,
+            "material": 0
+        }]}],
+        "nodes": [{"mesh": 0}],
+        "scenes": [{"nodes": [0]}]
+    });
+    Some(glb(&json, &bin))
+}
+
 /// Fuzz target `meshopt`: the input is a 7-byte header, then a vertex stream and an index
 /// stream, served as two EXT_ or KHR_meshopt_compression buffer views of one primitive
 /// (over a fallback buffer that is never read). The header: flags (bit 0 positions as

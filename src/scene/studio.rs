@@ -12,7 +12,7 @@ use super::obj::load_obj;
 use super::part::{MeshPart, PartTriangle};
 use super::settings::RenderSettings;
 use super::source::FileSource;
-use super::texture::{TextureError, TextureRef, TextureSource, Textures};
+use super::texture::{ImageType, TextureError, TextureRef, TextureSource, Textures};
 use super::{NO_NORMAL, NO_TANGENT, NO_UV, Scene, SceneError, Sky};
 use crate::math::Aabb;
 use glam::{Mat4, Vec3};
@@ -139,7 +139,7 @@ pub fn sky(textures: &mut Textures) -> Result<Sky, SceneError> {
     let r = TextureRef::environment(TextureSource::Memory {
         name: "studio.hdr (built in)".into(),
         bytes: Arc::from(STUDIO_HDR),
-        format: Some(image::ImageFormat::Hdr),
+        format: Some(ImageType::Image(image::ImageFormat::Hdr)),
     });
     let texture = textures.add(&r, &super::source::Fs).map_err(|e| match e {
         TextureError::Fatal(e) => e,

@@ -135,6 +135,33 @@ pub enum Usage {
     Linear,
 }
 
+/// An image's format, as its file name or MIME type gives it: one the `image` crate decodes,
+/// or KTX2 with Basis Universal data (glTF's KHR_texture_basisu), which `basisu` transcodes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageType {
+    Image(ImageFormat),
+    Ktx2,
+}
+
+impl ImageType {
+    /// The format a MIME type names (`image/ktx2`, or one the `image` crate knows).
+    pub fn from_mime_type(mime: &str) -> Option<Self> {
+        if mime.eq_ignore_ascii_case("image/ktx2") {
+            return Some(ImageType::Ktx2);
+        }
+        ImageFormat::from_mime_type(mime).map(ImageType::Image)
+    }
+
+    /// The format a file name's extension names (`.ktx2`, or one the `image` crate knows).
+    pub fn from_path(path: &Path) -> Option<Self> {
+        let ext = path.extension()?;
+        if ext.eq_ignore_ascii_case("ktx2") {
+            return Some(ImageType::Ktx2);
+        }
+        ImageFormat::from_extension(ext).map(ImageType::Image)
+    }
+}
+
 /// Where a texture's image comes from.
 #[derive(Clone, Debug, PartialEq)]
 pub enum TextureSource {
@@ -146,7 +173,7 @@ pub enum TextureSource {
     Memory {
         name: String,
         bytes: Arc<[u8]>,
-        format: Option<ImageFormat>,
+        format: Option<ImageType>,
     },
 }
 
@@ -290,7 +317,7 @@ impl Textures {
     ) -> Result<(Kind, (u32, u32, u32)), TextureError> {
         let (bytes, format) = match &r.source {
             TextureSource::File(path) => match files.read(path) {
-                Ok(bytes) => (bytes.into(), ImageFormat::from_path(path).ok()),
+                Ok(bytes) => (bytes.into(), ImageType::from_path(path)),
                 Err(e) if r.optional => {
                     return Err(TextureError::Missing(format!("{shown} ({e})")));
                 }
@@ -546,15 +573,18 @@ fn check_exr_compression(bytes: &[u8]) -> Result<(), String> {
 /// has no magic number), or else in the format guessed from its first bytes. Before it
 /// allocates, the image's size is checked against the memory the machine has free: an
 /// image that cannot fit is an error that says how much it needs and how much there is.
-fn decode(format: Option<ImageFormat>, bytes: &[u8]) -> Result<(Kind, Decoded), String> {
+fn decode(format: Option<ImageType>, bytes: &[u8]) -> Result<(Kind, Decoded), String> {
     use image::ImageDecoder;
     let format = match format {
-        Some(format) => Ok(format),
+        Some(ImageType::Ktx2) => return decode_ktx2(bytes),
+        None if bytes.starts_with(KTX2_IDENTIFIER) => return decode_ktx2(bytes),
+        Some(ImageType::Image(format)) => Ok(format),
         None if bytes.starts_with(RGBE_SIGNATURE) => Ok(ImageFormat::Hdr),
         None => image::guess_format(bytes),
     }
     .map_err(|_| {
-        "not an image format meshtrace reads (PNG, JPEG, BMP, TGA, WebP, HDR, EXR)".to_string()
+        "not an image format meshtrace reads (PNG, JPEG, BMP, TGA, WebP, HDR, EXR, KTX2)"
+            .to_string()
     })?;
     let cannot = |e: image::ImageError| format!("cannot decode the image: {e}");
     let decoder: Box<dyn ImageDecoder + '_> = match format {
@@ -584,15 +614,7 @@ fn decode(format: Option<ImageFormat>, bytes: &[u8]) -> Result<(Kind, Decoded), 
     let need = decoder
         .total_bytes()
         .saturating_add(texels.saturating_mul(packed));
-    if let Some(free) = available_memory()
-        && need > free
-    {
-        return Err(format!(
-            "the image is {width}×{height} texels: decoding and packing it needs {}, more than the {} of memory free",
-            gibibytes(need),
-            gibibytes(free)
-        ));
-    }
+    check_memory(width, height, need)?;
     let image = image::DynamicImage::from_decoder(decoder).map_err(cannot)?;
     use image::DynamicImage as D;
     Ok(match image {
@@ -604,6 +626,103 @@ fn decode(format: Option<ImageFormat>, bytes: &[u8]) -> Result<(Kind, Decoded), 
         }
         other => (Kind::FloatSrgb, Decoded::Float(other.to_rgba32f())),
     })
+}
+
+/// Refuses an image of `width` × `height` texels whose decoding and packing needs `need`
+/// bytes, more than the machine has free, saying how much each is.
+fn check_memory(width: u32, height: u32, need: u64) -> Result<(), String> {
+    match available_memory() {
+        Some(free) if need > free => Err(format!(
+            "the image is {width}×{height} texels: decoding and packing it needs {}, more than the {} of memory free",
+            gibibytes(need),
+            gibibytes(free)
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// The 12 bytes that open every KTX2 file: `«KTX 20»\r\n\x1A\n`.
+const KTX2_IDENTIFIER: &[u8; 12] = b"\xABKTX 20\xBB\r\n\x1A\n";
+
+/// Decodes a KTX2 image whose data is Basis Universal ETC1S or UASTC (LDR), the two that
+/// glTF's KHR_texture_basisu allows, to 8-bit RGBA: level 0 (the full-size image; the
+/// renderer filters without mipmaps) transcoded by `basisu`'s RGBA32 target. The texels
+/// are left as stored, sRGB or linear being the texture slot's business, as for a PNG. A
+/// texture array, cubemap or video is refused: a glTF texture is one 2D image.
+fn decode_ktx2(bytes: &[u8]) -> Result<(Kind, Decoded), String> {
+    use basisu::{DecodeFlags, SourceFormat, TargetFormat, Transcoder};
+    if !bytes.starts_with(KTX2_IDENTIFIER) {
+        return Err("not a KTX2 file (it does not start with the KTX2 identifier)".into());
+    }
+    let ktx2 = Transcoder::new(bytes).map_err(|e| {
+        format!(
+            "cannot read the KTX2 file: {} (meshtrace reads KTX2 files with Basis Universal \
+             ETC1S or UASTC data, as KHR_texture_basisu requires)",
+            basisu_error(&e)
+        )
+    })?;
+    let source = ktx2.source_format();
+    if !matches!(source, SourceFormat::Etc1s | SourceFormat::UastcLdr) {
+        return Err(format!(
+            "the KTX2 image holds {source:?} data; KHR_texture_basisu allows only ETC1S and \
+             UASTC (LDR), which meshtrace reads"
+        ));
+    }
+    let (layers, faces) = (ktx2.layer_count(), ktx2.face_count());
+    if ktx2.is_video() || layers > 1 || faces != 1 {
+        return Err(format!(
+            "the KTX2 file is {}, not one 2D image as a glTF texture must be",
+            if ktx2.is_video() {
+                "a video".to_string()
+            } else if faces != 1 {
+                format!("a cubemap ({faces} faces)")
+            } else {
+                format!("a texture array ({layers} layers)")
+            }
+        ));
+    }
+    let (width, height) = ktx2.base_dimensions();
+    if width == 0 || height == 0 {
+        return Err("the image has no pixels".into());
+    }
+    // The transcoder sizes its RGBA32 output as width · height · 4 in u32 arithmetic.
+    let texels = u64::from(width) * u64::from(height);
+    if texels > u64::from(u32::MAX / 4) {
+        return Err(format!(
+            "the KTX2 image is {width}×{height} texels, more than meshtrace's limit of 2^30"
+        ));
+    }
+    // Transcoded, then packed, at 4 bytes a texel each.
+    check_memory(width, height, texels * 8)?;
+    let rgba = ktx2
+        .transcode(0, TargetFormat::Rgba32, DecodeFlags::NONE)
+        .map_err(|e| {
+            // The formats are checked above: the transcoder's one remaining failure, which it
+            // calls an unimplemented feature, is level data it cannot follow.
+            let why = match e {
+                basisu::Error::UnsupportedFeature(_) => {
+                    "the data of its level 0 is corrupt or truncated".to_string()
+                }
+                e => basisu_error(&e),
+            };
+            format!("cannot transcode the KTX2 image: {why}")
+        })?;
+    let got = rgba.len();
+    let image = image::RgbaImage::from_raw(width, height, rgba).ok_or_else(|| {
+        format!("the KTX2 transcoder gave {got} bytes for a {width}×{height} image")
+    })?;
+    Ok((Kind::Ldr, Decoded::Ldr(image)))
+}
+
+/// What a `basisu` error means, in words (the crate gives its errors no `Display`).
+fn basisu_error(e: &basisu::Error) -> String {
+    use basisu::Error as E;
+    match e {
+        E::InvalidData => "the file is corrupt or not a Basis Universal texture".into(),
+        E::Truncated => "the file is truncated, or an offset in it is out of range".into(),
+        E::ZstdRequired => "its Zstandard-supercompressed data cannot be read".into(),
+        other => format!("{other:?}"),
+    }
 }
 
 /// The signature line of a Radiance HDR file as the `image` crate's decoder knows it.

@@ -4,11 +4,10 @@
 
 use super::{Doc, meshopt};
 use crate::scene::SceneError;
-use crate::scene::texture::TextureSource;
-use image::ImageFormat;
+use crate::scene::texture::{ImageType, TextureSource};
 use std::cell::RefCell;
 use std::collections::HashMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// The file's buffers, read on first use.
@@ -237,8 +236,8 @@ impl<'a> Buffers<'a> {
                     Some(bytes) => {
                         let format = mime
                             .or(data_uri_mime(uri))
-                            .and_then(ImageFormat::from_mime_type)
-                            .or_else(|| ImageFormat::from_path(&source).ok());
+                            .and_then(ImageType::from_mime_type)
+                            .or_else(|| ImageType::from_path(Path::new(&source)));
                         let name = if uri.starts_with("data:") {
                             format!("{}: {image_at}", doc.shown)
                         } else {
@@ -258,7 +257,7 @@ impl<'a> Buffers<'a> {
                 Some(TextureSource::Memory {
                     name: format!("{}: {image_at}", doc.shown),
                     bytes: view.bytes().into(),
-                    format: mime.and_then(ImageFormat::from_mime_type),
+                    format: mime.and_then(ImageType::from_mime_type),
                 })
             }
             (None, None) => {

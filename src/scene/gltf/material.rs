@@ -1,7 +1,7 @@
 //! glTF materials as meshtrace `pbr` materials: the metallic-roughness factors and
 //! textures, the normal and emissive maps, the alpha mode, and KHR_materials_ior,
 //! _specular, _transmission, _volume and _emissive_strength; texture references with
-//! KHR_texture_transform, and images from EXT_texture_webp. Each material is converted
+//! KHR_texture_transform, and images from EXT_texture_webp and KHR_texture_basisu. Each material is converted
 //! when a primitive first uses it.
 
 use super::buffers::Buffers;
@@ -340,19 +340,27 @@ impl<'b, 'a> Materials<'b, 'a> {
     }
 }
 
-/// The image texture `index` reads, with the JSON path that names it: the WebP image of
-/// its `EXT_texture_webp` extension where it has one (preferred over the fallback `source`
-/// that the extension lets a file keep for viewers without WebP), else its own `source`.
-/// A texture with neither is an error.
+/// The extensions through which a texture names an image in a format a core glTF viewer
+/// need not read, in the order they are preferred where a texture has several: WebP (as a
+/// rule the less lossy), then KTX2 with Basis Universal data.
+const IMAGE_EXTENSIONS: [&str; 2] = ["EXT_texture_webp", "KHR_texture_basisu"];
+
+/// The image texture `index` reads, with the JSON path that names it: the image of its
+/// `EXT_texture_webp` or `KHR_texture_basisu` extension where it has one (preferred over
+/// the fallback `source` that both extensions let a file keep for viewers without them),
+/// else its own `source`. A texture with neither is an error.
 fn image_of(texture: &json::Texture, index: usize) -> Result<(usize, String), (String, String)> {
     let at = format!("textures[{index}]");
-    let webp = texture
-        .extensions
-        .as_ref()
-        .and_then(|e| e.others.get("EXT_texture_webp"));
-    if let Some(webp) = webp {
-        let at = format!("{at}.extensions.EXT_texture_webp.source");
-        return match webp.get("source").map(|s| s.as_u64().map(usize::try_from)) {
+    let extension = IMAGE_EXTENSIONS.iter().find_map(|&name| {
+        let value = texture.extensions.as_ref()?.others.get(name)?;
+        Some((name, value))
+    });
+    if let Some((name, extension)) = extension {
+        let at = format!("{at}.extensions.{name}.source");
+        return match extension
+            .get("source")
+            .map(|s| s.as_u64().map(usize::try_from))
+        {
             Some(Some(Ok(source))) => Ok((source, at)),
             Some(_) => Err((at, "must be an image index (an integer ≥ 0)".into())),
             None => Err((at, "is required but missing".into())),
@@ -363,7 +371,9 @@ fn image_of(texture: &json::Texture, index: usize) -> Result<(usize, String), (S
     if source == u32::MAX as usize {
         return Err((
             format!("{at}.source"),
-            "is missing, and the texture names no EXT_texture_webp image instead".into(),
+            "is missing, and the texture names no EXT_texture_webp or KHR_texture_basisu \
+             image instead"
+                .into(),
         ));
     }
     Ok((source, format!("{at}.source")))
