@@ -84,7 +84,10 @@ fn decoder_seeds_load() {
     ] {
         let seeds: Vec<PathBuf> = corpus(target)
             .into_iter()
-            .filter(|p| p.file_name().is_some_and(|n| n.to_string_lossy().starts_with("seed-")))
+            .filter(|p| {
+                p.file_name()
+                    .is_some_and(|n| n.to_string_lossy().starts_with("seed-"))
+            })
             .collect();
         assert!(seeds.len() >= 3, "{target}: {} seeds", seeds.len());
         for seed in seeds {

@@ -34,7 +34,7 @@ use meshtrace::render::sampling::{
     sample_cosine_hemisphere, sample_uniform_triangle,
 };
 use meshtrace::render::texture::{
-    alpha_test, material_at, normal_mapped, texture_lookup, triangle_uv,
+    alpha_test, material_at, normal_mapped, texture_lookup, triangle_color, triangle_uv,
 };
 use meshtrace::render::{RenderScene, TRI_SMOOTH, TRI_TANGENT};
 use meshtrace::scene::{
@@ -1313,7 +1313,8 @@ fn texture_lookup_matches() {
                 .fold(0.0, f64::max),
             show,
         );
-        let cm = material_at(&rs, &rs.materials[m as usize], uv);
+        let both = glam::Vec4::new(uv.x, uv.y, uv.x, uv.y);
+        let cm = material_at(&rs, &rs.materials[m as usize], both, glam::Vec4::ONE);
         let (ga, gr) = (v3(o[1]), f(o[1][3]));
         let show = || format!("material {m} at {uv}: CPU {cm:?}, GPU {ga} {gr}");
         material.add(
@@ -1423,6 +1424,7 @@ fn surface_maps_match() {
             &rs,
             &rs.materials[rs.shading[tri as usize].material as usize],
             uv,
+            triangle_color(&rs, tri, b1, b2),
         );
         let (gm, gt) = (f(o[1][0]), f(o[1][1]));
         factors.add(

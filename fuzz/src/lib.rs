@@ -202,9 +202,7 @@ pub fn draco_glb(data: &[u8]) -> Option<Vec<u8>> {
     let (head, stream) = (data.get(..4)?, data.get(4..)?);
     let points = u16::from_le_bytes([head[0], head[1]]);
     let corners = u16::from_le_bytes([head[2], head[3]]);
-    let accessor = |ty: &str, component: u32, count: u16| {
-        serde_json::json!({"componentType": component, "type": ty, "count": count})
-    };
+    let accessor = |ty: &str, component: u32, count: u16| serde_json::json!({"componentType": component, "type": ty, "count": count});
     let mut position = accessor("VEC3", 5126, points);
     position["min"] = serde_json::json!(WIDE.map(|x| -x));
     position["max"] = serde_json::json!(WIDE);
@@ -262,7 +260,11 @@ pub fn meshopt_glb(data: &[u8]) -> Option<Vec<u8>> {
     } else {
         "NONE"
     };
-    let mode = if flags & 4 != 0 { "INDICES" } else { "TRIANGLES" };
+    let mode = if flags & 4 != 0 {
+        "INDICES"
+    } else {
+        "TRIANGLES"
+    };
     let (index_stride, index_component) = if flags & 8 != 0 { (2, 5123) } else { (4, 5125) };
     let name = if flags & 16 != 0 {
         "KHR_meshopt_compression"

@@ -193,7 +193,7 @@ pub fn path_vertex<'a, const CAUSTICS: bool>(
     // A material without textures is used where it lies (no copy); the WGSL copies anyway.
     let base = &scene.materials[si.material as usize];
     let mat = if base.has_texture() {
-        &*textured.write(material_at(scene, base, si.uv))
+        &*textured.write(material_at(scene, base, si.uv, si.color))
     } else {
         base
     };
@@ -607,7 +607,12 @@ pub fn first_hit(scene: &RenderScene, ray: &Ray) -> FirstHit {
         };
     };
     let si = surface_at(scene, ray, &hit);
-    let mat = material_at(scene, &scene.materials[si.material as usize], si.uv);
+    let mat = material_at(
+        scene,
+        &scene.materials[si.material as usize],
+        si.uv,
+        si.color,
+    );
     FirstHit {
         hit: true,
         p: si.p,
