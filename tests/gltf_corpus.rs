@@ -272,9 +272,9 @@ fn a_texture_on_the_second_uv_map_reads_it() {
     let mut corners = Vec::new();
     for (i, t) in mesh.triangles.iter().enumerate() {
         let second = mesh.uv1_indices(i);
-        for k in 0..3 {
-            let uv0 = mesh.texcoords[t.t[k] as usize];
-            let uv1 = mesh.texcoords[second[k] as usize];
+        for (k, (first, second)) in t.t.into_iter().zip(second).enumerate() {
+            let uv0 = mesh.texcoords[first as usize];
+            let uv1 = mesh.texcoords[second as usize];
             assert!(
                 (uv1 - glam::Vec2::new(1.0 - uv0.x, uv0.y))
                     .abs()

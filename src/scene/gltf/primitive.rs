@@ -1,6 +1,7 @@
 //! Mesh primitives: their attributes (POSITION, NORMAL, TEXCOORD_0 and _1, TANGENT,
-//! COLOR_0; morph targets and skin attributes are `deform`'s) and their topology (triangle lists, strips and fans, indexed or not) as a [`MeshPart`] whose
-//! corners all index one vertex table.
+//! COLOR_0; morph targets and skin attributes are `deform`'s) and their topology (triangle
+//! lists, strips and fans, indexed or not) as a [`MeshPart`] whose corners all index one
+//! vertex table.
 
 use super::accessor::{self, read_indices};
 use super::buffers::Buffers;
