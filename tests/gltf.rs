@@ -989,3 +989,37 @@ fn ext_texture_webp_is_preferred_over_the_fallback_source() {
         );
     }
 }
+
+/// A normal map on TEXCOORD_1 of a primitive without TANGENT gets MikkTSpace tangents
+/// from that set: where the second set's u runs along +y (the first set's along +x), the
+/// generated tangents point along +y.
+#[test]
+fn generated_tangents_follow_the_set_the_normal_map_reads() {
+    for (set, along) in [(0, Vec3::X), (1, Vec3::Y)] {
+        let mut a = Asset::new();
+        let image_view = a.view(&two_texels(), None);
+        a.push(
+            "images",
+            json!({ "bufferView": image_view, "mimeType": "image/png" }),
+        );
+        a.push("textures", json!({ "source": 0 }));
+        // Corners (0,0,0), (1,0,0), (0,1,0): set 0 is (x, 1 − y), set 1 is (y, x).
+        let t0 = a.floats(&[0.0, 1.0, 1.0, 1.0, 0.0, 0.0], "VEC2");
+        let t1 = a.floats(&[0.0, 0.0, 0.0, 1.0, 1.0, 0.0], "VEC2");
+        let n = a.floats(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0], "VEC3");
+        a.triangle(
+            json!({ "attributes": { "TEXCOORD_0": t0, "TEXCOORD_1": t1, "NORMAL": n },
+            "material": 0 }),
+        );
+        a.json["materials"] = json!([{ "normalTexture": { "index": 0, "texCoord": set } }]);
+        let scene = load(&a);
+        let mesh = &scene.mesh;
+        for k in mesh.tangent_indices(0) {
+            let t = mesh.tangents[k as usize];
+            assert!(
+                close(t.truncate(), along),
+                "set {set}: tangent {t}, want {along}"
+            );
+        }
+    }
+}

@@ -65,11 +65,15 @@ impl RenderScene {
                 }
                 if textured && t.t[0] != NO_UV {
                     s.flags |= TRI_UV;
-                    let normal_map = scene.materials[t.material as usize].normal_texture;
-                    if normal_map != NO_TEXTURE && mesh.tangent_indices(i as usize)[0] != NO_TANGENT
-                    {
-                        s.flags |= TRI_TANGENT;
-                    }
+                }
+                // The scene builder gives a triangle whose material has a normal map the
+                // texture coordinates the map reads (set 0 or 1).
+                let normal_map = scene.materials[t.material as usize].normal_texture;
+                if textured
+                    && normal_map != NO_TEXTURE
+                    && mesh.tangent_indices(i as usize)[0] != NO_TANGENT
+                {
+                    s.flags |= TRI_TANGENT;
                 }
                 s
             })

@@ -370,7 +370,11 @@ impl Builder {
         // A mesh used by several objects repeats its warnings; say each once.
         let mut seen = std::collections::HashSet::new();
         self.warnings.retain(|w| seen.insert(w.clone()));
-        let untangented = super::tangents::generate_missing(&mut self.mesh, &self.materials);
+        let untangented = super::tangents::generate_missing(
+            &mut self.mesh,
+            &self.materials,
+            &self.textures.records,
+        );
         if untangented > 0 {
             self.warnings.push(format!(
                 "{untangented} triangle{} with a normal map got no tangent (its texture coordinates collapse to a point or a line); the map is not applied there",
