@@ -3,7 +3,9 @@ sees in each: `tests/data/gltf/corpus/NAME.glb` and `NAME.expected.json`.
 
 Run with Blender 5 as a Python module (`pip install bpy==5.0.0`, Python 3.11):
 
-    python tools/gltf_corpus/blender_corpus.py tests/data/gltf/corpus
+    python tools/gltf_corpus/blender_corpus.py tests/data/gltf/corpus [NAME...]
+
+With NAMEs (`vertex_colors`, `second_uv_map`, ...; see FILES) only those files are written.
 
 Each file is exported, then imported into an empty scene, and the importer's evaluated
 meshes (modifiers, armatures and shape keys applied), world-space triangles in glTF's frame
