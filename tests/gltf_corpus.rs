@@ -229,8 +229,8 @@ const BASE: [f32; 3] = [0.9, 0.8, 0.6];
 
 /// COLOR_0 multiplies the base colour (glTF 2.0, 3.9.2): under a white sky each quad of
 /// Blender's vertex-coloured plane, which is Lambertian, shows base colour × its face
-/// colour, the four quads the four colours; the Draco-compressed form (colours quantised
-/// to 10 bits) alike.
+/// colour, the four quads the four colours; the Draco-compressed form, whose colours
+/// come from its Draco stream, alike.
 #[test]
 fn vertex_colors_multiply_the_base_color_in_a_render() {
     for name in ["vertex_colors", "vertex_colors_draco"] {
