@@ -94,7 +94,7 @@ struct LightPath {
 }
 
 fn no_light_vertex() -> LightVertex {
-    let si = SurfaceHit(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, 1.0), 0u, true, 0u, vec2<f32>(0.0));
+    let si = SurfaceHit(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, 1.0), 0u, true, 0u, vec4<f32>(0.0), vec4<f32>(1.0));
     return LightVertex(si, vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0), 0.0, 0u);
 }
 
@@ -247,7 +247,7 @@ fn trace_light_subpath(rng: Rng, max_segments: u32) -> TracedLight {
             break;
         }
         let si = surface_at(ray, hit);
-        let mat = material_at(load_material(si.material), si.uv);
+        let mat = material_at(load_material(si.material), si.uv, si.color);
         let delta = bsdf_is_delta(mat);
         if !delta && chain == 0u {
             break;
@@ -382,7 +382,7 @@ struct SeenLightVertex {
 // mirror: src/render/caustics.rs `light_vertex_seen`
 fn light_vertex_seen(lv: LightVertex, wc: vec3<f32>) -> SeenLightVertex {
     let none = SeenLightVertex(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), false);
-    let mat_l = material_at(load_material(lv.si.material), lv.si.uv);
+    let mat_l = material_at(load_material(lv.si.material), lv.si.uv, lv.si.color);
     let wo_l_world = -wc;
     let frame_l = shading_frame(mat_l, lv.si, wo_l_world);
     let wo_l = wo_l_world * frame_l.m;

@@ -98,7 +98,7 @@ fn path_vertex(st: ptr<function, PathState>, rng: Rng, branches: u32) -> PathVer
         return v;
     }
     let si = surface_at((*st).ray, hit);
-    let mat = material_at(load_material(si.material), si.uv);
+    let mat = material_at(load_material(si.material), si.uv, si.color);
     if si.front_face && is_emissive(mat) {
         let cos_l = -dot((*st).ray.dir, si.ng);
         var w = 1.0;
@@ -396,7 +396,7 @@ fn first_hit(ray: Ray) -> FirstHit {
         return FirstHit(false, vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), NO_ID, NO_ID, counted.cost);
     }
     let si = surface_at(ray, hit);
-    let mat = material_at(load_material(si.material), si.uv);
+    let mat = material_at(load_material(si.material), si.uv, si.color);
     let normal = select(si.ns, -si.ns, dot(si.ns, ray.dir) > 0.0);
     let albedo = select(mat.albedo, vec3<f32>(1.0), mat.kind == MAT_DIELECTRIC);
     // TriVerts.v1.w holds the bits of the triangle's object index.

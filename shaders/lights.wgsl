@@ -97,7 +97,9 @@ fn sample_light(p: vec3<f32>, ng: vec3<f32>, u_pair: vec2<f32>) -> LightSample {
 
 // mirror: src/render/lights.rs `triangle_emission`
 fn triangle_emission(light: u32, bary: vec2<f32>) -> vec3<f32> {
-    return material_at(load_material(load_shading(light).material), triangle_uv(light, bary.x, bary.y)).emission;
+    // Vertex colours tint the base colour, not the emission.
+    let uv = triangle_uv(light, bary.x, bary.y);
+    return material_at(load_material(load_shading(light).material), uv, vec4<f32>(1.0)).emission;
 }
 
 // mirror: src/render/lights.rs `sample_punctual`

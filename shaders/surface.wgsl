@@ -10,7 +10,8 @@ struct SurfaceHit {
     material: u32,
     front_face: bool,
     tri: u32,
-    uv: vec2<f32>,
+    uv: vec4<f32>,
+    color: vec4<f32>,
 }
 
 // mirror: src/render/surface.rs `surface_at`
@@ -35,7 +36,7 @@ fn surface_at(ray: Ray, hit: Hit) -> SurfaceHit {
     if (sh.flags & TRI_TANGENT) != 0u {
         ns = normal_mapped(hit.tri, hit.u, hit.v, uv, ns, ng);
     }
-    return SurfaceHit(ray.origin + hit.t * ray.dir, ng, ns, sh.material, dot(ray.dir, ng) < 0.0, hit.tri, uv);
+    return SurfaceHit(ray.origin + hit.t * ray.dir, ng, ns, sh.material, dot(ray.dir, ng) < 0.0, hit.tri, uv, triangle_color(hit.tri, hit.u, hit.v));
 }
 
 // mirror: src/render/surface.rs `offset_ray_origin`

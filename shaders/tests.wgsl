@@ -200,15 +200,31 @@ fn test_caustic_targets(@builtin(global_invocation_id) gid: vec3<u32>) {
 }
 
 // in: (u, v, texture index, material index) | out: texture_lookup(texture, uv),
-// (material_at(material, uv).albedo, its roughness)
+// (material_at(material, uv in both sets, white).albedo, its roughness)
 @compute @workgroup_size(64)
 fn test_texture(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = case_index(gid);
     if i >= case_count() { return; }
     let k = case_in(i, 0u);
     let uv = bitcast<vec2<f32>>(k.xy);
-    let m = material_at(load_material(k.w), uv);
+    let m = material_at(load_material(k.w), vec4<f32>(uv, uv), vec4<f32>(1.0));
     case_out(i, u4(texture_lookup(k.z, uv)), u4(vec4<f32>(m.albedo, m.roughness)));
+}
+
+// in: (triangle, b1, b2, -) | out: (material_at(its material, triangle_uv,
+// triangle_color).albedo, alpha_test as 0 or 1), triangle_uv(triangle, b1, b2)
+@compute @workgroup_size(64)
+fn test_surface_colors(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = case_index(gid);
+    if i >= case_count() { return; }
+    let k = case_in(i, 0u);
+    let tri = k.x;
+    let b1 = bitcast<f32>(k.y);
+    let b2 = bitcast<f32>(k.z);
+    let uv = triangle_uv(tri, b1, b2);
+    let m = material_at(load_material(load_shading(tri).material), uv, triangle_color(tri, b1, b2));
+    let passes = select(0u, 1u, alpha_test(tri, b1, b2));
+    case_out(i, vec4<u32>(u4(vec4<f32>(m.albedo, 0.0)).xyz, passes), u4(uv));
 }
 
 // in: (triangle, b1, b2, -), (n.xyz, -) | out: (normal_mapped(triangle, b1, b2, its uv, n,
@@ -227,7 +243,7 @@ fn test_surface_maps(@builtin(global_invocation_id) gid: vec3<u32>) {
     let ng = geometric_normal(load_tri(tri));
     let mapped = normal_mapped(tri, b1, b2, uv, n, ng);
     let passes = select(0u, 1u, alpha_test(tri, b1, b2));
-    let m = material_at(load_material(load_shading(tri).material), uv);
+    let m = material_at(load_material(load_shading(tri).material), uv, triangle_color(tri, b1, b2));
     case_out(i, vec4<u32>(u4(vec4<f32>(mapped, 0.0)).xyz, passes), u4(vec4<f32>(m.metallic, m.transmission, 0.0, 0.0)));
 }
 

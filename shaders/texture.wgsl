@@ -78,32 +78,55 @@ fn texture_lookup(index: u32, uv: vec2<f32>) -> vec4<f32> {
 }
 
 // mirror: src/render/texture.rs `triangle_uv`
-fn triangle_uv(tri: u32, b1: f32, b2: f32) -> vec2<f32> {
-    if (load_shading(tri).flags & TRI_UV) == 0u {
-        return vec2<f32>(0.0);
+fn triangle_uv(tri: u32, b1: f32, b2: f32) -> vec4<f32> {
+    let flags = load_shading(tri).flags;
+    var first = vec2<f32>(0.0);
+    if (flags & TRI_UV) != 0u {
+        let t = load_tri_uvs(tri);
+        first = (1.0 - b1 - b2) * t.uv0 + b1 * t.uv1 + b2 * t.uv2;
     }
-    let t = load_tri_uvs(tri);
-    return (1.0 - b1 - b2) * t.uv0 + b1 * t.uv1 + b2 * t.uv2;
+    var second = vec2<f32>(0.0);
+    if (flags & TRI_UV1) != 0u {
+        let t = load_tri_uvs1(tri);
+        second = (1.0 - b1 - b2) * t.uv0 + b1 * t.uv1 + b2 * t.uv2;
+    }
+    return vec4<f32>(first, second);
+}
+
+// mirror: src/render/texture.rs `triangle_color`
+fn triangle_color(tri: u32, b1: f32, b2: f32) -> vec4<f32> {
+    if (load_shading(tri).flags & TRI_COLOR) == 0u {
+        return vec4<f32>(1.0);
+    }
+    let c = load_tri_colors(tri);
+    return (1.0 - b1 - b2) * c.c0 + b1 * c.c1 + b2 * c.c2;
+}
+
+// mirror: src/render/texture.rs `surface_lookup`
+fn surface_lookup(index: u32, uv: vec4<f32>) -> vec4<f32> {
+    let st = select(uv.xy, uv.zw, load_texture(index).uv_set == 1u);
+    return texture_lookup(index, st);
 }
 
 // mirror: src/render/texture.rs `scalar_lookup`
-fn scalar_lookup(index: u32, uv: vec2<f32>) -> f32 {
+fn scalar_lookup(index: u32, uv: vec4<f32>) -> f32 {
     let channel = load_texture(index).channel;
     check(channel < 4u);
-    return texture_lookup(index, uv)[channel];
+    return surface_lookup(index, uv)[channel];
 }
 
 // mirror: src/render/texture.rs `material_at`
-fn material_at(m: Material, uv: vec2<f32>) -> Material {
-    if !TEXTURES {
-        return m;
-    }
+fn material_at(m: Material, uv: vec4<f32>, color: vec4<f32>) -> Material {
     var out = m;
+    out.albedo *= color.xyz;
+    if !TEXTURES {
+        return out;
+    }
     if m.albedo_texture != NO_TEXTURE {
-        out.albedo *= texture_lookup(m.albedo_texture, uv).xyz;
+        out.albedo *= surface_lookup(m.albedo_texture, uv).xyz;
     }
     if m.emission_texture != NO_TEXTURE {
-        out.emission *= texture_lookup(m.emission_texture, uv).xyz;
+        out.emission *= surface_lookup(m.emission_texture, uv).xyz;
     }
     if m.roughness_texture != NO_TEXTURE {
         let r = scalar_lookup(m.roughness_texture, uv);
@@ -121,7 +144,7 @@ fn material_at(m: Material, uv: vec2<f32>) -> Material {
 }
 
 // mirror: src/render/texture.rs `normal_mapped`
-fn normal_mapped(tri: u32, b1: f32, b2: f32, uv: vec2<f32>, n: vec3<f32>, ng: vec3<f32>) -> vec3<f32> {
+fn normal_mapped(tri: u32, b1: f32, b2: f32, uv: vec4<f32>, n: vec3<f32>, ng: vec3<f32>) -> vec3<f32> {
     if !TEXTURES {
         return n;
     }
@@ -136,7 +159,7 @@ fn normal_mapped(tri: u32, b1: f32, b2: f32, uv: vec2<f32>, n: vec3<f32>, ng: ve
     }
     let t = tr * inverseSqrt(tlen2);
     let b = select(cross(n, t), -cross(n, t), t4.w < 0.0);
-    let c = texture_lookup(m.normal_texture, uv).xyz * 2.0 - vec3<f32>(1.0);
+    let c = surface_lookup(m.normal_texture, uv).xyz * 2.0 - vec3<f32>(1.0);
     let p = t * (c.x * m.normal_scale) + b * (c.y * m.normal_scale) + n * c.z;
     let plen2 = dot(p, p);
     if !(plen2 > 0.0) {
@@ -158,10 +181,10 @@ fn alpha_test(tri: u32, b1: f32, b2: f32) -> bool {
     if (m.flags & MAT_ALPHA_MASK) == 0u {
         return true;
     }
-    var alpha = m.alpha;
+    var alpha = m.alpha * triangle_color(tri, b1, b2).w;
     if TEXTURES && m.albedo_texture != NO_TEXTURE {
         let uv = triangle_uv(tri, b1, b2);
-        alpha *= texture_lookup(m.albedo_texture, uv).w;
+        alpha *= surface_lookup(m.albedo_texture, uv).w;
     }
     return alpha >= m.alpha_cutoff;
 }

@@ -39,9 +39,18 @@ struct TriUvs {
     _pad1: u32,
 }
 
-// mirror: src/scene/texture.rs `Texture` (48 bytes): an image in the texel table, its
+// mirror: src/render/tables.rs `TriColors` (48 bytes): each corner's vertex colour, linear
+// RGBA.
+struct TriColors {
+    c0: vec4<f32>,
+    c1: vec4<f32>,
+    c2: vec4<f32>,
+}
+
+// mirror: src/scene/texture.rs `Texture` (64 bytes): an image in the texel table, its
 // format (a TEX_* code), the UV map uv_matrix (rows: xy, zw) · uv + uv_offset, the
-// channel a scalar parameter reads, and the WRAP_* codes along u (low byte) and v.
+// channel a scalar parameter reads, the WRAP_* codes along u (low byte) and v, and the
+// texture coordinate set a surface lookup reads (0 or 1).
 struct Texture {
     offset: u32,
     width: u32,
@@ -51,6 +60,10 @@ struct Texture {
     uv_offset: vec2<f32>,
     channel: u32,
     wrap: u32,
+    uv_set: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 // mirror: src/render/tables.rs `Light` (64 bytes): a punctual light; kind is a LIGHT_* code.

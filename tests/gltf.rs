@@ -483,7 +483,8 @@ fn texture_transforms_reach_the_texture_records() {
     );
     a.push("textures", json!({ "source": 0 }));
     let t = a.floats(&[0.0; 6], "VEC2");
-    a.triangle(json!({ "attributes": { "TEXCOORD_0": t }, "material": 0 }));
+    let t1 = a.floats(&[0.5; 6], "VEC2");
+    a.triangle(json!({ "attributes": { "TEXCOORD_0": t, "TEXCOORD_1": t1 }, "material": 0 }));
     let r = 0.5f32;
     a.json["materials"] = json!([{
         "pbrMetallicRoughness": { "baseColorTexture": { "index": 0, "texCoord": 0,
@@ -507,16 +508,102 @@ fn texture_transforms_reach_the_texture_records() {
         (normal.uv_matrix, normal.uv_offset),
         ([1.0, 0.0, 0.0, 1.0], [0.125, 0.0])
     );
+    // The extension's texCoord overrides the texture's own: set 1 is read; set 2 is not.
+    assert_eq!(base.uv_set, 1);
+    assert_eq!(normal.uv_set, 0);
+    let emissive = scene.textures.records[m.emission_texture as usize];
+    assert_eq!(emissive.uv_set, 0);
     let w = scene.warnings.join("\n");
-    // The extension's texCoord overrides the texture's own; neither 1 nor 2 is read.
+    assert!(!w.contains("baseColorTexture"), "{w}");
     assert!(
-        w.contains("baseColorTexture: TEXCOORD_1 is not supported; TEXCOORD_0 is used"),
+        w.contains("emissiveTexture: TEXCOORD_2 is not supported (only TEXCOORD_0 and TEXCOORD_1 are); TEXCOORD_0 is used"),
         "{w}"
     );
-    assert!(
-        w.contains("emissiveTexture: TEXCOORD_2 is not supported"),
-        "{w}"
+}
+
+/// COLOR_0 as normalised unsigned bytes, RGB, and TEXCOORD_1 reach the mesh: each
+/// triangle's colour and second-set corners index the file's values, and the texture
+/// record on set 1 reads them through `triangle_uv`'s zw.
+#[test]
+fn vertex_colors_and_a_second_texture_coordinate_set_reach_the_mesh() {
+    use meshtrace::render::texture::{triangle_color, triangle_uv};
+    let mut a = Asset::new();
+    let image_view = a.view(&two_texels(), None);
+    a.push(
+        "images",
+        json!({ "bufferView": image_view, "mimeType": "image/png" }),
     );
+    a.push("textures", json!({ "source": 0 }));
+    let t0 = a.floats(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0], "VEC2");
+    let t1 = a.floats(&[0.25, 0.75, 0.5, 0.5, 0.75, 0.25], "VEC2");
+    let bytes = [255u8, 0, 0, 0, 255, 0, 0, 0, 51, 0];
+    let c = a.accessor(&bytes[..9], common::gltf::UNSIGNED_BYTE, 3, "VEC3", true);
+    a.triangle(json!({
+        "attributes": { "TEXCOORD_0": t0, "TEXCOORD_1": t1, "COLOR_0": c }, "material": 0 }));
+    a.json["materials"] = json!([{
+        "pbrMetallicRoughness": { "baseColorTexture": { "index": 0, "texCoord": 1 } } }]);
+    let scene = load(&a);
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let mesh = &scene.mesh;
+    let colors = mesh.color_indices(0).map(|k| mesh.colors[k as usize]);
+    assert_eq!(colors[0], glam::Vec4::new(1.0, 0.0, 0.0, 1.0));
+    assert_eq!(colors[1], glam::Vec4::new(0.0, 1.0, 0.0, 1.0));
+    assert!(
+        (colors[2] - glam::Vec4::new(0.0, 0.0, 0.2, 1.0))
+            .abs()
+            .max_element()
+            < 1e-6
+    );
+    let second = mesh.uv1_indices(0).map(|k| mesh.texcoords[k as usize]);
+    assert_eq!(
+        second,
+        [
+            Vec2::new(0.25, 0.75),
+            Vec2::new(0.5, 0.5),
+            Vec2::new(0.75, 0.25)
+        ]
+    );
+    let rs = meshtrace::render::RenderScene::new(&scene, &Default::default()).unwrap();
+    let (b1, b2) = (0.2, 0.3);
+    let uv = triangle_uv(&rs, 0, b1, b2);
+    let expect1 = 0.5 * second[0] + b1 * second[1] + b2 * second[2];
+    let expect0 = b1 * Vec2::new(1.0, 0.0) + b2 * Vec2::new(0.0, 1.0);
+    assert!(
+        (Vec2::new(uv.z, uv.w) - expect1).abs().max_element() < 1e-6,
+        "{uv}"
+    );
+    assert!(
+        (Vec2::new(uv.x, uv.y) - expect0).abs().max_element() < 1e-6,
+        "{uv}"
+    );
+    let color = triangle_color(&rs, 0, b1, b2);
+    let expect = 0.5 * colors[0] + b1 * colors[1] + b2 * colors[2];
+    assert!((color - expect).abs().max_element() < 1e-6, "{color}");
+}
+
+/// A texture on TEXCOORD_1 of a primitive without that set is an error naming the
+/// primitive.
+#[test]
+fn a_texture_on_a_missing_second_set_is_an_error() {
+    let mut a = Asset::new();
+    let image_view = a.view(&two_texels(), None);
+    a.push(
+        "images",
+        json!({ "bufferView": image_view, "mimeType": "image/png" }),
+    );
+    a.push("textures", json!({ "source": 0 }));
+    let t0 = a.floats(&[0.0; 6], "VEC2");
+    a.triangle(json!({ "attributes": { "TEXCOORD_0": t0 }, "material": 0 }));
+    a.json["materials"] = json!([{
+        "pbrMetallicRoughness": { "baseColorTexture": { "index": 0, "texCoord": 1 } } }]);
+    let dir = TempDir::new("gltf-set1");
+    let path = dir.write("a.gltf", a.embedded());
+    let e = load_scene(&path).expect_err("set 1 is missing").to_string();
+    assert!(
+        e.contains("a.gltf: meshes[0].primitives[0]: material `materials[0]` reads a texture through TEXCOORD_1, but the mesh has faces without a second texture coordinate set"),
+        "{e}"
+    );
+    assert_eq!(e.lines().count(), 1);
 }
 
 #[test]
@@ -904,5 +991,39 @@ fn ext_texture_webp_is_preferred_over_the_fallback_source() {
             want,
             "{texture}"
         );
+    }
+}
+
+/// A normal map on TEXCOORD_1 of a primitive without TANGENT gets MikkTSpace tangents
+/// from that set: where the second set's u runs along +y (the first set's along +x), the
+/// generated tangents point along +y.
+#[test]
+fn generated_tangents_follow_the_set_the_normal_map_reads() {
+    for (set, along) in [(0, Vec3::X), (1, Vec3::Y)] {
+        let mut a = Asset::new();
+        let image_view = a.view(&two_texels(), None);
+        a.push(
+            "images",
+            json!({ "bufferView": image_view, "mimeType": "image/png" }),
+        );
+        a.push("textures", json!({ "source": 0 }));
+        // Corners (0,0,0), (1,0,0), (0,1,0): set 0 is (x, 1 − y), set 1 is (y, x).
+        let t0 = a.floats(&[0.0, 1.0, 1.0, 1.0, 0.0, 0.0], "VEC2");
+        let t1 = a.floats(&[0.0, 0.0, 0.0, 1.0, 1.0, 0.0], "VEC2");
+        let n = a.floats(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0], "VEC3");
+        a.triangle(
+            json!({ "attributes": { "TEXCOORD_0": t0, "TEXCOORD_1": t1, "NORMAL": n },
+            "material": 0 }),
+        );
+        a.json["materials"] = json!([{ "normalTexture": { "index": 0, "texCoord": set } }]);
+        let scene = load(&a);
+        let mesh = &scene.mesh;
+        for k in mesh.tangent_indices(0) {
+            let t = mesh.tangents[k as usize];
+            assert!(
+                close(t.truncate(), along),
+                "set {set}: tangent {t}, want {along}"
+            );
+        }
     }
 }

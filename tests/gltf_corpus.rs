@@ -177,3 +177,168 @@ fn animations_are_noted_not_warned() {
     let still = load_scene(&data("gltf/corpus/skinned_arm.glb")).expect("loads");
     assert!(still.notes.is_empty(), "{:?}", still.notes);
 }
+
+/// A scene file that looks straight down (image right +x, image up −z) at corpus file
+/// `name`, a 2 × 2 m plane at y = 0, under a white sky of radiance 1: where the plane is
+/// Lambertian (its files' KHR_materials_specular factor is 0) a pixel's radiance is its
+/// albedo.
+fn from_above(name: &str) -> Scene {
+    let dir = common::fs::TempDir::new("corpus-above");
+    let glb = data(&format!("gltf/corpus/{name}.glb"));
+    let toml = format!(
+        "[camera]\nposition = [0.0, {HEIGHT}, 0.0]\nlook_at = [0.0, 0.0, 0.0]\nup = [0.0, 0.0, -1.0]\n\
+         vfov = {VFOV}\n[render]\nwidth = {SIDE}\nheight = {SIDE}\nspp = 64\nmax_depth = 2\n\
+         [sky]\ncolor = [1.0, 1.0, 1.0]\n[[objects]]\nmesh = {:?}\n",
+        glb.to_str().expect("a UTF-8 path")
+    );
+    load_scene(&dir.write("scene.toml", toml)).unwrap_or_else(|e| panic!("{e}"))
+}
+
+const HEIGHT: f32 = 4.0;
+const VFOV: f32 = 30.0;
+const SIDE: usize = 32;
+
+/// The pixel (column, row) that sees point (x, 0, z) in [`from_above`]'s image.
+fn pixel_of(x: f32, z: f32) -> (usize, usize) {
+    let half = HEIGHT * (0.5 * VFOV).to_radians().tan();
+    let col = (x / half + 1.0) * 0.5 * SIDE as f32;
+    let row = (z / half + 1.0) * 0.5 * SIDE as f32;
+    (col as usize, row as usize)
+}
+
+/// The mean radiance of the 3 × 3 pixels around (col, row).
+fn window(film: &meshtrace::film::Film, (col, row): (usize, usize)) -> glam::Vec3 {
+    let mean = film.mean();
+    let mut sum = glam::Vec3::ZERO;
+    for r in row - 1..=row + 1 {
+        for c in col - 1..=col + 1 {
+            sum += mean[r * SIDE + c];
+        }
+    }
+    sum / 9.0
+}
+
+/// Whether `got` is `want` within 3% (and 0.005), channel by channel.
+fn near(got: glam::Vec3, want: glam::Vec3) -> bool {
+    ((got - want).abs() - (0.03 * want + glam::Vec3::splat(0.005))).max_element() <= 0.0
+}
+
+/// `vertex_colors.py`'s face colours (`FACE_COLORS`) and base colour factor.
+const FACE_COLORS: [[f32; 3]; 4] = [[0.8, 0.2, 0.1], [0.1, 0.7, 0.3], [0.2, 0.3, 0.9], [0.5; 3]];
+const BASE: [f32; 3] = [0.9, 0.8, 0.6];
+
+/// COLOR_0 multiplies the base colour (glTF 2.0, 3.9.2): under a white sky each quad of
+/// Blender's vertex-coloured plane, which is Lambertian, shows base colour × its face
+/// colour, the four quads the four colours; the Draco-compressed form, whose colours
+/// come from its Draco stream, alike.
+#[test]
+fn vertex_colors_multiply_the_base_color_in_a_render() {
+    for name in ["vertex_colors", "vertex_colors_draco"] {
+        check(name, "vertex_colors", 1e-3);
+        let scene = from_above(name);
+        assert!(scene.warnings.is_empty(), "{name}: {:?}", scene.warnings);
+        let rs = meshtrace::render::RenderScene::new(&scene, &Default::default()).unwrap();
+        let film = common::cpu_render(&rs, &meshtrace::render::RenderJob::new(scene.settings));
+        let mut found = Vec::new();
+        for (x, z) in [(-0.5, -0.5), (0.5, -0.5), (-0.5, 0.5), (0.5, 0.5)] {
+            let got = window(&film, pixel_of(x, z));
+            let k = FACE_COLORS
+                .iter()
+                .position(|&c| near(got, glam::Vec3::from(c) * glam::Vec3::from(BASE)))
+                .unwrap_or_else(|| {
+                    panic!("{name}: quad at ({x}, {z}) shows {got}, no face colour × base")
+                });
+            eprintln!("{name}: quad at ({x}, {z}) shows {got}: face colour {k}");
+            found.push(k);
+        }
+        found.sort();
+        assert_eq!(found, [0, 1, 2, 3], "{name}: each quad its own colour");
+    }
+}
+
+/// A base colour texture on TEXCOORD_1 reads the second UV map: Blender's plane carries
+/// its first map mirrored along u as its second, so every corner's second-set coordinates
+/// are (1 − u, v) of its first; and where the second set points at the centre of each
+/// quadrant of the 8 × 8 image (four solid colours, `QUADRANTS` in the script), the render
+/// shows that quadrant's texel decoded from sRGB, which differs from the texel the first
+/// set points at there.
+#[test]
+fn a_texture_on_the_second_uv_map_reads_it() {
+    check("second_uv_map", "second_uv_map", 1e-3);
+    let scene = from_above("second_uv_map");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let mesh = &scene.mesh;
+    assert_eq!(scene.textures.records[0].uv_set, 1);
+    let mut corners = Vec::new();
+    for (i, t) in mesh.triangles.iter().enumerate() {
+        let second = mesh.uv1_indices(i);
+        for (k, (first, second)) in t.t.into_iter().zip(second).enumerate() {
+            let uv0 = mesh.texcoords[first as usize];
+            let uv1 = mesh.texcoords[second as usize];
+            assert!(
+                (uv1 - glam::Vec2::new(1.0 - uv0.x, uv0.y))
+                    .abs()
+                    .max_element()
+                    < 1e-6,
+                "triangle {i} corner {k}: first {uv0}, second {uv1}"
+            );
+            corners.push((mesh.positions[t.p[k] as usize], uv0, uv1));
+        }
+    }
+    // The plane's map from (x, z) to each set is affine: u runs along x, v along z.
+    let at = |uv: glam::Vec2, set: usize| -> (f32, f32) {
+        let pick = |c: &(glam::Vec3, glam::Vec2, glam::Vec2)| if set == 0 { c.1 } else { c.2 };
+        let (lo, hi) = corners.iter().fold(
+            ((f32::MAX, f32::MAX), (f32::MIN, f32::MIN)),
+            |(lo, hi), c| {
+                (
+                    (lo.0.min(c.0.x), lo.1.min(c.0.z)),
+                    (hi.0.max(c.0.x), hi.1.max(c.0.z)),
+                )
+            },
+        );
+        let u_at = |x: f32| {
+            corners
+                .iter()
+                .find(|c| (c.0.x - x).abs() < 1e-6)
+                .map(|c| pick(c).x)
+                .expect("a corner")
+        };
+        let v_at = |z: f32| {
+            corners
+                .iter()
+                .find(|c| (c.0.z - z).abs() < 1e-6)
+                .map(|c| pick(c).y)
+                .expect("a corner")
+        };
+        let x = lo.0 + (uv.x - u_at(lo.0)) / (u_at(hi.0) - u_at(lo.0)) * (hi.0 - lo.0);
+        let z = lo.1 + (uv.y - v_at(lo.1)) / (v_at(hi.1) - v_at(lo.1)) * (hi.1 - lo.1);
+        (x, z)
+    };
+    let quadrants: [[u8; 3]; 4] = [[200, 40, 40], [40, 200, 40], [40, 40, 200], [220, 220, 60]];
+    let decode = |c: [u8; 3]| glam::Vec3::from(c.map(meshtrace::film::srgb8_to_linear));
+    let rs = meshtrace::render::RenderScene::new(&scene, &Default::default()).unwrap();
+    let film = common::cpu_render(&rs, &meshtrace::render::RenderJob::new(scene.settings));
+    for (q, uv) in [(0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75)]
+        .into_iter()
+        .enumerate()
+    {
+        let uv1 = glam::Vec2::new(uv.0, uv.1);
+        let (x, z) = at(uv1, 1);
+        let got = window(&film, pixel_of(x, z));
+        let want = decode(quadrants[q]);
+        // The first set at that point: the quadrant mirrored along u.
+        let (x0, z0) = at(uv1, 0);
+        let mirrored = (x0 - x).abs() > 0.5 || (z0 - z).abs() > 0.5;
+        let first = decode(quadrants[q ^ 1]);
+        eprintln!(
+            "second set at {uv1}: point ({x}, {z}) shows {got}, texel {want}; first set reads {first}"
+        );
+        assert!(mirrored, "the two sets agree at {uv1}");
+        assert!(near(got, want), "second set at {uv1}: {got}, want {want}");
+        assert!(
+            !near(got, first),
+            "second set at {uv1} shows the first set's texel"
+        );
+    }
+}

@@ -305,3 +305,31 @@ fn sample_ranges_merge_into_the_full_render() {
         );
     }
 }
+
+/// The same seed on Blender's vertex-coloured plane and on its plane with a texture on
+/// the second UV map (tests/data/gltf/corpus), in the studio: the GPU replays the CPU's
+/// paths through COLOR_0 and TEXCOORD_1.
+#[test]
+fn gpu_replays_the_cpu_paths_through_vertex_colors_and_a_second_uv_map() {
+    let Some(ctx) =
+        common::gpu("gpu_replays_the_cpu_paths_through_vertex_colors_and_a_second_uv_map")
+    else {
+        return;
+    };
+    for name in ["vertex_colors", "second_uv_map"] {
+        let path = common::fs::data(&format!("gltf/corpus/{name}.glb"));
+        let scene = meshtrace::scene::load_scene(&path).expect("corpus file");
+        let rs =
+            meshtrace::render::RenderScene::new(&scene, &meshtrace::bvh::BuildParams::default())
+                .expect("BVH");
+        assert!(
+            rs.shading.iter().any(|s| s.flags
+                & (meshtrace::render::TRI_COLOR | meshtrace::render::TRI_UV1)
+                != 0),
+            "{name}: neither colours nor a second set"
+        );
+        let job = RenderJob::new(square(48, 8, 6, 7));
+        eprintln!("{name}:");
+        assert_replays(&gpu_render(&ctx, &rs, &job), &cpu_render(&rs, &job));
+    }
+}

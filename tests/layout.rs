@@ -170,6 +170,7 @@ fn structs_match_their_rust_twins() {
             "Material",
             "TriUvs",
             "TriTangents",
+            "TriColors",
             "Texture",
             "Light",
             "CausticTarget",

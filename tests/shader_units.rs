@@ -34,7 +34,7 @@ use meshtrace::render::sampling::{
     sample_cosine_hemisphere, sample_uniform_triangle,
 };
 use meshtrace::render::texture::{
-    alpha_test, material_at, normal_mapped, texture_lookup, triangle_uv,
+    alpha_test, material_at, normal_mapped, texture_lookup, triangle_color, triangle_uv,
 };
 use meshtrace::render::{RenderScene, TRI_SMOOTH, TRI_TANGENT};
 use meshtrace::scene::{
@@ -1327,7 +1327,8 @@ fn texture_lookup_matches() {
                 .fold(0.0, f64::max),
             show,
         );
-        let cm = material_at(&rs, &rs.materials[m as usize], uv);
+        let both = glam::Vec4::new(uv.x, uv.y, uv.x, uv.y);
+        let cm = material_at(&rs, &rs.materials[m as usize], both, glam::Vec4::ONE);
         let (ga, gr) = (v3(o[1]), f(o[1][3]));
         let show = || format!("material {m} at {uv}: CPU {cm:?}, GPU {ga} {gr}");
         material.add(
@@ -1437,6 +1438,7 @@ fn surface_maps_match() {
             &rs,
             &rs.materials[rs.shading[tri as usize].material as usize],
             uv,
+            triangle_color(&rs, tri, b1, b2),
         );
         let (gm, gt) = (f(o[1][0]), f(o[1][1]));
         factors.add(
@@ -1452,6 +1454,114 @@ fn surface_maps_match() {
     normal.check("test_surface_maps");
     alpha.check("test_surface_maps", cases.len());
     factors.check("test_surface_maps");
+}
+
+/// `triangle_uv`, `triangle_color`, `material_at` and `alpha_test` on a glTF triangle pair
+/// with COLOR_0 (alpha below and above the cut-off) and a base colour texture on
+/// TEXCOORD_1, against their Rust twins at 12,000 random barycentric points.
+#[test]
+fn vertex_colors_and_second_set_match() {
+    let Some(ctx) = common::gpu("vertex_colors_and_second_set_match") else {
+        return;
+    };
+    use common::gltf::Asset;
+    use serde_json::json;
+    let mut r = SplitMix::new(0x7e47_0009);
+    let mut a = Asset::new();
+    let texels: Vec<[u8; 4]> = (0..20)
+        .map(|_| [0; 4].map(|_| (r.u32() >> 24) as u8))
+        .collect();
+    let image = a.view(&common::gltf::png(4, 5, &texels), None);
+    a.push(
+        "images",
+        json!({ "bufferView": image, "mimeType": "image/png" }),
+    );
+    a.push("textures", json!({ "source": 0 }));
+    let p = a.positions(&[
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ]);
+    let t0 = a.floats(&[0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0], "VEC2");
+    let t1 = a.floats(&[0.3, -0.7, 2.1, 0.4, 1.2, 1.9, -0.5, 0.8], "VEC2");
+    let c = a.floats(
+        &[
+            1.0, 0.2, 0.1, 0.2, 0.1, 0.9, 0.3, 0.9, 0.5, 0.5, 0.5, 0.6, 0.9, 0.9, 0.2, 1.0,
+        ],
+        "VEC4",
+    );
+    let i = a.indices(&[0, 1, 2, 0, 2, 3]);
+    a.mesh(
+        json!({ "attributes": { "POSITION": p, "TEXCOORD_0": t0, "TEXCOORD_1": t1,
+        "COLOR_0": c }, "indices": i, "material": 0 }),
+    );
+    let node = a.node(json!({ "mesh": 0 }));
+    a.scene(&[node]);
+    a.json["materials"] = json!([{ "alphaMode": "MASK", "alphaCutoff": 0.4,
+        "pbrMetallicRoughness": { "baseColorFactor": [0.9, 0.7, 0.5, 0.8],
+            "baseColorTexture": { "index": 0, "texCoord": 1 } } }]);
+    let dir = common::fs::TempDir::new("colour-units");
+    let scene = meshtrace::scene::load_scene(&dir.write("a.gltf", a.embedded())).unwrap();
+    let rs = RenderScene::new(&scene, &BuildParams::default()).unwrap();
+    let tris = rs.tris.len();
+    let mut cases = Vec::new();
+    while cases.len() < 12_000 {
+        let tri = r.below(tris) as u32;
+        let (b1, b2) = (r.range(0.0, 1.0), r.range(0.0, 1.0));
+        let (b1, b2) = if b1 + b2 > 1.0 {
+            (1.0 - b1, 1.0 - b2)
+        } else {
+            (b1, b2)
+        };
+        cases.push([[tri, b(b1), b(b2), 0], [0; 4]]);
+    }
+    let out = run(&ctx, &rs, &scene.settings, "test_surface_colors", &cases);
+    let mut albedo = Worst::new("material_at albedo with colour (relative)", 1e-4);
+    let mut uvs = Worst::new("triangle_uv (relative, floor 1e-3)", 1e-5);
+    let mut alpha = Tally::new("alpha_test disagrees", 1e-3);
+    let mut masked = 0;
+    for (c, o) in cases.iter().zip(&out) {
+        let [tri, b1, b2, _] = c[0];
+        let (b1, b2) = (f(b1), f(b2));
+        let uv = triangle_uv(&rs, tri, b1, b2);
+        let m = material_at(
+            &rs,
+            &rs.materials[rs.shading[tri as usize].material as usize],
+            uv,
+            triangle_color(&rs, tri, b1, b2),
+        );
+        let ga = v3(o[0]);
+        albedo.add(rel3(m.albedo, ga, 1e-3), || {
+            format!("triangle {tri} at ({b1}, {b2}): CPU {}, GPU {ga}", m.albedo)
+        });
+        let gu = glam::Vec4::new(f(o[1][0]), f(o[1][1]), f(o[1][2]), f(o[1][3]));
+        uvs.add(
+            (0..4).map(|k| rel(uv[k], gu[k], 1e-3)).fold(0.0, f64::max),
+            || format!("triangle {tri} at ({b1}, {b2}): CPU {uv}, GPU {gu}"),
+        );
+        let passes = alpha_test(&rs, tri, b1, b2);
+        masked += usize::from(!passes);
+        if passes != (o[0][3] == 1) {
+            alpha.add(|| {
+                format!(
+                    "triangle {tri} at ({b1}, {b2}): CPU {passes}, GPU {}",
+                    o[0][3]
+                )
+            });
+        }
+    }
+    eprintln!(
+        "test_surface_colors: {} cases, {masked} masked out",
+        cases.len()
+    );
+    assert!(
+        masked > 100 && masked < cases.len() - 100,
+        "{masked} masked out"
+    );
+    albedo.check("test_surface_colors");
+    uvs.check("test_surface_colors");
+    alpha.check("test_surface_colors", cases.len());
 }
 
 /// `env_radiance`, `env_pdf` and `sample_env` against their Rust twins on an environment

@@ -837,7 +837,7 @@ fn wrap_modes_on_obj_texture_coordinates_work_in_the_files_terms() {
                     _ => t,
                 };
                 let expected = ((1.0 - wrapped) * 4.0 - 0.5).clamp(0.0, 3.0);
-                let got = material_at(&rs, &material, uv).albedo.x;
+                let got = material_at(&rs, &material, uv, glam::Vec4::ONE).albedo.x;
                 assert!(
                     (got - expected).abs() < 1e-4,
                     "{mode} at OBJ v = {}: got {got}, expected {expected}",

@@ -7,7 +7,8 @@
 use super::environment::cell_corners;
 use super::tables::{
     CausticTarget, Environment, LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_POINT, LIGHT_SPOT, Light,
-    RenderScene, SKY_EMITTER, TRI_SMOOTH, TRI_TANGENT, TRI_UV, TriShading, TriTangents, TriUvs,
+    RenderScene, SKY_EMITTER, TRI_COLOR, TRI_SMOOTH, TRI_TANGENT, TRI_UV, TRI_UV1, TriColors,
+    TriShading, TriTangents, TriUvs,
 };
 use super::texture::texel;
 use crate::bvh::{BuildParams, Bvh, BvhError, WideBvh};
@@ -16,8 +17,8 @@ use crate::geometry::{self, TriVerts};
 use crate::math::{Aabb, luminance};
 use crate::scene::material::MAT_ALPHA_MASK;
 use crate::scene::{
-    Material, MaterialKind, NO_NORMAL, NO_TANGENT, NO_TEXTURE, NO_UV, PunctualLight, Scene, Sky,
-    Texture,
+    Material, MaterialKind, NO_COLOR, NO_NORMAL, NO_TANGENT, NO_TEXTURE, NO_UV, PunctualLight,
+    Scene, Sky, Texture,
 };
 use glam::Vec3;
 
@@ -56,13 +57,23 @@ impl RenderScene {
                     let [a, b, c] = t.n.map(|k| mesh.normals[k as usize].to_array());
                     (s.n0, s.n1, s.n2, s.flags) = (a, b, c, TRI_SMOOTH);
                 }
+                if textured && mesh.uv1_indices(i as usize)[0] != NO_UV {
+                    s.flags |= TRI_UV1;
+                }
+                if mesh.color_indices(i as usize)[0] != NO_COLOR {
+                    s.flags |= TRI_COLOR;
+                }
                 if textured && t.t[0] != NO_UV {
                     s.flags |= TRI_UV;
-                    let normal_map = scene.materials[t.material as usize].normal_texture;
-                    if normal_map != NO_TEXTURE && mesh.tangent_indices(i as usize)[0] != NO_TANGENT
-                    {
-                        s.flags |= TRI_TANGENT;
-                    }
+                }
+                // The scene builder gives a triangle whose material has a normal map the
+                // texture coordinates the map reads (set 0 or 1).
+                let normal_map = scene.materials[t.material as usize].normal_texture;
+                if textured
+                    && normal_map != NO_TEXTURE
+                    && mesh.tangent_indices(i as usize)[0] != NO_TANGENT
+                {
+                    s.flags |= TRI_TANGENT;
                 }
                 s
             })
@@ -83,25 +94,48 @@ impl RenderScene {
         } else {
             Vec::new()
         };
-        // Only a scene with textures reads texture coordinates.
-        let tri_uvs: Vec<TriUvs> = if textured {
+        // Only a scene with textures reads texture coordinates; the second set and the
+        // colours only where some triangle has them.
+        let uvs = |corners: &dyn Fn(usize) -> [u32; 3]| -> Vec<TriUvs> {
             bvh.order
                 .iter()
                 .map(|&i| {
-                    let t = &mesh.triangles[i as usize];
-                    let uv = |k: usize| {
-                        if t.t[k] == NO_UV {
+                    let [a, b, c] = corners(i as usize).map(|k| {
+                        if k == NO_UV {
                             [0.0; 2]
                         } else {
-                            mesh.texcoords[t.t[k] as usize].to_array()
+                            mesh.texcoords[k as usize].to_array()
                         }
-                    };
+                    });
                     TriUvs {
-                        uv0: uv(0),
-                        uv1: uv(1),
-                        uv2: uv(2),
+                        uv0: a,
+                        uv1: b,
+                        uv2: c,
                         _pad: [0; 2],
                     }
+                })
+                .collect()
+        };
+        let tri_uvs = if textured {
+            uvs(&|i| mesh.triangles[i].t)
+        } else {
+            Vec::new()
+        };
+        let tri_uvs1 = if shading.iter().any(|s| s.flags & TRI_UV1 != 0) {
+            uvs(&|i| mesh.uv1_indices(i))
+        } else {
+            Vec::new()
+        };
+        let tri_colors: Vec<TriColors> = if shading.iter().any(|s| s.flags & TRI_COLOR != 0) {
+            bvh.order
+                .iter()
+                .map(|&i| {
+                    let c = mesh.color_indices(i as usize);
+                    if c[0] == NO_COLOR {
+                        return TriColors::default();
+                    }
+                    let [c0, c1, c2] = c.map(|k| mesh.colors[k as usize].to_array());
+                    TriColors { c0, c1, c2 }
                 })
                 .collect()
         } else {
@@ -135,6 +169,8 @@ impl RenderScene {
             shading,
             tri_uvs,
             tri_tangents,
+            tri_uvs1,
+            tri_colors,
             materials: scene.materials.clone(),
             textures: scene.textures.records.clone(),
             texels: scene.textures.texels.clone(),

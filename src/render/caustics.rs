@@ -64,7 +64,7 @@ use super::texture::{alpha_test, material_at};
 use crate::geometry::{self, T_INF};
 use crate::math::{Ray, onb_from_normal};
 use crate::scene::Material;
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use std::f32::consts::PI;
 
 /// The share of camera samples that trace a light subpath. The light subpath's vertices
@@ -200,7 +200,8 @@ impl LightVertex {
             material: 0,
             front_face: true,
             tri: 0,
-            uv: Vec2::ZERO,
+            uv: Vec4::ZERO,
+            color: Vec4::ONE,
         },
         wi: Vec3::Z,
         beta: Vec3::ZERO,
@@ -434,7 +435,12 @@ pub fn trace_light_subpath(scene: &RenderScene, rng: &Rng, max_segments: u32) ->
             break;
         };
         let si = surface_at(scene, &ray, &hit);
-        let mat = material_at(scene, &scene.materials[si.material as usize], si.uv);
+        let mat = material_at(
+            scene,
+            &scene.materials[si.material as usize],
+            si.uv,
+            si.color,
+        );
         let delta = bsdf_is_delta(&mat);
         if !delta && chain == 0 {
             break;
@@ -610,7 +616,7 @@ pub fn light_vertex_seen(
     wc: Vec3,
 ) -> Option<SeenLightVertex> {
     let base = &scene.materials[lv.si.material as usize];
-    let mat_l = material_at(scene, base, lv.si.uv);
+    let mat_l = material_at(scene, base, lv.si.uv, lv.si.color);
     let wo_l_world = -wc;
     let frame_l = shading_frame(&mat_l, &lv.si, wo_l_world);
     let wo_l = frame_l.to_local(wo_l_world);

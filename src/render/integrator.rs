@@ -30,7 +30,7 @@ use crate::film::NO_ID;
 use crate::geometry::T_INF;
 use crate::math::Ray;
 use crate::scene::{Material, MaterialKind};
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use std::mem::MaybeUninit;
 
 /// Path depth (in bounces) from which Russian roulette may end a path.
@@ -190,10 +190,11 @@ pub fn path_vertex<'a, const CAUSTICS: bool>(
         return None;
     };
     let si = surface_at(scene, &st.ray, &hit);
-    // A material without textures is used where it lies (no copy); the WGSL copies anyway.
+    // A material without textures, at a point without a vertex colour, is used where it
+    // lies (no copy); the WGSL copies anyway.
     let base = &scene.materials[si.material as usize];
-    let mat = if base.has_texture() {
-        &*textured.write(material_at(scene, base, si.uv))
+    let mat = if base.has_texture() || si.color != Vec4::ONE {
+        &*textured.write(material_at(scene, base, si.uv, si.color))
     } else {
         base
     };
@@ -607,7 +608,12 @@ pub fn first_hit(scene: &RenderScene, ray: &Ray) -> FirstHit {
         };
     };
     let si = surface_at(scene, ray, &hit);
-    let mat = material_at(scene, &scene.materials[si.material as usize], si.uv);
+    let mat = material_at(
+        scene,
+        &scene.materials[si.material as usize],
+        si.uv,
+        si.color,
+    );
     FirstHit {
         hit: true,
         p: si.p,

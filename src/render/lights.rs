@@ -14,7 +14,7 @@ use super::tables::{
 use super::texture::{alpha_test, material_at, triangle_uv};
 use crate::geometry::{self, T_INF};
 use crate::scene::{NO_TEXTURE, Sky};
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 
 /// Radiance arriving along unit `dir` from outside the scene.
 /// mirror: shaders/lights.wgsl `sky_radiance`
@@ -167,7 +167,9 @@ pub fn sample_light(scene: &RenderScene, p: Vec3, ng: Vec3, u: Vec2) -> Option<L
 pub fn triangle_emission(scene: &RenderScene, light: u32, bary: Vec2) -> Vec3 {
     let material = &scene.materials[scene.shading[light as usize].material as usize];
     if material.emission_texture != NO_TEXTURE {
-        material_at(scene, material, triangle_uv(scene, light, bary.x, bary.y)).emission
+        // Vertex colours tint the base colour, not the emission.
+        let uv = triangle_uv(scene, light, bary.x, bary.y);
+        material_at(scene, material, uv, Vec4::ONE).emission
     } else {
         material.emission
     }

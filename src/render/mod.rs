@@ -31,5 +31,6 @@ pub mod watch;
 pub use job::{CheckpointFn, Checkpoints, RenderJob};
 pub use tables::{
     CausticTarget, Environment, LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_POINT, LIGHT_SPOT, Light,
-    RenderScene, SKY_EMITTER, TRI_SMOOTH, TRI_TANGENT, TRI_UV, TriShading, TriTangents, TriUvs,
+    RenderScene, SKY_EMITTER, TRI_COLOR, TRI_SMOOTH, TRI_TANGENT, TRI_UV, TRI_UV1, TriColors,
+    TriShading, TriTangents, TriUvs,
 };

@@ -6,12 +6,12 @@
 //! `shaders/surface.wgsl`.
 
 use super::bsdf::bsdf_is_two_sided;
-use super::tables::{RenderScene, TRI_SMOOTH, TRI_TANGENT, TRI_UV};
-use super::texture::{normal_mapped, triangle_uv};
+use super::tables::{RenderScene, TRI_SMOOTH, TRI_TANGENT};
+use super::texture::{normal_mapped, triangle_color, triangle_uv};
 use crate::bvh::Hit;
 use crate::math::{Ray, onb_from_normal};
 use crate::scene::Material;
-use glam::{Vec2, Vec3};
+use glam::{Vec3, Vec4};
 
 /// A ray's hit point with the frames its shading needs.
 /// mirror: shaders/surface.wgsl `SurfaceHit`
@@ -25,8 +25,11 @@ pub struct SurfaceHit {
     pub material: u32,
     pub front_face: bool,
     pub tri: u32,
-    /// Texture coordinates at the hit (zero on a triangle without them).
-    pub uv: Vec2,
+    /// Texture coordinates at the hit: xy the first set, zw the second (zero for a set
+    /// the triangle lacks).
+    pub uv: Vec4,
+    /// The vertex colour at the hit (linear RGBA; white on a triangle without colours).
+    pub color: Vec4,
 }
 
 /// mirror: shaders/surface.wgsl `surface_at`
@@ -45,11 +48,7 @@ pub fn surface_at(scene: &RenderScene, ray: &Ray, hit: &Hit) -> SurfaceHit {
             ns = ng;
         }
     }
-    let uv = if sh.flags & TRI_UV != 0 {
-        triangle_uv(scene, hit.tri, hit.u, hit.v)
-    } else {
-        Vec2::ZERO
-    };
+    let uv = triangle_uv(scene, hit.tri, hit.u, hit.v);
     if sh.flags & TRI_TANGENT != 0 {
         ns = normal_mapped(scene, hit.tri, hit.u, hit.v, uv, ns, ng);
     }
@@ -61,6 +60,7 @@ pub fn surface_at(scene: &RenderScene, ray: &Ray, hit: &Hit) -> SurfaceHit {
         front_face: ray.dir.dot(ng) < 0.0,
         tri: hit.tri,
         uv,
+        color: triangle_color(scene, hit.tri, hit.u, hit.v),
     }
 }
 

@@ -21,7 +21,7 @@ pub struct TriShading {
     /// Probability of choosing this triangle in next event estimation; 0 for non-emitters.
     pub emitter_pmf: f32,
     pub n2: [f32; 3],
-    /// [`TRI_SMOOTH`], [`TRI_UV`] and [`TRI_TANGENT`] bits.
+    /// [`TRI_SMOOTH`], [`TRI_UV`], [`TRI_TANGENT`], [`TRI_COLOR`] and [`TRI_UV1`] bits.
     pub flags: u32,
 }
 
@@ -32,6 +32,22 @@ pub const TRI_UV: u32 = 2;
 /// [`TriShading::flags`]: the triangle's material has a normal map, and the triangle has
 /// tangents in [`RenderScene::tri_tangents`].
 pub const TRI_TANGENT: u32 = 4;
+/// [`TriShading::flags`]: the triangle has vertex colours in [`RenderScene::tri_colors`].
+pub const TRI_COLOR: u32 = 8;
+/// [`TriShading::flags`]: the triangle has a second texture coordinate set in
+/// [`RenderScene::tri_uvs1`].
+pub const TRI_UV1: u32 = 16;
+
+/// Per-triangle vertex colours in leaf order (48 bytes): each corner's linear RGBA, which
+/// multiplies the base colour and the alpha an alpha mask reads.
+/// mirror: shaders/types.wgsl `TriColors`
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TriColors {
+    pub c0: [f32; 4],
+    pub c1: [f32; 4],
+    pub c2: [f32; 4],
+}
 
 /// Per-triangle tangents in leaf order (48 bytes): each corner's unit tangent (xyz) and
 /// the handedness of its bitangent (w = ±1; bitangent = w · normal × tangent).
@@ -108,6 +124,12 @@ pub struct RenderScene {
     pub tri_uvs: Vec<TriUvs>,
     /// Tangents of every triangle, or empty when no triangle has a normal map.
     pub tri_tangents: Vec<TriTangents>,
+    /// The second texture coordinate set of every triangle (zero where it has none), or
+    /// empty when the scene has no textures or no triangle has a second set.
+    pub tri_uvs1: Vec<TriUvs>,
+    /// Vertex colours of every triangle (zero where it has none), or empty when no
+    /// triangle has colours.
+    pub tri_colors: Vec<TriColors>,
     pub materials: Vec<Material>,
     /// The textures material slots index, and their texels.
     pub textures: Vec<Texture>,

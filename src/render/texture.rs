@@ -1,10 +1,11 @@
 //! Texture lookups, the same on both renderers: texels decoded through one table
 //! ([`RenderScene::texel_lut`]) for 8-bit images, bilinear filtering with repeat, clamp or
-//! mirror wrapping,
-//! and materials whose textured parameters are evaluated at a surface point. Every
-//! function has a WGSL twin of the same name in `shaders/texture.wgsl`.
+//! mirror wrapping, the texture coordinate sets and vertex colours of a surface point,
+//! and materials whose textured parameters (and vertex-coloured base colour) are
+//! evaluated there. Every function has a WGSL twin of the same name in
+//! `shaders/texture.wgsl`.
 
-use super::tables::{RenderScene, TRI_UV};
+use super::tables::{RenderScene, TRI_COLOR, TRI_UV, TRI_UV1, TriUvs};
 use crate::scene::material::MAT_ALPHA_MASK;
 use crate::scene::{Material, NO_TEXTURE, Texture, TextureFormat, Wrap};
 use glam::{Vec2, Vec3, Vec4};
@@ -95,34 +96,72 @@ pub fn texture_lookup(scene: &RenderScene, index: u32, uv: Vec2) -> Vec4 {
 }
 
 /// The texture coordinates of triangle `tri` at barycentrics (`b1`, `b2`) of its second
-/// and third corners; zero for a triangle without texture coordinates.
+/// and third corners: xy its first set, zw its second (glTF's `TEXCOORD_1`); zero for a
+/// set the triangle lacks.
 /// mirror: shaders/texture.wgsl `triangle_uv`
-pub fn triangle_uv(scene: &RenderScene, tri: u32, b1: f32, b2: f32) -> Vec2 {
-    if scene.shading[tri as usize].flags & TRI_UV == 0 {
-        return Vec2::ZERO;
+pub fn triangle_uv(scene: &RenderScene, tri: u32, b1: f32, b2: f32) -> Vec4 {
+    let flags = scene.shading[tri as usize].flags;
+    let at = |t: &TriUvs| {
+        (1.0 - b1 - b2) * Vec2::from(t.uv0) + b1 * Vec2::from(t.uv1) + b2 * Vec2::from(t.uv2)
+    };
+    let first = if flags & TRI_UV != 0 {
+        at(&scene.tri_uvs[tri as usize])
+    } else {
+        Vec2::ZERO
+    };
+    let second = if flags & TRI_UV1 != 0 {
+        at(&scene.tri_uvs1[tri as usize])
+    } else {
+        Vec2::ZERO
+    };
+    Vec4::new(first.x, first.y, second.x, second.y)
+}
+
+/// The vertex colour of triangle `tri` at barycentrics (`b1`, `b2`) of its second and
+/// third corners (linear RGBA); white, alpha 1, for a triangle without colours.
+/// mirror: shaders/texture.wgsl `triangle_color`
+pub fn triangle_color(scene: &RenderScene, tri: u32, b1: f32, b2: f32) -> Vec4 {
+    if scene.shading[tri as usize].flags & TRI_COLOR == 0 {
+        return Vec4::ONE;
     }
-    let t = &scene.tri_uvs[tri as usize];
-    (1.0 - b1 - b2) * Vec2::from(t.uv0) + b1 * Vec2::from(t.uv1) + b2 * Vec2::from(t.uv2)
+    let c = &scene.tri_colors[tri as usize];
+    (1.0 - b1 - b2) * Vec4::from(c.c0) + b1 * Vec4::from(c.c1) + b2 * Vec4::from(c.c2)
 }
 
-/// Texture `index` at `uv`, read as a number: the channel its record names.
+/// Texture `index` at a surface point whose texture coordinate sets are `uv` (xy the
+/// first, zw the second, as [`triangle_uv`] gives them): the set its record names.
+/// mirror: shaders/texture.wgsl `surface_lookup`
+pub fn surface_lookup(scene: &RenderScene, index: u32, uv: Vec4) -> Vec4 {
+    let st = if scene.textures[index as usize].uv_set == 1 {
+        Vec2::new(uv.z, uv.w)
+    } else {
+        Vec2::new(uv.x, uv.y)
+    };
+    texture_lookup(scene, index, st)
+}
+
+/// Texture `index` at a surface point whose texture coordinate sets are `uv`, read as a
+/// number: the channel its record names.
 /// mirror: shaders/texture.wgsl `scalar_lookup`
-pub fn scalar_lookup(scene: &RenderScene, index: u32, uv: Vec2) -> f32 {
+pub fn scalar_lookup(scene: &RenderScene, index: u32, uv: Vec4) -> f32 {
     let channel = scene.textures[index as usize].channel as usize;
-    texture_lookup(scene, index, uv)[channel]
+    surface_lookup(scene, index, uv)[channel]
 }
 
-/// `m` with every textured parameter multiplied by its texture at `uv`; a material
-/// without textures is returned as it is. Roughness, metallic and transmission stay
-/// within [0, 1].
+/// `m` at a surface point whose texture coordinate sets are `uv` and whose vertex colour
+/// is `color`: its base colour multiplied by the colour's RGB (glTF's `COLOR_0`; white
+/// leaves it as it is), and every textured parameter multiplied by its texture. A
+/// material without textures, at white, is returned as it is. Roughness, metallic and
+/// transmission stay within [0, 1].
 /// mirror: shaders/texture.wgsl `material_at`
-pub fn material_at(scene: &RenderScene, m: &Material, uv: Vec2) -> Material {
+pub fn material_at(scene: &RenderScene, m: &Material, uv: Vec4, color: Vec4) -> Material {
     let mut out = *m;
+    out.albedo *= color.truncate();
     if m.albedo_texture != NO_TEXTURE {
-        out.albedo *= texture_lookup(scene, m.albedo_texture, uv).truncate();
+        out.albedo *= surface_lookup(scene, m.albedo_texture, uv).truncate();
     }
     if m.emission_texture != NO_TEXTURE {
-        out.emission *= texture_lookup(scene, m.emission_texture, uv).truncate();
+        out.emission *= surface_lookup(scene, m.emission_texture, uv).truncate();
     }
     if m.roughness_texture != NO_TEXTURE {
         let r = scalar_lookup(scene, m.roughness_texture, uv);
@@ -140,7 +179,7 @@ pub fn material_at(scene: &RenderScene, m: &Material, uv: Vec2) -> Material {
 }
 
 /// The shading normal that the normal map of triangle `tri`'s material gives at
-/// barycentrics (`b1`, `b2`) and texture coordinates `uv`, around the unit normal `n` (interpolated
+/// barycentrics (`b1`, `b2`) and texture coordinate sets `uv`, around the unit normal `n` (interpolated
 /// or geometric, on the side of `ng`): the map's tangent-space normal (2 · texel − 1, its
 /// x and y scaled by `normal_scale`) in the frame of the interpolated tangent made
 /// orthogonal to `n` and the bitangent w · n × tangent. `n` itself where that frame
@@ -151,7 +190,7 @@ pub fn normal_mapped(
     tri: u32,
     b1: f32,
     b2: f32,
-    uv: Vec2,
+    uv: Vec4,
     n: Vec3,
     ng: Vec3,
 ) -> Vec3 {
@@ -164,7 +203,7 @@ pub fn normal_mapped(
         return n;
     }
     let b = if t4.w < 0.0 { -n.cross(t) } else { n.cross(t) };
-    let c = texture_lookup(scene, m.normal_texture, uv).truncate() * 2.0 - Vec3::ONE;
+    let c = surface_lookup(scene, m.normal_texture, uv).truncate() * 2.0 - Vec3::ONE;
     let mapped =
         (t * (c.x * m.normal_scale) + b * (c.y * m.normal_scale) + n * c.z).normalize_or_zero();
     if mapped.dot(ng) <= 0.0 {
@@ -174,18 +213,19 @@ pub fn normal_mapped(
 }
 
 /// Whether a hit at barycentrics (`b1`, `b2`) of triangle `tri` counts: false where its
-/// material is an alpha mask and the base colour's alpha (factor times the base colour
-/// texture's alpha) is below the cut-off, as glTF's `alphaMode` MASK says.
+/// material is an alpha mask and the base colour's alpha (factor times the vertex
+/// colour's alpha times the base colour texture's alpha) is below the cut-off, as glTF's
+/// `alphaMode` MASK says.
 /// mirror: shaders/texture.wgsl `alpha_test`
 pub fn alpha_test(scene: &RenderScene, tri: u32, b1: f32, b2: f32) -> bool {
     let m = &scene.materials[scene.shading[tri as usize].material as usize];
     if m.flags & MAT_ALPHA_MASK == 0 {
         return true;
     }
-    let mut alpha = m.alpha;
+    let mut alpha = m.alpha * triangle_color(scene, tri, b1, b2).w;
     if m.albedo_texture != NO_TEXTURE {
         let uv = triangle_uv(scene, tri, b1, b2);
-        alpha *= texture_lookup(scene, m.albedo_texture, uv).w;
+        alpha *= surface_lookup(scene, m.albedo_texture, uv).w;
     }
     alpha >= m.alpha_cutoff
 }

@@ -8,8 +8,8 @@ use super::part::MeshPart;
 use super::source::FileSource;
 use super::texture::{TextureError, TextureRef, Textures, Wrap};
 use super::{
-    Camera, Material, Mesh, NO_NORMAL, NO_TANGENT, NO_TEXTURE, NO_UV, RenderSettings, Scene,
-    SceneError, Sky, Triangle,
+    Camera, Material, Mesh, NO_COLOR, NO_NORMAL, NO_TANGENT, NO_TEXTURE, NO_UV, RenderSettings,
+    Scene, SceneError, Sky, Triangle,
 };
 use glam::{Mat3, Mat4, Vec3};
 use std::collections::HashMap;
@@ -70,6 +70,19 @@ impl Builder {
         };
         self.obj_materials.insert(m, found);
         found
+    }
+
+    /// Which texture coordinate sets (0, 1) the textures of material `m` read.
+    fn uv_sets(&self, m: u32) -> [bool; 2] {
+        let mut material = self.materials[m as usize];
+        let mut sets = [false; 2];
+        for slot in material.texture_slots_mut() {
+            if *slot != NO_TEXTURE {
+                let set = self.textures.records[*slot as usize].uv_set;
+                sets[usize::from(set == 1)] = true;
+            }
+        }
+        sets
     }
 
     pub(super) fn default_material(&mut self) -> u32 {
@@ -227,6 +240,11 @@ impl Builder {
                 .map(|&n| (normal_matrix * n).normalize_or_zero()),
         );
         self.mesh.texcoords.extend(&part.texcoords);
+        let base_t1 = self.mesh.texcoords.len() as u32;
+        self.mesh.texcoords.extend(&part.texcoords1);
+        let base_c = self.mesh.colors.len() as u32;
+        self.mesh.colors.extend(&part.colors);
+        let (has_t1, has_c) = (!part.texcoords1.is_empty(), !part.colors.is_empty());
         // A tangent follows the surface (the linear part, not the normal matrix); a mirror
         // turns the bitangent's handedness.
         let handedness = if linear.determinant() < 0.0 {
@@ -265,9 +283,27 @@ impl Builder {
             } else {
                 t.t.map(|i| i + base_t)
             };
-            if uv[0] == NO_UV && self.materials[material as usize].has_texture() {
+            // The second set and the colours index the part's vertex table, as `p` does.
+            let uv1 = if has_t1 {
+                t.p.map(|i| i + base_t1)
+            } else {
+                [NO_UV; 3]
+            };
+            let color = if has_c {
+                t.p.map(|i| i + base_c)
+            } else {
+                [NO_COLOR; 3]
+            };
+            let [set0, set1] = self.uv_sets(material);
+            if uv[0] == NO_UV && set0 {
                 return Err(error(format!(
                     "material `{}` uses a texture, but the mesh has faces without texture coordinates",
+                    self.material_names[material as usize].escape_debug()
+                )));
+            }
+            if uv1[0] == NO_UV && set1 {
+                return Err(error(format!(
+                    "material `{}` reads a texture through TEXCOORD_1, but the mesh has faces without a second texture coordinate set",
                     self.material_names[material as usize].escape_debug()
                 )));
             }
@@ -300,11 +336,18 @@ impl Builder {
             {
                 g = [NO_TANGENT; 3];
             }
-            // The tangent table runs beside the triangles from the first one with tangents.
-            let corners = &mut self.mesh.tangent_corners;
-            if g[0] != NO_TANGENT || !corners.is_empty() {
-                corners.resize(self.mesh.triangles.len(), [NO_TANGENT; 3]);
-                corners.push(g);
+            // The tangent, second-set and colour tables run beside the triangles from the
+            // first one that has such corners.
+            let count = self.mesh.triangles.len();
+            for (corners, value, none) in [
+                (&mut self.mesh.tangent_corners, g, NO_TANGENT),
+                (&mut self.mesh.uv1_corners, uv1, NO_UV),
+                (&mut self.mesh.color_corners, color, NO_COLOR),
+            ] {
+                if value[0] != none || !corners.is_empty() {
+                    corners.resize(count, [none; 3]);
+                    corners.push(value);
+                }
             }
             self.mesh.objects.push(self.object);
             self.mesh.triangles.push(Triangle {
@@ -327,7 +370,11 @@ impl Builder {
         // A mesh used by several objects repeats its warnings; say each once.
         let mut seen = std::collections::HashSet::new();
         self.warnings.retain(|w| seen.insert(w.clone()));
-        let untangented = super::tangents::generate_missing(&mut self.mesh, &self.materials);
+        let untangented = super::tangents::generate_missing(
+            &mut self.mesh,
+            &self.materials,
+            &self.textures.records,
+        );
         if untangented > 0 {
             self.warnings.push(format!(
                 "{untangented} triangle{} with a normal map got no tangent (its texture coordinates collapse to a point or a line); the map is not applied there",

@@ -286,6 +286,7 @@ impl Ctx<'_> {
             transform: UvTransform::scale(scale[0], scale[1]),
             wrap,
             optional: false,
+            uv_set: 0,
         };
         textures.add(&r, self.files).map_err(|e| {
             let message = match e {

@@ -46,6 +46,9 @@ pub const NO_UV: u32 = u32::MAX;
 /// Index value of a triangle corner that has no tangent.
 pub const NO_TANGENT: u32 = u32::MAX;
 
+/// Index value of a triangle corner that has no vertex colour.
+pub const NO_COLOR: u32 = u32::MAX;
+
 /// One triangle of the scene mesh, by index into [`Mesh::positions`] and [`Mesh::normals`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Triangle {
@@ -73,6 +76,17 @@ pub struct Mesh {
     /// table beside the triangles rather than a field of [`Triangle`], so that meshes built
     /// in code need not say that they have none.)
     pub tangent_corners: Vec<[u32; 3]>,
+    /// Per triangle, parallel to [`Mesh::triangles`], its corners' second texture
+    /// coordinate set (glTF `TEXCOORD_1`), indices into [`Mesh::texcoords`] or
+    /// `[NO_UV; 3]`; empty when no triangle has one. Textures whose record names set 1
+    /// read it.
+    pub uv1_corners: Vec<[u32; 3]>,
+    /// Vertex colours (glTF `COLOR_0`), linear RGBA in [0, 1]: they multiply the base
+    /// colour and the alpha an alpha mask reads.
+    pub colors: Vec<Vec4>,
+    /// Per triangle, parallel to [`Mesh::triangles`], its corners' indices into
+    /// [`Mesh::colors`] or `[NO_COLOR; 3]`; empty when no triangle has colours.
+    pub color_corners: Vec<[u32; 3]>,
     /// Per triangle, parallel to [`Mesh::triangles`], the object it belongs to (the index
     /// of its scene file's `[[objects]]` entry, or of a bare glTF file's node); empty in
     /// a mesh built in code, whose triangles all belong to object 0.
@@ -87,6 +101,17 @@ impl Mesh {
     /// The object triangle `i` belongs to ([`Mesh::objects`]).
     pub fn object(&self, i: usize) -> u32 {
         self.objects.get(i).copied().unwrap_or(0)
+    }
+
+    /// The second-set texture coordinate indices of triangle `i`: `[NO_UV; 3]` where it
+    /// has none.
+    pub fn uv1_indices(&self, i: usize) -> [u32; 3] {
+        self.uv1_corners.get(i).copied().unwrap_or([NO_UV; 3])
+    }
+
+    /// The colour indices of triangle `i`: `[NO_COLOR; 3]` where it has none.
+    pub fn color_indices(&self, i: usize) -> [u32; 3] {
+        self.color_corners.get(i).copied().unwrap_or([NO_COLOR; 3])
     }
 
     /// The tangent indices of triangle `i`: `[NO_TANGENT; 3]` where it has none.

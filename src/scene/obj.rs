@@ -477,6 +477,7 @@ pub fn map_mtl(m: &MtlMaterial, dir: &Path, textures: &mut Vec<TextureRef>) -> M
             transform: UvTransform::scale(map.scale[0], map.scale[1]),
             wrap: [if map.clamp { Wrap::CLAMP } else { Wrap::REPEAT }; 2],
             optional: true,
+            uv_set: 0,
         });
         textures.len() as u32 - 1
     };

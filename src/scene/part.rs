@@ -18,6 +18,13 @@ pub struct MeshPart {
     /// Every texture coordinate the part defines, v running down the image from its top
     /// edge (an OBJ `vt u v` is (u, −v): OBJ runs v up from the bottom edge).
     pub texcoords: Vec<Vec2>,
+    /// A second set of texture coordinates (glTF `TEXCOORD_1`), one per entry of
+    /// `positions` (glTF corners index one vertex table), for textures that name that set;
+    /// empty when the part has none.
+    pub texcoords1: Vec<Vec2>,
+    /// Vertex colours (glTF `COLOR_0`), linear RGBA, one per entry of `positions`: they
+    /// multiply the base colour and its alpha; empty when the part has none.
+    pub colors: Vec<Vec4>,
     /// Tangents (glTF `TANGENT`): xyz the direction of increasing u, w (±1) the handedness
     /// of the bitangent, `cross(normal, tangent.xyz) * w`.
     pub tangents: Vec<Vec4>,

@@ -3,7 +3,7 @@
 //! `bevy_mikktspace` crate: a safe port that gives the reference implementation's bits.
 
 use super::material::Material;
-use super::{Mesh, NO_NORMAL, NO_TANGENT, NO_TEXTURE, NO_UV};
+use super::{Mesh, NO_NORMAL, NO_TANGENT, NO_TEXTURE, NO_UV, Texture};
 use bevy_mikktspace::{Geometry, TangentSpace, generate_tangents};
 use glam::{Vec3, Vec4};
 
@@ -14,6 +14,8 @@ use glam::{Vec3, Vec4};
 struct Faces<'a> {
     mesh: &'a Mesh,
     faces: Vec<u32>,
+    /// Per face, its corners' texture coordinates in the set its normal map reads.
+    uvs: Vec<[u32; 3]>,
     /// Per face corner: the tangent found, if any.
     out: Vec<Option<Vec4>>,
 }
@@ -50,8 +52,7 @@ impl Geometry for Faces<'_> {
     }
 
     fn tex_coord(&self, face: usize, vert: usize) -> [f32; 2] {
-        let (t, k) = self.corner(face, vert);
-        let uv = self.mesh.texcoords[self.mesh.triangles[t].t[k] as usize];
+        let uv = self.mesh.texcoords[self.uvs[face][vert] as usize];
         [uv.x, -uv.y]
     }
 
@@ -63,19 +64,28 @@ impl Geometry for Faces<'_> {
 }
 
 /// Gives MikkTSpace tangents to every triangle whose material has a normal map and whose
-/// file gave none. Returns how many such triangles got none (MikkTSpace finds no tangent
+/// file gave none, from the texture coordinate set the map reads (`textures`, the texture
+/// records, say which). Returns how many such triangles got none (MikkTSpace finds no tangent
 /// for a triangle whose texture coordinates collapse and which has no neighbour to borrow
 /// one from); their normal maps are not applied.
-pub fn generate_missing(mesh: &mut Mesh, materials: &[Material]) -> usize {
-    let faces: Vec<u32> = (0..mesh.triangles.len())
-        .filter(|&i| {
-            let t = &mesh.triangles[i];
-            materials[t.material as usize].normal_texture != NO_TEXTURE
-                && t.t[0] != NO_UV
-                && mesh.tangent_indices(i)[0] == NO_TANGENT
-        })
-        .map(|i| i as u32)
-        .collect();
+pub fn generate_missing(mesh: &mut Mesh, materials: &[Material], textures: &[Texture]) -> usize {
+    let mut faces = Vec::new();
+    let mut uvs = Vec::new();
+    for (i, t) in mesh.triangles.iter().enumerate() {
+        let map = materials[t.material as usize].normal_texture;
+        if map == NO_TEXTURE || mesh.tangent_indices(i)[0] != NO_TANGENT {
+            continue;
+        }
+        let corners = if textures[map as usize].uv_set == 1 {
+            mesh.uv1_indices(i)
+        } else {
+            t.t
+        };
+        if corners[0] != NO_UV {
+            faces.push(i as u32);
+            uvs.push(corners);
+        }
+    }
     if faces.is_empty() {
         return 0;
     }
@@ -83,6 +93,7 @@ pub fn generate_missing(mesh: &mut Mesh, materials: &[Material]) -> usize {
         mesh,
         out: vec![None; 3 * faces.len()],
         faces,
+        uvs,
     };
     // The crate's error type has no values yet; a corner it leaves without a tangent is
     // counted below either way.

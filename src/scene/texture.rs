@@ -67,10 +67,11 @@ impl Wrap {
     }
 }
 
-/// One texture as a material slot reads it (48 bytes): an image in the texel table, how
+/// One texture as a material slot reads it (64 bytes): an image in the texel table, how
 /// its texels decode, the affine map applied to texture coordinates before the lookup
 /// (`uv_matrix · uv + uv_offset`: a tiling scale, and glTF's KHR_texture_transform), for
-/// a scalar parameter the channel it reads, and the wrap modes along u and v.
+/// a scalar parameter the channel it reads, the wrap modes along u and v, and the
+/// texture coordinate set it reads.
 /// mirror: shaders/types.wgsl `Texture`
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
@@ -87,6 +88,10 @@ pub struct Texture {
     pub channel: u32,
     /// [`Wrap`] codes packed by [`Wrap::pack`].
     pub wrap: u32,
+    /// The texture coordinate set a surface lookup reads: 0, or 1 for glTF's
+    /// `TEXCOORD_1` (the triangles' second set).
+    pub uv_set: u32,
+    pub _pad: [u32; 3],
 }
 
 /// An affine map of texture coordinates, as scene files and glTF's KHR_texture_transform
@@ -203,8 +208,9 @@ enum SourceKey {
 }
 
 /// A texture a material asks for before its image is read: the image, its use, its UV
-/// transform, its wrap modes along u and v, and whether a missing file falls back to the
-/// parameter's constant factor (MTL and glTF files) or is an error (scene files).
+/// transform, its wrap modes along u and v, whether a missing file falls back to the
+/// parameter's constant factor (MTL and glTF files) or is an error (scene files), and
+/// the texture coordinate set it reads ([`Texture::uv_set`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct TextureRef {
     pub source: TextureSource,
@@ -212,6 +218,7 @@ pub struct TextureRef {
     pub transform: UvTransform,
     pub wrap: [Wrap; 2],
     pub optional: bool,
+    pub uv_set: u32,
 }
 
 impl TextureRef {
@@ -225,6 +232,7 @@ impl TextureRef {
             transform: UvTransform::scale(1.0, 1.0),
             wrap: [Wrap::REPEAT, Wrap::CLAMP],
             optional: false,
+            uv_set: 0,
         }
     }
 }
@@ -291,6 +299,8 @@ impl Textures {
                 Usage::Scalar { channel } => channel,
             },
             wrap: Wrap::pack(r.wrap[0], r.wrap[1]),
+            uv_set: r.uv_set,
+            _pad: [0; 3],
         };
         if let Some(i) = self.records.iter().position(|t| *t == record) {
             return Ok(i as u32);

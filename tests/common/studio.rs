@@ -27,8 +27,14 @@ pub fn without_ground(mut scene: Scene) -> Scene {
     assert_eq!(keep.iter().filter(|k| !**k).count(), 2);
     assert!(!keep[keep.len() - 1] && !keep[keep.len() - 2]);
     mesh.triangles.truncate(keep.len() - 2);
-    if mesh.tangent_corners.len() == keep.len() {
-        mesh.tangent_corners.truncate(keep.len() - 2);
+    for corners in [
+        &mut mesh.tangent_corners,
+        &mut mesh.uv1_corners,
+        &mut mesh.color_corners,
+    ] {
+        if corners.len() == keep.len() {
+            corners.truncate(keep.len() - 2);
+        }
     }
     if mesh.objects.len() == keep.len() {
         mesh.objects.truncate(keep.len() - 2);

@@ -3,7 +3,9 @@ sees in each: `tests/data/gltf/corpus/NAME.glb` and `NAME.expected.json`.
 
 Run with Blender 5 as a Python module (`pip install bpy==5.0.0`, Python 3.11):
 
-    python tools/gltf_corpus/blender_corpus.py tests/data/gltf/corpus
+    python tools/gltf_corpus/blender_corpus.py tests/data/gltf/corpus [NAME...]
+
+With NAMEs (`vertex_colors`, `second_uv_map`, ...; see FILES) only those files are written.
 
 Each file is exported, then imported into an empty scene, and the importer's evaluated
 meshes (modifiers, armatures and shape keys applied), world-space triangles in glTF's frame
@@ -213,16 +215,119 @@ def animated(path):
     )
 
 
+# Face colours of `vertex_colors`, linear RGBA, one per quad of its 2 x 2 grid.
+FACE_COLORS = [
+    (0.8, 0.2, 0.1, 1.0),
+    (0.1, 0.7, 0.3, 1.0),
+    (0.2, 0.3, 0.9, 1.0),
+    (0.5, 0.5, 0.5, 1.0),
+]
+
+
+def lambertian(material, base_color):
+    """`material`'s Principled BSDF as glTF's exporter reads it: `base_color`, not metallic,
+    fully rough, with no specular layer (KHR_materials_specular's factor 0)."""
+    bsdf = material.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Base Color"].default_value = base_color
+    bsdf.inputs["Metallic"].default_value = 0.0
+    bsdf.inputs["Roughness"].default_value = 1.0
+    bsdf.inputs["Specular IOR Level"].default_value = 0.0
+    return bsdf
+
+
+def vertex_colors(path, **options):
+    """A 2 x 2 m plane of 2 x 2 quads, each quad's corners one colour of FACE_COLORS (a
+    float colour attribute on face corners), with a base colour factor: COLOR_0."""
+    empty_scene()
+    bpy.ops.mesh.primitive_grid_add(x_subdivisions=2, y_subdivisions=2, size=2.0)
+    plane = bpy.context.active_object
+    mesh = plane.data
+    colors = mesh.color_attributes.new("Col", "FLOAT_COLOR", "CORNER")
+    mesh.color_attributes.active_color = colors
+    for face in mesh.polygons:
+        for corner in face.loop_indices:
+            colors.data[corner].color = FACE_COLORS[face.index]
+    material = bpy.data.materials.new("tinted")
+    material.use_nodes = True
+    lambertian(material, (0.9, 0.8, 0.6, 1.0))
+    mesh.materials.append(material)
+    export(path, export_vertex_color="ACTIVE", **options)
+
+
+def vertex_colors_draco(path):
+    """`vertex_colors` compressed with Blender's Draco library, colours included."""
+    vertex_colors(
+        path,
+        export_draco_mesh_compression_enable=True,
+        export_draco_position_quantization=14,
+        export_draco_color_quantization=10,
+    )
+
+
+# The texels of `second_uv_map`'s image, sRGB bytes: each 4 x 4 quadrant of the 8 x 8 image
+# one colour, top-left, top-right, bottom-left, bottom-right as the image shows them.
+QUADRANTS = [(200, 40, 40), (40, 200, 40), (40, 40, 200), (220, 220, 60)]
+
+
+def second_uv_map(path):
+    """A 2 x 2 m plane with two UV maps: the first spans the image, the second is it
+    mirrored along u. Its base colour texture (an 8 x 8 image of four solid quadrants)
+    reads the second through a UV Map node, which the exporter writes as texCoord 1."""
+    empty_scene()
+    bpy.ops.mesh.primitive_plane_add(size=2.0)
+    plane = bpy.context.active_object
+    mesh = plane.data
+    first = mesh.uv_layers[0]
+    second = mesh.uv_layers.new(name="Mirrored")
+    for k, loop in enumerate(first.data):
+        u, v = loop.uv
+        second.data[k].uv = (1.0 - u, v)
+    image = bpy.data.images.new("quadrants", 8, 8, alpha=False)
+    pixels = []
+    # Blender's rows run up from the image's bottom edge.
+    for y in range(8):
+        for x in range(8):
+            top, right = y >= 4, x >= 4
+            q = (0 if top else 2) + (1 if right else 0)
+            pixels += [c / 255.0 for c in QUADRANTS[q]] + [1.0]
+    image.pixels = pixels
+    image.file_format = "PNG"
+    image.pack()
+    material = bpy.data.materials.new("second set")
+    material.use_nodes = True
+    nodes, links = material.node_tree.nodes, material.node_tree.links
+    bsdf = lambertian(material, (1.0, 1.0, 1.0, 1.0))
+    texture = nodes.new("ShaderNodeTexImage")
+    texture.image = image
+    texture.interpolation = "Closest"
+    uv_map = nodes.new("ShaderNodeUVMap")
+    uv_map.uv_map = "Mirrored"
+    links.new(uv_map.outputs["UV"], texture.inputs["Vector"])
+    links.new(texture.outputs["Color"], bsdf.inputs["Base Color"])
+    mesh.materials.append(material)
+    export(path)
+
+
+# Every file, by name; `python blender_corpus.py OUT NAME...` writes only those named.
+FILES = [
+    ("skinned_arm", skinned_arm),
+    ("morph_box", morph_box),
+    ("crowd", crowd),
+    ("draco_monkey", draco),
+    ("animated_cube", animated),
+    ("vertex_colors", vertex_colors),
+    ("vertex_colors_draco", vertex_colors_draco),
+    ("second_uv_map", second_uv_map),
+]
+
+
 def main():
     out = Path(sys.argv[1])
     out.mkdir(parents=True, exist_ok=True)
-    for name, make in [
-        ("skinned_arm", skinned_arm),
-        ("morph_box", morph_box),
-        ("crowd", crowd),
-        ("draco_monkey", draco),
-        ("animated_cube", animated),
-    ]:
+    only = sys.argv[2:]
+    for name, make in FILES:
+        if only and name not in only:
+            continue
         glb = out / f"{name}.glb"
         make(glb)
         n = write_expected(glb, out / f"{name}.expected.json")

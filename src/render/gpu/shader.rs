@@ -18,8 +18,8 @@ use crate::render::integrator::RR_DEPTH;
 use crate::render::rng;
 use crate::render::sampling::{ONE_MINUS_EPSILON, UNIFORM_SPHERE_PDF};
 use crate::render::tables::{
-    LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_POINT, LIGHT_SPOT, RenderScene, SKY_EMITTER,
-    TRI_SMOOTH, TRI_TANGENT, TRI_UV,
+    LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_POINT, LIGHT_SPOT, RenderScene, SKY_EMITTER, TRI_COLOR,
+    TRI_SMOOTH, TRI_TANGENT, TRI_UV, TRI_UV1,
 };
 use crate::scene::material::{MAT_ALPHA_MASK, MAT_THIN_WALLED};
 use crate::scene::{MaterialKind, NO_TEXTURE, TextureFormat, Wrap};
@@ -61,6 +61,8 @@ pub fn shared_constants() -> Vec<(String, Value)> {
         ("TRI_SMOOTH", U32(TRI_SMOOTH)),
         ("TRI_UV", U32(TRI_UV)),
         ("TRI_TANGENT", U32(TRI_TANGENT)),
+        ("TRI_COLOR", U32(TRI_COLOR)),
+        ("TRI_UV1", U32(TRI_UV1)),
         ("LIGHT_POINT", U32(LIGHT_POINT)),
         ("LIGHT_SPOT", U32(LIGHT_SPOT)),
         ("LIGHT_DIRECTIONAL", U32(LIGHT_DIRECTIONAL)),
@@ -115,16 +117,18 @@ pub fn wgsl_constants() -> String {
         .collect()
 }
 
-/// Every host-shared struct, described from its Rust definition: the tables' elements and
-/// the parameter block. `tests/layout.rs` checks each against its WGSL twin.
+/// Every host-shared struct, described from its Rust definition, once each: the tables'
+/// elements and the parameter block. `tests/layout.rs` checks each against its WGSL twin.
 pub fn host_structs() -> Vec<StructLayout> {
-    let mut out: Vec<StructLayout> = TABLES
-        .iter()
-        .filter_map(|t| match (t.element)() {
-            Element::Struct(s) => Some(s),
-            Element::U32 | Element::F32 => None,
-        })
-        .collect();
+    let mut out: Vec<StructLayout> = Vec::new();
+    for t in TABLES {
+        // Two tables may share a struct (both texture coordinate sets are `TriUvs`).
+        if let Element::Struct(s) = (t.element)()
+            && !out.iter().any(|o| o.name == s.name)
+        {
+            out.push(s);
+        }
+    }
     out.push(Params::layout());
     out
 }

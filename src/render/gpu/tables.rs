@@ -10,7 +10,9 @@ use super::layout::{Member, StructLayout, struct_layout};
 use super::params::Params;
 use crate::bvh::BvhNode;
 use crate::geometry::TriVerts;
-use crate::render::tables::{CausticTarget, Light, RenderScene, TriShading, TriTangents, TriUvs};
+use crate::render::tables::{
+    CausticTarget, Light, RenderScene, TriColors, TriShading, TriTangents, TriUvs,
+};
 use crate::scene::{Material, Texture};
 
 /// Texels per row of the table textures (the shaders get its log2 from `shader::shared_constants`).
@@ -129,6 +131,27 @@ pub const TABLES: &[Table] = &[
         bytes: |s| bytemuck::cast_slice(&s.tri_tangents),
     },
     Table {
+        what: "second texture coordinates",
+        texture: "tri_uvs1_tex",
+        loader: "load_tri_uvs1",
+        element: || {
+            Element::Struct(struct_layout!(TriUvs {
+                uv0,
+                uv1,
+                uv2,
+                _pad
+            }))
+        },
+        bytes: |s| bytemuck::cast_slice(&s.tri_uvs1),
+    },
+    Table {
+        what: "vertex colours",
+        texture: "tri_colors_tex",
+        loader: "load_tri_colors",
+        element: || Element::Struct(struct_layout!(TriColors { c0, c1, c2 })),
+        bytes: |s| bytemuck::cast_slice(&s.tri_colors),
+    },
+    Table {
         what: "textures",
         texture: "textures_tex",
         loader: "load_texture",
@@ -142,6 +165,8 @@ pub const TABLES: &[Table] = &[
                 uv_offset,
                 channel,
                 wrap,
+                uv_set,
+                _pad,
             }))
         },
         bytes: |s| bytemuck::cast_slice(&s.textures),

@@ -70,15 +70,30 @@ pub(super) fn tangent(quantized: bool) -> Expect {
     }
 }
 
-pub(super) fn texcoord(quantized: bool) -> Expect {
+/// Texture coordinate set `name` (`TEXCOORD_0`, `TEXCOORD_1`).
+pub(super) fn texcoord(quantized: bool, name: &'static str) -> Expect {
     Expect {
-        name: "TEXCOORD_0",
+        name,
         ty: Type::Vec2,
         components: if quantized {
             QUANTIZED_ANY
         } else {
             &[(C::F32, false), (C::U8, true), (C::U16, true)]
         },
+    }
+}
+
+/// `COLOR_0`: RGB or RGBA (`ty`, the accessor's own type, either one), floats or
+/// normalized unsigned bytes or shorts.
+pub(super) fn color(ty: Type) -> Expect {
+    Expect {
+        name: "COLOR_0",
+        ty: if ty == Type::Vec3 {
+            Type::Vec3
+        } else {
+            Type::Vec4
+        },
+        components: &[(C::F32, false), (C::U8, true), (C::U16, true)],
     }
 }
 

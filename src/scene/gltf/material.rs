@@ -304,12 +304,16 @@ impl<'b, 'a> Materials<'b, 'a> {
             };
             tex_coord = t.tex_coord.unwrap_or(tex_coord);
         }
-        if tex_coord != 0 {
+        // Sets 0 and 1 are read; a texture on another set reads set 0.
+        let uv_set = if tex_coord > 1 {
             doc.warn(
                 at,
-                format!("TEXCOORD_{tex_coord} is not supported; TEXCOORD_0 is used"),
+                format!("TEXCOORD_{tex_coord} is not supported (only TEXCOORD_0 and TEXCOORD_1 are); TEXCOORD_0 is used"),
             );
-        }
+            0
+        } else {
+            tex_coord
+        };
         let (source, source_at) =
             image_of(texture, info.index).map_err(|(at, m)| doc.error(at, m))?;
         let Some(source) = self.buffers.image(source, &source_at)? else {
@@ -321,6 +325,7 @@ impl<'b, 'a> Materials<'b, 'a> {
             transform,
             wrap,
             optional: false,
+            uv_set,
         });
         Ok(self.textures.len() as u32 - 1)
     }

@@ -213,6 +213,8 @@ fn clone_part(part: &MeshPart) -> MeshPart {
         positions: part.positions.clone(),
         normals: part.normals.clone(),
         texcoords: part.texcoords.clone(),
+        texcoords1: part.texcoords1.clone(),
+        colors: part.colors.clone(),
         tangents: part.tangents.clone(),
         triangles: part.triangles.clone(),
         ..MeshPart::default()

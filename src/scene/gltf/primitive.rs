@@ -1,7 +1,7 @@
-//! Mesh primitives: their attributes (POSITION, NORMAL, TEXCOORD_0, TANGENT; morph targets
-//! and skin attributes are `deform`'s) and their
-//! topology (triangle lists, strips and fans, indexed or not) as a [`MeshPart`] whose
-//! corners all index one vertex table.
+//! Mesh primitives: their attributes (POSITION, NORMAL, TEXCOORD_0 and _1, TANGENT,
+//! COLOR_0; morph targets and skin attributes are `deform`'s) and their topology (triangle
+//! lists, strips and fans, indexed or not) as a [`MeshPart`] whose corners all index one
+//! vertex table.
 
 use super::accessor::{self, read_indices};
 use super::buffers::Buffers;
@@ -10,6 +10,7 @@ use super::draco::Source;
 use crate::scene::part::{MeshPart, PartTriangle};
 use crate::scene::{NO_NORMAL, NO_TANGENT, NO_UV, SceneError};
 use glam::{Vec2, Vec3, Vec4};
+use gltf::json::accessor::Type;
 use gltf::json::mesh::{Mode, Primitive, Semantic};
 use gltf::json::validation::Checked;
 
@@ -96,26 +97,29 @@ pub(super) fn read_primitive(
             .collect();
         same_count("NORMAL", index, part.normals.len())?;
     }
-    if let Some(index) = attribute(Semantic::TexCoords(0)) {
-        let at_t = attribute_at("TEXCOORD_0");
+    // glTF's (0, 0) is the image's top-left corner, as meshtrace's.
+    let texcoords = |set: u32, name: &'static str| -> Result<Vec<Vec2>, SceneError> {
+        let Some(index) = attribute(Semantic::TexCoords(set)) else {
+            return Ok(Vec::new());
+        };
         let values = source
-            .floats(Semantic::TexCoords(0), &accessor::texcoord(quantized))?
+            .floats(
+                Semantic::TexCoords(set),
+                &accessor::texcoord(quantized, name),
+            )?
             .unwrap_or_default();
-        // glTF's (0, 0) is the image's top-left corner, as meshtrace's.
-        part.texcoords = values.chunks_exact(2).map(Vec2::from_slice).collect();
-        same_count("TEXCOORD_0", index, part.texcoords.len())?;
-        if let Some((i, v)) = part
-            .texcoords
-            .iter()
-            .enumerate()
-            .find(|(_, v)| !v.is_finite())
-        {
+        let uvs: Vec<Vec2> = values.chunks_exact(2).map(Vec2::from_slice).collect();
+        same_count(name, index, uvs.len())?;
+        if let Some((i, v)) = uvs.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             return Err(doc.error(
-                at_t,
+                attribute_at(name),
                 format!("accessor {index}: texture coordinate {i} is not finite: {v}"),
             ));
         }
-    }
+        Ok(uvs)
+    };
+    part.texcoords = texcoords(0, "TEXCOORD_0")?;
+    part.texcoords1 = texcoords(1, "TEXCOORD_1")?;
     if let Some(index) = attribute(Semantic::Tangents) {
         let values = source
             .floats(Semantic::Tangents, &accessor::tangent(quantized))?
@@ -127,8 +131,32 @@ pub(super) fn read_primitive(
             .collect();
         same_count("TANGENT", index, part.tangents.len())?;
     }
-    if attribute(Semantic::Colors(0)).is_some() {
-        doc.warn(&at, "vertex colours (COLOR_0) are ignored");
+    if let Some(index) = attribute(Semantic::Colors(0)) {
+        // The accessor's own type says RGB or RGBA; another type fails the check.
+        let ty = doc
+            .root
+            .accessors
+            .get(index)
+            .and_then(|a| match a.type_ {
+                Checked::Valid(ty) => Some(ty),
+                Checked::Invalid => None,
+            })
+            .unwrap_or(Type::Vec4);
+        let expect = accessor::color(ty);
+        let values = source
+            .floats(Semantic::Colors(0), &expect)?
+            .unwrap_or_default();
+        let k = expect.ty.multiplicity();
+        // The specification bounds colours to [0, 1]; a component that is not finite
+        // becomes 1, leaving the base colour as it is.
+        part.colors = values
+            .chunks_exact(k)
+            .map(|c| {
+                let rgba = Vec4::new(c[0], c[1], c[2], if k == 4 { c[3] } else { 1.0 });
+                Vec4::select(rgba.is_finite_mask(), rgba, Vec4::ONE).clamp(Vec4::ZERO, Vec4::ONE)
+            })
+            .collect();
+        same_count("COLOR_0", index, part.colors.len())?;
     }
     let deform = Deform::read(&source, primitive, &at, n, quantized)?;
 
