@@ -702,6 +702,7 @@ fn decode_ktx2(bytes: &[u8]) -> Result<(Kind, Decoded), String> {
             "the KTX2 image is {width}×{height} texels, more than meshtrace's limit of 2^30"
         ));
     }
+    check_ktx2_inflated_size(bytes, width, height)?;
     // Transcoded, then packed, at 4 bytes a texel each.
     check_memory(width, height, texels * 8)?;
     let rgba = ktx2
@@ -722,6 +723,42 @@ fn decode_ktx2(bytes: &[u8]) -> Result<(Kind, Decoded), String> {
         format!("the KTX2 transcoder gave {got} bytes for a {width}×{height} image")
     })?;
     Ok((Kind::Ldr, Decoded::Ldr(image)))
+}
+
+/// KTX2's supercompressionScheme for Zstandard.
+const KTX2_ZSTD: u32 = 2;
+
+/// Refuses a Zstandard-supercompressed KTX2 whose level 0 claims to inflate to other than
+/// the UASTC blocks of a `width`×`height` image (16 bytes a 4×4 block): the transcoder
+/// allocates what the claim says before it inflates, so a forged header could ask for any
+/// amount of memory. The header is 48 bytes, its index 32 more; level 0's entry follows:
+/// byteOffset, byteLength and uncompressedByteLength, each a u64 (KTX 2.0 §3.9).
+fn check_ktx2_inflated_size(bytes: &[u8], width: u32, height: u32) -> Result<(), String> {
+    let u32_at = |at: usize| {
+        bytes
+            .get(at..at + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    let u64_at = |at: usize| {
+        bytes
+            .get(at..at + 8)
+            .map(|b| u64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]))
+    };
+    if u32_at(44) != Some(KTX2_ZSTD) {
+        return Ok(());
+    }
+    let Some(claimed) = u64_at(80 + 16) else {
+        return Err("the file is truncated, or an offset in it is out of range".into());
+    };
+    let blocks = u64::from(width.div_ceil(4)) * u64::from(height.div_ceil(4));
+    if claimed != blocks * 16 {
+        return Err(format!(
+            "its level 0 claims to inflate to {claimed} bytes, but a {width}×{height} UASTC \
+             image is {} bytes",
+            blocks * 16
+        ));
+    }
+    Ok(())
 }
 
 /// What a `basisu` error means, in words (the crate gives its errors no `Display`).
