@@ -22,8 +22,8 @@ pub(super) struct Expect {
 }
 
 /// Floats, and with KHR_mesh_quantization also these integer forms.
-const FLOAT: &[(C, bool)] = &[(C::F32, false)];
-const QUANTIZED_ANY: &[(C, bool)] = &[
+pub(super) const FLOAT: &[(C, bool)] = &[(C::F32, false)];
+pub(super) const QUANTIZED_ANY: &[(C, bool)] = &[
     (C::F32, false),
     (C::I8, false),
     (C::I8, true),
@@ -34,7 +34,8 @@ const QUANTIZED_ANY: &[(C, bool)] = &[
     (C::U16, false),
     (C::U16, true),
 ];
-const QUANTIZED_SIGNED_NORMALIZED: &[(C, bool)] = &[(C::F32, false), (C::I8, true), (C::I16, true)];
+pub(super) const QUANTIZED_SIGNED_NORMALIZED: &[(C, bool)] =
+    &[(C::F32, false), (C::I8, true), (C::I16, true)];
 
 /// The accessors a primitive reads, as glTF 2.0 allows them and, with
 /// `quantized` (KHR_mesh_quantization), as that extension widens them.

@@ -1,12 +1,12 @@
 //! `EXT_mesh_gpu_instancing`: a node that draws its mesh once per instance, each placed by
 //! its own TRANSLATION, ROTATION and SCALE after the node's transform.
 
-use super::accessor::{Expect, read_floats};
+use super::accessor::{Expect, FLOAT, QUANTIZED_ANY, QUANTIZED_SIGNED_NORMALIZED, read_floats};
 use super::buffers::Buffers;
 use crate::scene::SceneError;
 use glam::{Mat4, Quat, Vec3};
 use gltf::json;
-use gltf::json::accessor::{ComponentType as C, Type};
+use gltf::json::accessor::Type;
 
 /// The extension's name, as a node's `extensions` key.
 pub(super) const EXTENSION: &str = "EXT_mesh_gpu_instancing";
@@ -24,19 +24,6 @@ struct Attributes {
 struct Instancing {
     attributes: Attributes,
 }
-
-/// Translations and scales: floats, or with KHR_mesh_quantization any integer form.
-const VEC3_QUANTIZED: &[(C, bool)] = &[
-    (C::F32, false),
-    (C::I8, false),
-    (C::I8, true),
-    (C::U8, false),
-    (C::U8, true),
-    (C::I16, false),
-    (C::I16, true),
-    (C::U16, false),
-    (C::U16, true),
-];
 
 /// The instances' local matrices of node `node` (at JSON path `at`), or `None` where the
 /// node does not use the extension.
@@ -64,16 +51,13 @@ pub(super) fn instances(
     let vec3 = |name: &'static str| Expect {
         name,
         ty: Type::Vec3,
-        components: if quantized {
-            VEC3_QUANTIZED
-        } else {
-            &[(C::F32, false)]
-        },
+        // Translations and scales: floats, or with KHR_mesh_quantization any integer form.
+        components: if quantized { QUANTIZED_ANY } else { FLOAT },
     };
     let rotation = Expect {
         name: "ROTATION",
         ty: Type::Vec4,
-        components: &[(C::F32, false), (C::I8, true), (C::I16, true)],
+        components: QUANTIZED_SIGNED_NORMALIZED,
     };
     let read = |index: Option<usize>, name: &str, expect: &Expect, width: usize| {
         index
