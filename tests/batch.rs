@@ -368,3 +368,37 @@ fn scene_views_orbit_the_point_the_camera_looks_at() {
         cam.position
     );
 }
+
+/// An input whose camera is orthographic (here a glTF file's) is refused on its own
+/// `error:` line, since transforms.json describes pinhole cameras; the other inputs render,
+/// and the summary counts the failure.
+#[test]
+fn an_orthographic_input_is_reported_and_the_rest_render() {
+    let dir = TempDir::new("batch-ortho");
+    models(&dir);
+    let mut g = common::gltf::Asset::new();
+    g.triangle(serde_json::json!({}));
+    let camera = g.push(
+        "cameras",
+        serde_json::json!({"type": "orthographic", "orthographic": {"xmag": 1.0, "ymag": 1.0, "znear": 0.1, "zfar": 10.0}}),
+    );
+    let node = g.node(serde_json::json!({"camera": camera, "translation": [0.0, 0.0, 3.0]}));
+    g.scene(&[0, node]);
+    std::fs::write(dir.path().join("models/flat.gltf"), g.embedded()).unwrap();
+    let manifest = MANIFEST.replace("models/*.obj", "models/*.*");
+    std::fs::write(dir.path().join("m.toml"), manifest).unwrap();
+    let (code, stderr) = run(&dir, &["batch", "m.toml", "--device", "cpu"]);
+    assert_eq!(code, 1, "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error:")).collect();
+    assert_eq!(errors.len(), 2, "{stderr}");
+    assert!(
+        errors[0].contains("flat.gltf: its camera is orthographic"),
+        "{stderr}"
+    );
+    assert!(errors[1].contains("1 of 16 inputs failed"), "{stderr}");
+    assert!(
+        stderr.contains("12 rendered, 0 already complete, 1 failed"),
+        "{stderr}"
+    );
+}

@@ -289,6 +289,12 @@ fn run_input(
     })?;
     let settings = prepared.job.settings;
     let own = prepared.scene.camera.clone();
+    if own.is_orthographic() {
+        bail!(
+            "its camera is orthographic, which transforms.json's pinhole intrinsics cannot \
+             describe; give it a perspective camera, or render it with `meshtrace render`"
+        );
+    }
     let framed = prepared.framed;
     let mut views = prepared.views(backend).map_err(pipeline_error)?;
     views.job_mut().cancel = Some(cancel.clone());
