@@ -171,6 +171,17 @@ pub struct Film {
     pub saved_aovs: u32,
 }
 
+/// Bits per channel of a PNG output (the other formats have their own: 8 for JPEG and BMP,
+/// floats for HDR and EXR).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BitDepth {
+    #[default]
+    Eight,
+    /// 16-bit sRGB-encoded channels (and 16-bit alpha), for pipelines that keep more than
+    /// 8 bits of an image's gradients.
+    Sixteen,
+}
+
 /// The image formats meshtrace writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {
@@ -219,6 +230,10 @@ pub enum FilmError {
         "{path}: a transparent render is written as a PNG (its alpha channel is the coverage); give a .png output"
     )]
     TransparentNotPng { path: String },
+    #[error(
+        "{path}: 16-bit output is a PNG's (EXR and HDR hold floats; JPEG and BMP 8 bits); give a .png output"
+    )]
+    DeepNotPng { path: String },
 }
 
 /// The EXR header attribute that records an image's samples per pixel.
@@ -410,6 +425,7 @@ impl Film {
                 path: path.display().to_string(),
             });
         }
+        Self::check_depth(path, format, BitDepth::Eight)?;
         let tmp = temp_sibling(path);
         std::fs::File::create(&tmp).map_err(|e| FilmError::Io {
             path: path.display().to_string(),
@@ -429,24 +445,40 @@ impl Film {
         path.with_file_name(format!("{stem}.aovs.exr"))
     }
 
+    /// Refuses a `depth` that `path`'s `format` cannot hold: 16 bits are a PNG's.
+    pub fn check_depth(path: &Path, format: Format, depth: BitDepth) -> Result<(), FilmError> {
+        if depth == BitDepth::Sixteen && format != Format::Png {
+            return Err(FilmError::DeepNotPng {
+                path: path.display().to_string(),
+            });
+        }
+        Ok(())
+    }
+
     /// Writes the mean radiance in the format the extension names, with the AOVs the film
     /// holds: extra channels of an EXR, or else [`Film::aov_path`] beside the image. A
-    /// transparent film is written as an RGBA PNG.
+    /// transparent film is written as an RGBA PNG. PNGs have 8 bits a channel.
     pub fn save(&self, path: &Path) -> Result<(), FilmError> {
+        self.save_as(path, BitDepth::Eight)
+    }
+
+    /// [`Film::save`], with a PNG's channels of `depth` bits.
+    pub fn save_as(&self, path: &Path, depth: BitDepth) -> Result<(), FilmError> {
         let format = Format::from_path(path)?;
         if self.transparent && format != Format::Png {
             return Err(FilmError::TransparentNotPng {
                 path: path.display().to_string(),
             });
         }
+        Self::check_depth(path, format, depth)?;
         // An EXR holds the AOVs itself; another format's go beside it.
         if format == Format::Exr || self.saved_aovs == 0 {
-            return write_atomically(path, |tmp| self.encode(tmp, format));
+            return write_atomically(path, |tmp| self.encode(tmp, format, depth));
         }
         write_atomically(&Self::aov_path(path), |tmp| {
             self.encode_exr(tmp, false, None)
         })?;
-        write_atomically(path, |tmp| self.encode(tmp, format))
+        write_atomically(path, |tmp| self.encode(tmp, format, depth))
     }
 
     /// One single-part EXR: the mean radiance as `R`, `G`, `B` if `radiance`, then every
@@ -523,7 +555,7 @@ impl Film {
 
     /// The image in `format`: an EXR through [`Film::encode_exr`] (with the AOVs and the
     /// sample count), the others through the `image` crate.
-    fn encode(&self, tmp: &Path, format: Format) -> Result<(), String> {
+    fn encode(&self, tmp: &Path, format: Format, depth: BitDepth) -> Result<(), String> {
         let (w, h) = (self.width, self.height);
         let image_format = match format {
             Format::Exr => return self.encode_exr(tmp, true, None),
@@ -541,10 +573,26 @@ impl Film {
                 let img = image::Rgb32FImage::from_raw(w, h, data).ok_or("film size mismatch")?;
                 image::DynamicImage::ImageRgb32F(img).write_to(&mut out, image_format)
             }
+            Format::Png if self.transparent && depth == BitDepth::Sixteen => {
+                let data = self.straight_rgba(&mean, linear_to_srgb16)?;
+                let img: image::ImageBuffer<image::Rgba<u16>, _> =
+                    image::ImageBuffer::from_raw(w, h, data).ok_or("film size mismatch")?;
+                image::DynamicImage::ImageRgba16(img).write_to(&mut out, image_format)
+            }
             Format::Png if self.transparent => {
-                let img = image::RgbaImage::from_raw(w, h, self.straight_rgba8(&mean)?)
-                    .ok_or("film size mismatch")?;
+                let img =
+                    image::RgbaImage::from_raw(w, h, self.straight_rgba(&mean, linear_to_srgb8)?)
+                        .ok_or("film size mismatch")?;
                 image::DynamicImage::ImageRgba8(img).write_to(&mut out, image_format)
+            }
+            Format::Png if depth == BitDepth::Sixteen => {
+                let data: Vec<u16> = mean
+                    .iter()
+                    .flat_map(|c| c.to_array().map(linear_to_srgb16))
+                    .collect();
+                let img: image::ImageBuffer<image::Rgb<u16>, _> =
+                    image::ImageBuffer::from_raw(w, h, data).ok_or("film size mismatch")?;
+                image::DynamicImage::ImageRgb16(img).write_to(&mut out, image_format)
             }
             Format::Png | Format::Jpeg | Format::Bmp => {
                 let data: Vec<u8> = mean
@@ -559,9 +607,14 @@ impl Film {
         finish_file(out)
     }
 
-    /// A transparent film's 8-bit RGBA: alpha the coverage, colour the premultiplied mean
-    /// divided by it (PNG stores straight alpha), sRGB-encoded; 0 where nothing was hit.
-    fn straight_rgba8(&self, mean: &[Vec3]) -> Result<Vec<u8>, String> {
+    /// A transparent film's RGBA, each channel encoded by `encode` (8 or 16 bits): alpha
+    /// the coverage, colour the premultiplied mean divided by it (PNG stores straight
+    /// alpha), sRGB-encoded; 0 where nothing was hit.
+    fn straight_rgba<T: Quantum>(
+        &self,
+        mean: &[Vec3],
+        encode: fn(f32) -> T,
+    ) -> Result<Vec<T>, String> {
         let alpha = self
             .channel(Aov::Alpha.name())
             .map(|c| self.channel_values(c))
@@ -572,8 +625,8 @@ impl Film {
             .flat_map(|(&c, a)| {
                 let a = a.map_or(0.0, |a| a[0]);
                 let c = if a > 0.0 { c / a } else { Vec3::ZERO };
-                let [r, g, b] = c.to_array().map(linear_to_srgb8);
-                [r, g, b, (a.clamp(0.0, 1.0) * 255.0 + 0.5) as u8]
+                let [r, g, b] = c.to_array().map(encode);
+                [r, g, b, T::linear(a)]
             })
             .collect())
     }
@@ -697,13 +750,40 @@ fn temp_sibling(path: &Path) -> PathBuf {
 
 /// The sRGB transfer function, clamped and rounded to 8 bits.
 pub fn linear_to_srgb8(x: f32) -> u8 {
+    (srgb(x) * 255.0 + 0.5) as u8
+}
+
+/// The sRGB transfer function, clamped and rounded to 16 bits.
+pub fn linear_to_srgb16(x: f32) -> u16 {
+    (srgb(x) * 65535.0 + 0.5) as u16
+}
+
+/// The sRGB transfer function of `x` clamped to [0, 1] (NaN as 0).
+fn srgb(x: f32) -> f32 {
     let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
-    let s = if x <= 0.0031308 {
+    if x <= 0.0031308 {
         12.92 * x
     } else {
         1.055 * x.powf(1.0 / 2.4) - 0.055
-    };
-    (s * 255.0 + 0.5) as u8
+    }
+}
+
+/// An integer channel of a PNG, 8 or 16 bits.
+trait Quantum: Copy {
+    /// `x` in [0, 1] (clamped) stored linearly, rounded: an alpha channel.
+    fn linear(x: f32) -> Self;
+}
+
+impl Quantum for u8 {
+    fn linear(x: f32) -> Self {
+        (x.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
+    }
+}
+
+impl Quantum for u16 {
+    fn linear(x: f32) -> Self {
+        (x.clamp(0.0, 1.0) * 65535.0 + 0.5) as u16
+    }
 }
 
 /// Inverse of the sRGB transfer function.

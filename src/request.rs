@@ -8,7 +8,7 @@
 //! as the manifest spells it (`max_depth`), for the caller to place (`--max-depth`,
 //! `render.max_depth`).
 
-use crate::film::Aov;
+use crate::film::{Aov, BitDepth};
 use crate::render::backend::{Backend, DeviceChoice};
 use crate::render::gpu::{Accel, GpuError};
 use crate::scene::RenderSettings;
@@ -58,6 +58,8 @@ pub struct RenderRequest {
     pub part: Option<Part>,
     /// Whether to denoise the image with Open Image Denoise (the `denoise` feature).
     pub denoise: Option<bool>,
+    /// Bits per channel of PNG outputs: 8 (the default) or 16.
+    pub bit_depth: Option<u32>,
 }
 
 /// One part of a split render: samples `PartHeader::range(index, count, spp)`.
@@ -114,6 +116,7 @@ impl RenderRequest {
             max_texture_size: r.max_texture_size.or(u.max_texture_size),
             part: r.part.or(u.part),
             denoise: r.denoise.or(u.denoise),
+            bit_depth: r.bit_depth.or(u.bit_depth),
         }
     }
 
@@ -166,6 +169,15 @@ impl RenderRequest {
                 format!("{index}/{count}: K must be below N, and N at least 1"),
             ));
         }
+        if let Some(bits) = self.bit_depth
+            && bits != 8
+            && bits != 16
+        {
+            return Err(RequestError::new(
+                "bit_depth",
+                format!("must be 8 or 16 (bits per channel of a PNG), got {bits}"),
+            ));
+        }
         if self.max_texture_size == Some(0) {
             return Err(RequestError::new(
                 "max_texture_size",
@@ -198,6 +210,14 @@ impl RenderRequest {
 
     pub fn transparent(&self) -> bool {
         self.transparent.unwrap_or(false)
+    }
+
+    /// The bit depth of PNG outputs.
+    pub fn bit_depth(&self) -> BitDepth {
+        match self.bit_depth {
+            Some(16) => BitDepth::Sixteen,
+            _ => BitDepth::Eight,
+        }
     }
 
     pub fn denoise(&self) -> bool {

@@ -428,6 +428,22 @@ material = "white"
         assert!(film.aov_values(Aov::Alpha).is_some());
         let png = dir.join(format!("{device}.png"));
         film.save(&png).unwrap();
+        // The 16-bit PNG has the same pixels to within half an 8-bit step, alpha included.
+        let deep = dir.join(format!("{device}16.png"));
+        film.save_as(&deep, meshtrace::film::BitDepth::Sixteen)
+            .unwrap();
+        let deep = image::open(&deep).unwrap();
+        assert_eq!(deep.color(), image::ColorType::Rgba16);
+        let eight = image::open(&png).unwrap().into_rgba8();
+        for (p, q) in deep.into_rgba16().pixels().zip(eight.pixels()) {
+            for c in 0..4 {
+                let as_eight = p[c] as f64 / 65535.0 * 255.0;
+                assert!(
+                    (as_eight - q[c] as f64).abs() <= 0.5 + 1e-9,
+                    "{device}: {p:?} vs {q:?}"
+                );
+            }
+        }
         let img = image::open(&png).unwrap().into_rgba8();
         for (x, y, p) in img.enumerate_pixels() {
             match x {

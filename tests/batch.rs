@@ -246,6 +246,14 @@ fn bad_manifests_fail_cleanly() {
             &["render.branches", "from 1 to 64"],
         ),
         (
+            "[render]\nbit_depth = 16\n[[jobs]]\nmeshes = \"models/*.obj\"\noutput = \"{stem}.exr\"\n",
+            &["jobs[0].output", "16-bit PNGs"],
+        ),
+        (
+            "[render]\nbit_depth = 10\n[[jobs]]\nmeshes = \"models/*.obj\"\noutput = \"{stem}.png\"\n",
+            &["render.bit_depth", "8 or 16"],
+        ),
+        (
             "[render]\npart = 1\n[[jobs]]\nscene = \"x.toml\"\noutput = \"a.png\"\n",
             &["bad.toml:2", "unknown field `part`"],
         ),

@@ -200,6 +200,16 @@ fn bad_arguments_and_outputs_fail_cleanly() {
         &["render", "-o", "out.png", "--max-texture-size", "0"],
         &["--max-texture-size", "at least 1"],
     );
+    assert_fails(
+        &dir,
+        &["render", "-o", "out.png", "--bit-depth", "12"],
+        &["--bit-depth", "8 or 16"],
+    );
+    assert_fails(
+        &dir,
+        &["render", "-o", "out.exr", "--bit-depth", "16"],
+        &["out.exr", "16-bit output is a PNG's"],
+    );
 }
 
 #[test]

@@ -6,7 +6,8 @@ mod common;
 use common::fs::TempDir;
 use glam::Vec3;
 use meshtrace::film::{
-    Accumulation, Film, FilmError, Format, linear_to_srgb8, read_linear, srgb8_to_linear,
+    Accumulation, BitDepth, Film, FilmError, Format, linear_to_srgb8, linear_to_srgb16,
+    read_linear, srgb8_to_linear,
 };
 use meshtrace::fixed::{fixed_add3, texel_add, to_fixed, to_fixed3};
 use std::path::Path;
@@ -390,4 +391,44 @@ fn srgb_encoding_values() {
     assert_eq!(linear_to_srgb8(1e-3), 3);
     assert!((srgb8_to_linear(188) - 0.5029).abs() < 1e-4);
     assert!((srgb8_to_linear(10) - 10.0 / 255.0 / 12.92).abs() < 1e-9);
+}
+
+/// A 16-bit PNG holds each channel as the sRGB curve rounded to 16 bits: 257 times as many
+/// levels as the 8-bit one, which it agrees with to within half an 8-bit step. Other
+/// formats refuse 16 bits.
+#[test]
+fn png_of_16_bits_rounds_the_srgb_curve_to_16_bits() {
+    let dir = TempDir::new("png16");
+    let film = test_film();
+    let deep = dir.path().join("deep.png");
+    film.save_as(&deep, BitDepth::Sixteen)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let img = image::open(&deep).expect("a PNG");
+    assert_eq!(img.color(), image::ColorType::Rgb16);
+    let img = img.into_rgb16();
+    let shallow = dir.path().join("shallow.png");
+    film.save(&shallow).unwrap();
+    let eight = image::open(&shallow).expect("a PNG").into_rgb8();
+    for ((p, mean), q) in img.pixels().zip(film.mean()).zip(eight.pixels()) {
+        for c in 0..3 {
+            assert_eq!(p[c], linear_to_srgb16(mean[c]), "{mean}");
+            let as_eight = p[c] as f64 / 65535.0 * 255.0;
+            assert!(
+                (as_eight - q[c] as f64).abs() <= 0.5 + 1e-9,
+                "{mean}: {} vs {}",
+                p[c],
+                q[c]
+            );
+        }
+    }
+    // Distinct 16-bit levels where 8 bits have one: 0.18 and 0.1805 share an 8-bit level.
+    assert_eq!(linear_to_srgb8(0.18), linear_to_srgb8(0.1805));
+    assert_ne!(linear_to_srgb16(0.18), linear_to_srgb16(0.1805));
+    for name in ["deep.exr", "deep.hdr", "deep.jpg", "deep.bmp"] {
+        let err = film
+            .save_as(&dir.path().join(name), BitDepth::Sixteen)
+            .unwrap_err();
+        assert!(matches!(err, FilmError::DeepNotPng { .. }), "{name}: {err}");
+        assert!(err.to_string().contains(name), "{err}");
+    }
 }

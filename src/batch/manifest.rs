@@ -174,6 +174,14 @@ impl Manifest {
                     "render.transparent writes RGBA PNGs (alpha is the coverage); give a .png pattern".into(),
                 ));
             }
+            if request.bit_depth() == crate::film::BitDepth::Sixteen
+                && format != crate::film::Format::Png
+            {
+                return Err(invalid(
+                    field("output"),
+                    "render.bit_depth = 16 writes 16-bit PNGs; give a .png pattern".into(),
+                ));
+            }
             out.push(Job {
                 source,
                 views,

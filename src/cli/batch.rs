@@ -318,7 +318,7 @@ fn run_input(
             std::fs::create_dir_all(dir)
                 .with_context(|| format!("cannot create {}", dir.display()))?;
         }
-        film.save(&task.output)?;
+        film.save_as(&task.output, request.bit_depth())?;
         tally.rendered += 1;
         if tally.first_peak.is_none() && tally.rendered >= tally.warm_up {
             tally.first_peak = peak_kib();

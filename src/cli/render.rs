@@ -71,6 +71,10 @@ pub struct RenderArgs {
     /// is not seen directly.
     #[arg(long)]
     pub transparent: bool,
+    /// Bits per channel of a PNG output: 8, or 16 for pipelines that keep the finer
+    /// gradients (alpha too, with --transparent).
+    #[arg(long, value_name = "8|16")]
+    pub bit_depth: Option<u32>,
     /// On Ctrl-C or SIGTERM, write no image (by default the samples finished so far are
     /// written; checkpoints already written stay).
     #[arg(long)]
@@ -136,6 +140,7 @@ impl RenderArgs {
             branches: self.branches,
             aov,
             transparent: Some(self.transparent),
+            bit_depth: self.bit_depth,
             up: self.up.map(UpAxis::up),
             environment: self.env.clone(),
             max_texture_size: self.max_texture_size,
@@ -164,6 +169,13 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         None
     };
     Film::check_writable(&args.output, args.transparent && part.is_none())?;
+    if part.is_none() {
+        Film::check_depth(
+            &args.output,
+            Format::from_path(&args.output)?,
+            request.bit_depth(),
+        )?;
+    }
     if request.aov_mask() != 0 && part.is_none() && Format::from_path(&args.output)? != Format::Exr
     {
         Film::check_writable(&Film::aov_path(&args.output), false)?;
@@ -176,9 +188,10 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     // A part file records which render it belongs to; any other output is an image.
     let header = prepared.part_header(&backend);
     let output = args.output.clone();
+    let depth = request.bit_depth();
     let write = Arc::new(move |film: &Film| match &header {
         Some(h) => film.save_part(&output, h),
-        None => film.save(&output),
+        None => film.save_as(&output, depth),
     });
     let cancel = Arc::new(AtomicBool::new(false));
     prepared.job.cancel = Some(cancel.clone());
