@@ -113,14 +113,7 @@ pub const TABLES: &[Table] = &[
         what: "texture coordinates",
         texture: "tri_uvs_tex",
         loader: "load_tri_uvs",
-        element: || {
-            Element::Struct(struct_layout!(TriUvs {
-                uv0,
-                uv1,
-                uv2,
-                _pad
-            }))
-        },
+        element: tri_uvs_element,
         bytes: |s| bytemuck::cast_slice(&s.tri_uvs),
     },
     Table {
@@ -134,14 +127,7 @@ pub const TABLES: &[Table] = &[
         what: "second texture coordinates",
         texture: "tri_uvs1_tex",
         loader: "load_tri_uvs1",
-        element: || {
-            Element::Struct(struct_layout!(TriUvs {
-                uv0,
-                uv1,
-                uv2,
-                _pad
-            }))
-        },
+        element: tri_uvs_element,
         bytes: |s| bytemuck::cast_slice(&s.tri_uvs1),
     },
     Table {
@@ -233,6 +219,16 @@ pub const TABLES: &[Table] = &[
         bytes: |s| bytemuck::cast_slice(&s.caustic_targets),
     },
 ];
+
+/// The element of both texture-coordinate tables, which share `TriUvs`.
+fn tri_uvs_element() -> Element {
+    Element::Struct(struct_layout!(TriUvs {
+        uv0,
+        uv1,
+        uv2,
+        _pad
+    }))
+}
 
 /// The binding of the TLAS of hardware ray queries in the scene group, after the tables.
 pub const TLAS_BINDING: u32 = TABLES.len() as u32 + 1;
