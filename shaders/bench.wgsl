@@ -13,7 +13,7 @@ fn bench_ray(i: u32) -> Ray {
 fn bench_closest(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x + gid.y * 65535u * 64u;
     if 2u * i >= arrayLength(&bench_rays) { return; }
-    let h = traverse_closest(bench_ray(i), bitcast<f32>(bench_rays[2u * i].w));
+    let h = traverse_closest(bench_ray(i), bitcast<f32>(bench_rays[2u * i].w), false);
     bench_hits[i] = vec4<u32>(h.tri, bitcast<u32>(h.t), 0u, 0u);
 }
 

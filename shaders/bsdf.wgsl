@@ -16,7 +16,9 @@ fn no_sample() -> BsdfSample {
 // mirror: src/render/bsdf.rs `bsdf_is_delta`
 fn bsdf_is_delta(m: Material) -> bool {
     if m.kind == MAT_PBR {
-        return m.roughness == 0.0 && (1.0 - m.metallic) * (1.0 - m.transmission) == 0.0;
+        return m.roughness == 0.0 && (1.0 - m.metallic) * (1.0 - m.transmission) == 0.0
+            && max(max(m.sheen_color.x, m.sheen_color.y), m.sheen_color.z) == 0.0
+            && (m.clearcoat == 0.0 || m.clearcoat_roughness == 0.0);
     }
     return m.kind == MAT_CONDUCTOR || m.kind == MAT_DIELECTRIC;
 }
@@ -222,6 +224,9 @@ fn fresnel_schlick(f0: vec3<f32>, c: f32) -> vec3<f32> {
 
 // mirror: src/render/bsdf.rs `pbr_fresnel`
 fn pbr_fresnel(m: Material, cos_i: f32) -> vec3<f32> {
+    if (m.flags & MAT_SPEC_GLOSS) != 0u {
+        return fresnel_schlick(m.specular_color, abs(cos_i)) * m.specular;
+    }
     let f = fresnel_dielectric(cos_i, m.ior).x;
     let r = (m.ior - 1.0) / (m.ior + 1.0);
     let k = 1.0 - abs(cos_i);
@@ -281,8 +286,8 @@ fn ggx_visible_pdf(wo: vec3<f32>, h: vec3<f32>, alpha: f32) -> f32 {
     return ggx_g1_abs(wo, h, alpha) * ggx_d(h, alpha) * abs(dot(wo, h)) / abs(wo.z);
 }
 
-// mirror: src/render/bsdf.rs `pbr_eval`
-fn pbr_eval(m: Material, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+// The base layer. mirror: src/render/bsdf.rs `base_eval`
+fn base_eval(m: Material, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     if wo.z == 0.0 || wi.z == 0.0 {
         return vec3<f32>(0.0);
     }
@@ -335,8 +340,8 @@ fn pbr_eval(m: Material, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     return f + m.albedo * (vec3<f32>(1.0) - pbr_fresnel(m, oh)) * (t * micro / (etap * etap));
 }
 
-// mirror: src/render/bsdf.rs `pbr_pdf`
-fn pbr_pdf(m: Material, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+// mirror: src/render/bsdf.rs `base_pdf`
+fn base_pdf(m: Material, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
     if wo.z == 0.0 || wi.z == 0.0 {
         return 0.0;
     }
@@ -371,8 +376,8 @@ fn pbr_pdf(m: Material, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
     return pdf + p.z * ggx_visible_pdf(wo, h, alpha) * abs(ih) / (denom * denom);
 }
 
-// mirror: src/render/bsdf.rs `pbr_sample`
-fn pbr_sample(m: Material, wo: vec3<f32>, u_lobe: f32, u: vec2<f32>) -> BsdfSample {
+// mirror: src/render/bsdf.rs `base_sample`
+fn base_sample(m: Material, wo: vec3<f32>, u_lobe: f32, u: vec2<f32>) -> BsdfSample {
     if wo.z == 0.0 {
         return no_sample();
     }
@@ -440,12 +445,167 @@ fn pbr_sample(m: Material, wo: vec3<f32>, u_lobe: f32, u: vec2<f32>) -> BsdfSamp
             }
         }
     }
-    let pdf = pbr_pdf(m, wo, wi);
+    let pdf = base_pdf(m, wo, wi);
     if !(pdf > 0.0) {
         return no_sample();
     }
     var eta = 1.0;
     if wo.z * wi.z < 0.0 && !thin {
+        eta = pbr_etap(m, wo);
+    }
+    return BsdfSample(wi, base_eval(m, wo, wi) / pdf, pdf, false, eta, true);
+}
+
+// The sheen and clear-coat layers over the pbr base (src/render/bsdf.rs says how they
+// stack).
+
+// mirror: src/render/bsdf.rs `has_layers`
+fn has_layers(m: Material) -> bool {
+    return m.clearcoat > 0.0 || max(max(m.sheen_color.x, m.sheen_color.y), m.sheen_color.z) > 0.0;
+}
+
+// mirror: src/render/bsdf.rs `coat_fresnel`
+fn coat_fresnel(c: f32) -> f32 {
+    let k = clamp(1.0 - abs(c), 0.0, 1.0);
+    let k5 = k * k * k * k * k;
+    return 0.04 + 0.96 * k5;
+}
+
+// (coat, sheen) factors of light crossing the layers along w.
+// mirror: src/render/bsdf.rs `layers_pass`
+fn layers_pass(m: Material, w: vec3<f32>) -> vec2<f32> {
+    let coat = 1.0 - m.clearcoat * coat_fresnel(dot(m.coat_normal, w));
+    let s = max(max(m.sheen_color.x, m.sheen_color.y), m.sheen_color.z);
+    var sheen = 1.0;
+    if s > 0.0 {
+        sheen = 1.0 - s * sheen_albedo(abs(w.z), m.sheen_roughness);
+    }
+    return vec2<f32>(coat, sheen);
+}
+
+// mirror: src/render/bsdf.rs `to_coat`
+fn to_coat(m: Material, w: vec3<f32>) -> vec3<f32> {
+    let f = onb_from_normal(m.coat_normal);
+    return vec3<f32>(dot(w, f[0]), dot(w, f[1]), dot(w, m.coat_normal));
+}
+
+// (f |cos wi|, pdf) of a rough clear coat. mirror: src/render/bsdf.rs `coat_reflect`
+fn coat_reflect(m: Material, wo: vec3<f32>, wi: vec3<f32>) -> vec2<f32> {
+    if m.clearcoat == 0.0 || m.clearcoat_roughness == 0.0 || wo.z <= 0.0 || wi.z <= 0.0 {
+        return vec2<f32>(0.0);
+    }
+    let o = to_coat(m, wo);
+    let i = to_coat(m, wi);
+    if o.z <= 0.0 || i.z <= 0.0 {
+        return vec2<f32>(0.0);
+    }
+    let alpha = ggx_alpha(m.clearcoat_roughness);
+    let h = normalize(o + i);
+    let d = ggx_d(h, alpha);
+    let f = m.clearcoat * coat_fresnel(dot(o, h)) * d * ggx_g1(o, alpha) * ggx_g1(i, alpha)
+        * wi.z / (4.0 * o.z * i.z);
+    return vec2<f32>(f, ggx_g1(o, alpha) * d / (4.0 * o.z));
+}
+
+// (coat, sheen, base) probabilities at wo. mirror: src/render/bsdf.rs `layer_pdfs`
+fn layer_pdfs(m: Material, wo: vec3<f32>) -> vec3<f32> {
+    let base = pbr_lobe_pdfs(m, wo);
+    let base_reflects = select(0.0, 1.0, base.x + base.y + base.z + base.w > 0.0);
+    if wo.z <= 0.0 {
+        return vec3<f32>(0.0, 0.0, base_reflects);
+    }
+    var f = coat_fresnel(dot(m.coat_normal, wo));
+    if m.clearcoat_roughness > 0.0 {
+        f = clamp(f, 0.25, 0.9);
+    }
+    let coat = m.clearcoat * f;
+    let s = max(max(m.sheen_color.x, m.sheen_color.y), m.sheen_color.z);
+    var sheen = 0.0;
+    if s > 0.0 {
+        sheen = (1.0 - coat) * s * sheen_albedo(wo.z, m.sheen_roughness);
+    }
+    let w = vec3<f32>(coat, sheen, (1.0 - coat - sheen) * base_reflects);
+    let sum = w.x + w.y + w.z;
+    if sum > 0.0 {
+        return w / sum;
+    }
+    return vec3<f32>(0.0);
+}
+
+// mirror: src/render/bsdf.rs `pbr_eval`
+fn pbr_eval(m: Material, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    let base = base_eval(m, wo, wi);
+    if !has_layers(m) {
+        return base;
+    }
+    let po = layers_pass(m, wo);
+    let pi = layers_pass(m, wi);
+    let sheen = sheen_reflect(m.sheen_color, m.sheen_roughness, wo, wi);
+    let under = sheen + base * min(po.y, pi.y);
+    return under * (po.x * pi.x) + vec3<f32>(coat_reflect(m, wo, wi).x);
+}
+
+// mirror: src/render/bsdf.rs `pbr_pdf`
+fn pbr_pdf(m: Material, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    if !has_layers(m) {
+        return base_pdf(m, wo, wi);
+    }
+    let p = layer_pdfs(m, wo);
+    var sheen = 0.0;
+    if wo.z > 0.0 && wi.z > 0.0 {
+        sheen = cosine_hemisphere_pdf(wi.z);
+    }
+    return p.x * coat_reflect(m, wo, wi).y + p.y * sheen + p.z * base_pdf(m, wo, wi);
+}
+
+// mirror: src/render/bsdf.rs `pbr_sample`
+fn pbr_sample(m: Material, wo: vec3<f32>, u_lobe: f32, u: vec2<f32>) -> BsdfSample {
+    if !has_layers(m) {
+        return base_sample(m, wo, u_lobe, u);
+    }
+    let p = layer_pdfs(m, wo);
+    var wi: vec3<f32>;
+    if u_lobe < p.x {
+        let f = onb_from_normal(m.coat_normal);
+        let o = to_coat(m, wo);
+        if m.clearcoat_roughness == 0.0 {
+            let mirrored = 2.0 * dot(wo, m.coat_normal) * m.coat_normal - wo;
+            if o.z <= 0.0 || mirrored.z <= 0.0 {
+                return no_sample();
+            }
+            return BsdfSample(mirrored, vec3<f32>(m.clearcoat * coat_fresnel(o.z) / p.x), p.x, true, 1.0, true);
+        }
+        if o.z <= 0.0 {
+            return no_sample();
+        }
+        let h = ggx_sample_visible(o, ggx_alpha(m.clearcoat_roughness), u);
+        let i = 2.0 * dot(o, h) * h - o;
+        wi = i.x * f[0] + i.y * f[1] + i.z * m.coat_normal;
+    } else if u_lobe < p.x + p.y {
+        wi = sample_cosine_hemisphere(u);
+    } else {
+        if p.z <= 0.0 {
+            return no_sample();
+        }
+        let u_base = min((u_lobe - p.x - p.y) / p.z, ONE_MINUS_EPSILON);
+        let bs = base_sample(m, wo, u_base, u);
+        if !bs.valid {
+            return no_sample();
+        }
+        if bs.delta {
+            let po = layers_pass(m, wo);
+            let pi = layers_pass(m, bs.wi);
+            let through = po.x * pi.x * min(po.y, pi.y);
+            return BsdfSample(bs.wi, bs.weight * (through / p.z), bs.pdf * p.z, true, bs.eta, true);
+        }
+        wi = bs.wi;
+    }
+    let pdf = pbr_pdf(m, wo, wi);
+    if !(pdf > 0.0) {
+        return no_sample();
+    }
+    var eta = 1.0;
+    if wo.z * wi.z < 0.0 && (m.flags & MAT_THIN_WALLED) == 0u {
         eta = pbr_etap(m, wo);
     }
     return BsdfSample(wi, pbr_eval(m, wo, wi) / pdf, pdf, false, eta, true);

@@ -94,7 +94,7 @@ struct LightPath {
 }
 
 fn no_light_vertex() -> LightVertex {
-    let si = SurfaceHit(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, 1.0), 0u, true, 0u, vec4<f32>(0.0), vec4<f32>(1.0));
+    let si = SurfaceHit(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, 1.0), 0u, true, 0u, vec4<f32>(0.0), vec4<f32>(1.0));
     return LightVertex(si, vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0), 0.0, 0u);
 }
 
@@ -126,7 +126,7 @@ fn no_light_subpath_start() -> LightSubpathStart {
 fn start_at_triangle(light: u32, pick: LightPick, rng: Rng) -> LightSubpathStart {
     let tri = load_tri(light);
     let bary = sample_uniform_triangle(pick.u);
-    if tri.v0.w != 0.0 && !alpha_test(light, bary.x, bary.y) {
+    if tri.v0.w != 0.0 && !alpha_test(light, bary.x, bary.y, false) {
         return no_light_subpath_start();
     }
     let q = (1.0 - bary.x - bary.y) * tri.v0.xyz + bary.x * tri.v1.xyz + bary.y * tri.v2.xyz;
@@ -242,7 +242,7 @@ fn trace_light_subpath(rng: Rng, max_segments: u32) -> TracedLight {
     var chain = 0u;
     for (var segment = 1u; segment <= max_segments; segment++) {
         rays += 1u;
-        let hit = traverse_closest(ray, T_INF);
+        let hit = traverse_closest(ray, T_INF, false);
         if hit.tri == NO_HIT {
             break;
         }
@@ -267,6 +267,7 @@ fn trace_light_subpath(rng: Rng, max_segments: u32) -> TracedLight {
             break;
         }
         let frame = shading_frame(mat, si, wo_world);
+        let mat_c = coated(mat, si, frame);
         let wo = wo_world * frame.m;
         var u_lobe = 0.0;
         if bsdf_draws_lobe(mat) {
@@ -276,7 +277,7 @@ fn trace_light_subpath(rng: Rng, max_segments: u32) -> TracedLight {
         if !delta {
             u = rng_2d(rng, segment, DIM_CAUSTIC_DIR_U);
         }
-        let bs = bsdf_sample(mat, wo, u_lobe, u);
+        let bs = bsdf_sample(mat_c, wo, u_lobe, u);
         if !bs.valid || bs.delta != delta {
             break;
         }
@@ -294,7 +295,7 @@ fn trace_light_subpath(rng: Rng, max_segments: u32) -> TracedLight {
         beta *= bs.weight * (bs.eta * bs.eta * correction);
         if !delta && pdf > 0.0 {
             let back = shading_frame(mat, si, wi_world);
-            let pdf_camera = bsdf_pdf(mat, wi_world * back.m, wo_world * back.m);
+            let pdf_camera = bsdf_pdf(coated(mat, si, back), wi_world * back.m, wo_world * back.m);
             pdf *= bs.pdf * cos_in / (pdf_camera * cos_out);
             if !(pdf > 0.0 && pdf <= T_INF) {
                 break;
@@ -382,9 +383,10 @@ struct SeenLightVertex {
 // mirror: src/render/caustics.rs `light_vertex_seen`
 fn light_vertex_seen(lv: LightVertex, wc: vec3<f32>) -> SeenLightVertex {
     let none = SeenLightVertex(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), false);
-    let mat_l = material_at(load_material(lv.si.material), lv.si.uv, lv.si.color);
+    let base = material_at(load_material(lv.si.material), lv.si.uv, lv.si.color);
     let wo_l_world = -wc;
-    let frame_l = shading_frame(mat_l, lv.si, wo_l_world);
+    let frame_l = shading_frame(base, lv.si, wo_l_world);
+    let mat_l = coated(base, lv.si, frame_l);
     let wo_l = wo_l_world * frame_l.m;
     let wi_l = lv.wi * frame_l.m;
     let f_l = bsdf_eval(mat_l, wo_l, wi_l);

@@ -88,7 +88,7 @@ fn path_vertex(st: ptr<function, PathState>, rng: Rng, branches: u32) -> PathVer
         u_light = rng_2d(rng, (*st).depth, DIM_LIGHT_U);
     }
     (*st).rays += 1u;
-    let hit = traverse_closest((*st).ray, T_INF);
+    let hit = traverse_closest((*st).ray, T_INF, (*st).depth == 0u);
     if hit.tri == NO_HIT {
         var w = 1.0;
         if !(*st).prev_delta && params.sky_pmf != 0.0 {
@@ -98,7 +98,12 @@ fn path_vertex(st: ptr<function, PathState>, rng: Rng, branches: u32) -> PathVer
         return v;
     }
     let si = surface_at((*st).ray, hit);
-    let mat = material_at(load_material(si.material), si.uv, si.color);
+    var mat = material_at(load_material(si.material), si.uv, si.color);
+    if mat.kind == MAT_UNLIT {
+        // Only camera rays find an unlit surface: its colour, as it is.
+        (*st).radiance += (*st).beta * mat.albedo;
+        return v;
+    }
     if si.front_face && is_emissive(mat) {
         let cos_l = -dot((*st).ray.dir, si.ng);
         var w = 1.0;
@@ -121,6 +126,7 @@ fn path_vertex(st: ptr<function, PathState>, rng: Rng, branches: u32) -> PathVer
     }
     let wo_world = -(*st).ray.dir;
     let sf = shading_frame(mat, si, wo_world);
+    mat = coated(mat, si, sf);
     let ng = sf.ng;
     let frame = sf.m;
     let wo = wo_world * frame;
@@ -210,7 +216,7 @@ fn path_continue(st: ptr<function, PathState>, v: PathVertex, rng: Rng) -> bool 
             let cos_out = abs(dot(wi_world, si.ng));
             let cos_in = abs(dot(wo_world, si.ng));
             let back = shading_frame(mat, si, wi_world);
-            let pdf_light = bsdf_pdf(mat, wi_world * back.m, wo_world * back.m);
+            let pdf_light = bsdf_pdf(coated(mat, si, back), wi_world * back.m, wo_world * back.m);
             (*st).caustic_pdf *= bs.pdf * cos_in / (pdf_light * cos_out);
             (*st).caustic_hops += 1u;
             if !((*st).caustic_pdf <= T_INF && (*st).caustic_hops < MAX_CAUSTIC_HOPS) {
@@ -390,7 +396,7 @@ struct FirstHit {
 
 // The first hit of a camera ray, for the AOVs. mirror: src/render/integrator.rs `first_hit`
 fn first_hit(ray: Ray) -> FirstHit {
-    let counted = traverse_closest_counted(ray, T_INF);
+    let counted = traverse_closest_counted(ray, T_INF, true);
     let hit = counted.hit;
     if hit.tri == NO_HIT {
         return FirstHit(false, vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), NO_ID, NO_ID, counted.cost);

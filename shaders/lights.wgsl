@@ -88,7 +88,7 @@ fn sample_light(p: vec3<f32>, ng: vec3<f32>, u_pair: vec2<f32>) -> LightSample {
     let wi = to_light * (1.0 / dist);
     let cos_l = -dot(wi, geometric_normal(tri));
     // A point that an alpha mask cuts out emits nothing.
-    if !(cos_l > 0.0 && dist > 0.0) || (tri.v0.w != 0.0 && !alpha_test(light, bary.x, bary.y)) {
+    if !(cos_l > 0.0 && dist > 0.0) || (tri.v0.w != 0.0 && !alpha_test(light, bary.x, bary.y, false)) {
         return none;
     }
     let le = triangle_emission(light, bary);

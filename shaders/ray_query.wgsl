@@ -14,8 +14,8 @@ struct Hit {
 }
 
 // mirror: src/bvh/traverse.rs `traverse_closest`
-fn traverse_closest(ray: Ray, t_max: f32) -> Hit {
-    return query(ray, t_max, false).hit;
+fn traverse_closest(ray: Ray, t_max: f32, camera: bool) -> Hit {
+    return query(ray, t_max, false, camera).hit;
 }
 
 // The closest hit and the query's cost: here the candidates the query stopped at, plus
@@ -26,20 +26,20 @@ struct CountedHit {
 }
 
 // mirror: src/bvh/traverse.rs `traverse_closest_counted`
-fn traverse_closest_counted(ray: Ray, t_max: f32) -> CountedHit {
-    return query(ray, t_max, false);
+fn traverse_closest_counted(ray: Ray, t_max: f32, camera: bool) -> CountedHit {
+    return query(ray, t_max, false, camera);
 }
 
 // mirror: src/bvh/traverse.rs `traverse_any`
 fn traverse_any(ray: Ray, t_max: f32) -> bool {
-    return query(ray, t_max, true).hit.tri != NO_HIT;
+    return query(ray, t_max, true, false).hit.tri != NO_HIT;
 }
 
 // The closest hit with 0 <= t <= t_max, or with `any_hit` the first found. A scene with
 // masked triangles has a non-opaque BLAS: each of its hits comes here as a candidate,
 // confirmed where the triangle is unmasked (TriVerts.v0.w == 0) or `alpha_test` passes, as
-// the software walk's test. Opaque hits are committed by the driver.
-fn query(ray: Ray, t_max: f32, any_hit: bool) -> CountedHit {
+// the software walk's test (for the camera's ray where `camera`). Opaque hits are committed by the driver.
+fn query(ray: Ray, t_max: f32, any_hit: bool, camera: bool) -> CountedHit {
     var rq: ray_query;
     let flags = select(RAY_FLAG_NONE, RAY_FLAG_TERMINATE_ON_FIRST_HIT, any_hit);
     rayQueryInitialize(&rq, scene_tlas, RayDesc(flags, 0xffu, 0.0, t_max, ray.origin, ray.dir));
@@ -48,7 +48,7 @@ fn query(ray: Ray, t_max: f32, any_hit: bool) -> CountedHit {
         cost += 1u;
         let c = rayQueryGetCandidateIntersection(&rq);
         let tri = c.primitive_index;
-        if load_tri(tri).v0.w == 0.0 || alpha_test(tri, c.barycentrics.x, c.barycentrics.y) {
+        if load_tri(tri).v0.w == 0.0 || alpha_test(tri, c.barycentrics.x, c.barycentrics.y, camera) {
             rayQueryConfirmIntersection(&rq);
         }
     }

@@ -7,6 +7,7 @@ struct SurfaceHit {
     p: vec3<f32>,
     ng: vec3<f32>,
     ns: vec3<f32>,
+    nc: vec3<f32>,
     material: u32,
     front_face: bool,
     tri: u32,
@@ -33,10 +34,18 @@ fn surface_at(ray: Ray, hit: Hit) -> SurfaceHit {
         }
     }
     let uv = triangle_uv(hit.tri, hit.u, hit.v);
+    var nc = ns;
     if (sh.flags & TRI_TANGENT) != 0u {
-        ns = normal_mapped(hit.tri, hit.u, hit.v, uv, ns, ng);
+        let m = load_material(sh.material);
+        let interpolated = ns;
+        if m.normal_texture != NO_TEXTURE {
+            ns = normal_mapped(hit, uv, interpolated, ng, m.normal_texture, m.normal_scale);
+        }
+        if m.clearcoat_normal_texture != NO_TEXTURE {
+            nc = normal_mapped(hit, uv, interpolated, ng, m.clearcoat_normal_texture, m.clearcoat_normal_scale);
+        }
     }
-    return SurfaceHit(ray.origin + hit.t * ray.dir, ng, ns, sh.material, dot(ray.dir, ng) < 0.0, hit.tri, uv, triangle_color(hit.tri, hit.u, hit.v));
+    return SurfaceHit(ray.origin + hit.t * ray.dir, ng, ns, nc, sh.material, dot(ray.dir, ng) < 0.0, hit.tri, uv, triangle_color(hit.tri, hit.u, hit.v));
 }
 
 // mirror: src/render/surface.rs `offset_ray_origin`
@@ -64,6 +73,28 @@ fn shading_frame(mat: Material, si: SurfaceHit, wo_world: vec3<f32>) -> ShadingF
         ns = ng;
     }
     return ShadingFrame(onb_from_normal(ns), ng);
+}
+
+// mirror: src/render/surface.rs `with_coat_normal`
+fn with_coat_normal(mat: Material, si: SurfaceHit, frame: ShadingFrame) -> Material {
+    var out = mat;
+    var c = si.nc * frame.m;
+    c = select(c, -c, c.z < 0.0);
+    out.coat_normal = select(vec3<f32>(0.0, 0.0, 1.0), normalize(c), c.z > 1e-4);
+    return out;
+}
+
+// mirror: src/render/surface.rs `needs_coat_normal`
+fn needs_coat_normal(mat: Material) -> bool {
+    return mat.clearcoat > 0.0 && (mat.normal_texture != NO_TEXTURE || mat.clearcoat_normal_texture != NO_TEXTURE);
+}
+
+// mirror: src/render/surface.rs `coated`
+fn coated(mat: Material, si: SurfaceHit, frame: ShadingFrame) -> Material {
+    if needs_coat_normal(mat) {
+        return with_coat_normal(mat, si, frame);
+    }
+    return mat;
 }
 
 // mirror: src/render/surface.rs `geometry_agrees`

@@ -79,7 +79,7 @@ fn test_traverse(@builtin(global_invocation_id) gid: vec3<u32>) {
     if i >= case_count() { return; }
     let ray = case_ray(i);
     let t_max = f4(case_in(i, 1u)).w;
-    let h = traverse_closest(ray, t_max);
+    let h = traverse_closest(ray, t_max, false);
     case_out(i, vec4<u32>(h.tri, bitcast<u32>(h.t), bitcast<u32>(h.u), bitcast<u32>(h.v)), vec4<u32>(select(0u, 1u, traverse_any(ray, t_max)), 0u, 0u, 0u));
 }
 
@@ -223,7 +223,7 @@ fn test_surface_colors(@builtin(global_invocation_id) gid: vec3<u32>) {
     let b2 = bitcast<f32>(k.z);
     let uv = triangle_uv(tri, b1, b2);
     let m = material_at(load_material(load_shading(tri).material), uv, triangle_color(tri, b1, b2));
-    let passes = select(0u, 1u, alpha_test(tri, b1, b2));
+    let passes = select(0u, 1u, alpha_test(tri, b1, b2, false));
     case_out(i, vec4<u32>(u4(vec4<f32>(m.albedo, 0.0)).xyz, passes), u4(uv));
 }
 
@@ -241,9 +241,10 @@ fn test_surface_maps(@builtin(global_invocation_id) gid: vec3<u32>) {
     let n = f4(case_in(i, 1u)).xyz;
     let uv = triangle_uv(tri, b1, b2);
     let ng = geometric_normal(load_tri(tri));
-    let mapped = normal_mapped(tri, b1, b2, uv, n, ng);
-    let passes = select(0u, 1u, alpha_test(tri, b1, b2));
-    let m = material_at(load_material(load_shading(tri).material), uv, triangle_color(tri, b1, b2));
+    let base = load_material(load_shading(tri).material);
+    let mapped = normal_mapped(Hit(0.0, b1, b2, tri), uv, n, ng, base.normal_texture, base.normal_scale);
+    let passes = select(0u, 1u, alpha_test(tri, b1, b2, false));
+    let m = material_at(base, uv, triangle_color(tri, b1, b2));
     case_out(i, vec4<u32>(u4(vec4<f32>(mapped, 0.0)).xyz, passes), u4(vec4<f32>(m.metallic, m.transmission, 0.0, 0.0)));
 }
 

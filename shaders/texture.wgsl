@@ -130,7 +130,11 @@ fn material_at(m: Material, uv: vec4<f32>, color: vec4<f32>) -> Material {
     }
     if m.roughness_texture != NO_TEXTURE {
         let r = scalar_lookup(m.roughness_texture, uv);
-        out.roughness = clamp(out.roughness * r, 0.0, 1.0);
+        if (m.flags & MAT_SPEC_GLOSS) != 0u {
+            out.roughness = clamp(1.0 - (1.0 - out.roughness) * r, 0.0, 1.0);
+        } else {
+            out.roughness = clamp(out.roughness * r, 0.0, 1.0);
+        }
     }
     if m.metallic_texture != NO_TEXTURE {
         let k = scalar_lookup(m.metallic_texture, uv);
@@ -140,18 +144,39 @@ fn material_at(m: Material, uv: vec4<f32>, color: vec4<f32>) -> Material {
         let k = scalar_lookup(m.transmission_texture, uv);
         out.transmission = clamp(out.transmission * k, 0.0, 1.0);
     }
+    if m.specular_color_texture != NO_TEXTURE {
+        out.specular_color *= surface_lookup(m.specular_color_texture, uv).xyz;
+    }
+    if m.specular_texture != NO_TEXTURE {
+        let k = scalar_lookup(m.specular_texture, uv);
+        out.specular = clamp(out.specular * k, 0.0, 1.0);
+    }
+    if m.clearcoat_texture != NO_TEXTURE {
+        let k = scalar_lookup(m.clearcoat_texture, uv);
+        out.clearcoat = clamp(out.clearcoat * k, 0.0, 1.0);
+    }
+    if m.clearcoat_roughness_texture != NO_TEXTURE {
+        let k = scalar_lookup(m.clearcoat_roughness_texture, uv);
+        out.clearcoat_roughness = clamp(out.clearcoat_roughness * k, 0.0, 1.0);
+    }
+    if m.sheen_color_texture != NO_TEXTURE {
+        out.sheen_color *= surface_lookup(m.sheen_color_texture, uv).xyz;
+    }
+    if m.sheen_roughness_texture != NO_TEXTURE {
+        let k = scalar_lookup(m.sheen_roughness_texture, uv);
+        out.sheen_roughness = clamp(out.sheen_roughness * k, 0.0, 1.0);
+    }
     return out;
 }
 
 // mirror: src/render/texture.rs `normal_mapped`
-fn normal_mapped(tri: u32, b1: f32, b2: f32, uv: vec4<f32>, n: vec3<f32>, ng: vec3<f32>) -> vec3<f32> {
+fn normal_mapped(hit: Hit, uv: vec4<f32>, n: vec3<f32>, ng: vec3<f32>, map: u32, scale: f32) -> vec3<f32> {
     if !TEXTURES {
         return n;
     }
-    let m = load_material(load_shading(tri).material);
-    let g = load_tri_tangents(tri);
-    let w = 1.0 - b1 - b2;
-    let t4 = w * g.t0 + b1 * g.t1 + b2 * g.t2;
+    let g = load_tri_tangents(hit.tri);
+    let w = 1.0 - hit.u - hit.v;
+    let t4 = w * g.t0 + hit.u * g.t1 + hit.v * g.t2;
     let tr = t4.xyz - n * dot(n, t4.xyz);
     let tlen2 = dot(tr, tr);
     if !(tlen2 > 0.0) {
@@ -159,8 +184,8 @@ fn normal_mapped(tri: u32, b1: f32, b2: f32, uv: vec4<f32>, n: vec3<f32>, ng: ve
     }
     let t = tr * inverseSqrt(tlen2);
     let b = select(cross(n, t), -cross(n, t), t4.w < 0.0);
-    let c = surface_lookup(m.normal_texture, uv).xyz * 2.0 - vec3<f32>(1.0);
-    let p = t * (c.x * m.normal_scale) + b * (c.y * m.normal_scale) + n * c.z;
+    let c = surface_lookup(map, uv).xyz * 2.0 - vec3<f32>(1.0);
+    let p = t * (c.x * scale) + b * (c.y * scale) + n * c.z;
     let plen2 = dot(p, p);
     if !(plen2 > 0.0) {
         return n;
@@ -173,11 +198,14 @@ fn normal_mapped(tri: u32, b1: f32, b2: f32, uv: vec4<f32>, n: vec3<f32>, ng: ve
 }
 
 // mirror: src/render/texture.rs `alpha_test`
-fn alpha_test(tri: u32, b1: f32, b2: f32) -> bool {
+fn alpha_test(tri: u32, b1: f32, b2: f32, camera: bool) -> bool {
     if !ALPHA_MASKS {
         return true;
     }
     let m = load_material(load_shading(tri).material);
+    if m.kind == MAT_UNLIT && !camera {
+        return false;
+    }
     if (m.flags & MAT_ALPHA_MASK) == 0u {
         return true;
     }

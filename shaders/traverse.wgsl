@@ -16,9 +16,10 @@ struct Hit {
     tri: u32,
 }
 
-// mirror: src/bvh/traverse.rs `traverse_closest`
-fn traverse_closest(ray: Ray, t_max: f32) -> Hit {
-    return walk(ray, t_max, false, false);
+// With `camera`, the ray is the camera's, which sees unlit surfaces (the CPU's `accept`
+// says so). mirror: src/bvh/traverse.rs `traverse_closest`
+fn traverse_closest(ray: Ray, t_max: f32, camera: bool) -> Hit {
+    return walk(ray, t_max, false, false, camera);
 }
 
 // The closest hit and the traversal's cost (the CPU's tuple).
@@ -28,15 +29,15 @@ struct CountedHit {
 }
 
 // mirror: src/bvh/traverse.rs `traverse_closest_counted`
-fn traverse_closest_counted(ray: Ray, t_max: f32) -> CountedHit {
+fn traverse_closest_counted(ray: Ray, t_max: f32, camera: bool) -> CountedHit {
     walk_cost = 0u;
-    let hit = walk(ray, t_max, false, true);
+    let hit = walk(ray, t_max, false, true, camera);
     return CountedHit(hit, walk_cost);
 }
 
 // mirror: src/bvh/traverse.rs `traverse_any`
 fn traverse_any(ray: Ray, t_max: f32) -> bool {
-    return walk(ray, t_max, true, false).tri != NO_HIT;
+    return walk(ray, t_max, true, false, false).tri != NO_HIT;
 }
 
 // The leaves the ray may reach, nearer child first: the closest hit, or with `any_hit`
@@ -47,7 +48,7 @@ fn traverse_any(ray: Ray, t_max: f32) -> bool {
 // less time on lavapipe, BENCHMARKS.md). With `counted`, adds the nodes visited and the
 // triangles tested to `walk_cost`; every call passes constants, so the compiler drops the
 // counting from the others. mirror: src/bvh/traverse.rs `walk`
-fn walk(ray: Ray, t_max: f32, any_hit: bool, counted: bool) -> Hit {
+fn walk(ray: Ray, t_max: f32, any_hit: bool, counted: bool, camera: bool) -> Hit {
     var best = Hit(t_max, 0.0, 0.0, NO_HIT);
     let sheared = sheared_ray(ray);
     let root = load_node(0);
@@ -117,7 +118,7 @@ fn walk(ray: Ray, t_max: f32, any_hit: bool, counted: bool) -> Hit {
             let tri = load_tri(i);
             let h = intersect_triangle(sheared, tri, best.t);
             // A masked triangle's hit counts only where its alpha test passes.
-            if h.hit && (tri.v0.w == 0.0 || alpha_test(i, h.u, h.v)) {
+            if h.hit && (tri.v0.w == 0.0 || alpha_test(i, h.u, h.v, camera)) {
                 best = Hit(h.t, h.u, h.v, i);
                 if any_hit {
                     return best;

@@ -94,7 +94,7 @@ fn camera_rays(cam: &CameraRays) -> Vec<BenchRay> {
 fn closest(scene: &RenderScene, ray: &Ray, t_max: f32) -> Option<Hit> {
     scene
         .wide
-        .traverse_closest(ray, t_max, |k, u, v| alpha_test(scene, k, u, v))
+        .traverse_closest(ray, t_max, |k, u, v| alpha_test(scene, k, u, v, false))
 }
 
 /// The share of `rays` whose closest hit is on a triangle that `subject` marks.
@@ -365,7 +365,7 @@ pub fn bench_scene(
                     .map(|(r, t)| {
                         if any {
                             rs.wide
-                                .traverse_any(r, *t, |k, u, v| alpha_test(&rs, k, u, v))
+                                .traverse_any(r, *t, |k, u, v| alpha_test(&rs, k, u, v, false))
                                 as usize
                         } else {
                             closest(&rs, r, *t).is_some() as usize

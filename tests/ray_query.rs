@@ -152,7 +152,7 @@ fn alpha_masked_triangles_are_honoured() {
     let rs = RenderScene::new(&scene, &BuildParams::default()).expect("BVH");
     assert!(rs.tris.iter().filter(|t| t.is_masked()).count() == 1500);
     let cases = traversal_rays(&rs, &mut SplitMix::new(18), 20_000);
-    let accept = |k, u, v| alpha_test(&rs, k, u, v);
+    let accept = |k, u, v| alpha_test(&rs, k, u, v, false);
     // The mask matters: count the rays whose closest hit it changes.
     let cut = cases
         .iter()

@@ -1420,12 +1420,19 @@ fn surface_maps_match() {
         let n = v3(c[1]);
         let uv = triangle_uv(&rs, tri, b1, b2);
         let ng = meshtrace::geometry::geometric_normal(&rs.tris[tri as usize]);
-        let cpu = normal_mapped(&rs, tri, b1, b2, uv, n, ng);
+        let m = &rs.materials[rs.shading[tri as usize].material as usize];
+        let hit = meshtrace::bvh::Hit {
+            t: 0.0,
+            u: b1,
+            v: b2,
+            tri,
+        };
+        let cpu = normal_mapped(&rs, &hit, uv, n, ng, m.normal_texture, m.normal_scale);
         let gpu = v3(o[0]);
         normal.add(rel3(cpu, gpu, 1e-3), || {
             format!("triangle {tri} at ({b1}, {b2}), n {n}: CPU {cpu}, GPU {gpu}")
         });
-        let passes = alpha_test(&rs, tri, b1, b2);
+        let passes = alpha_test(&rs, tri, b1, b2, false);
         if passes != (o[0][3] == 1) {
             alpha.add(|| {
                 format!(
@@ -1540,7 +1547,7 @@ fn vertex_colors_and_second_set_match() {
             (0..4).map(|k| rel(uv[k], gu[k], 1e-3)).fold(0.0, f64::max),
             || format!("triangle {tri} at ({b1}, {b2}): CPU {uv}, GPU {gu}"),
         );
-        let passes = alpha_test(&rs, tri, b1, b2);
+        let passes = alpha_test(&rs, tri, b1, b2, false);
         masked += usize::from(!passes);
         if passes != (o[0][3] == 1) {
             alpha.add(|| {

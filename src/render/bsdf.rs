@@ -6,8 +6,10 @@
 //! towards `wo` (`wo.z > 0`); the dielectric sees both sides. Every function has a WGSL
 //! twin of the same name in `shaders/bsdf.wgsl`.
 
-use super::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
-use crate::scene::material::MAT_THIN_WALLED;
+use super::sampling::{ONE_MINUS_EPSILON, cosine_hemisphere_pdf, sample_cosine_hemisphere};
+use super::sheen::{sheen_albedo, sheen_reflect};
+use crate::math::onb_from_normal;
+use crate::scene::material::{MAT_SPEC_GLOSS, MAT_THIN_WALLED};
 use crate::scene::{Material, MaterialKind};
 use glam::{Vec2, Vec3};
 use std::f32::consts::{FRAC_1_PI, PI};
@@ -31,7 +33,10 @@ pub fn bsdf_is_delta(m: &Material) -> bool {
     match m.kind {
         MaterialKind::CONDUCTOR | MaterialKind::DIELECTRIC => true,
         MaterialKind::PBR => {
-            m.roughness == 0.0 && (1.0 - m.metallic) * (1.0 - m.transmission) == 0.0
+            m.roughness == 0.0
+                && (1.0 - m.metallic) * (1.0 - m.transmission) == 0.0
+                && m.sheen_color.max_element() == 0.0
+                && (m.clearcoat == 0.0 || m.clearcoat_roughness == 0.0)
         }
         _ => false,
     }
@@ -280,7 +285,17 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> (f32, f32, f32, f32) {
 // below unit albedo, and is exactly Lambertian when `specular` is 0.
 //
 // The lobes are chosen by probabilities that depend on wo only (`pbr_lobe_pdfs`), so that
-// `pbr_pdf` is the sum of the non-delta lobes' pdfs weighed by them.
+// `base_pdf` is the sum of the non-delta lobes' pdfs weighed by them.
+//
+// Over this base lie two optional layers, as glTF stacks them: KHR_materials_sheen (the
+// Charlie lobe of `sheen.rs`, the base scaled by min(1 − S E(wo), 1 − S E(wi)) for S the
+// sheen colour's largest channel), and over it KHR_materials_clearcoat (a GGX dielectric
+// of IOR 1.5 about its own normal, the layers below scaled by (1 − c F(nc.wo))
+// (1 − c F(nc.wi)) for coat weight c). The extension's single factor 1 − c F(nc.wo)
+// counts one crossing of the coat and is not reciprocal; the product counts light going
+// in and coming out, and is.
+// `pbr_eval`, `pbr_pdf` and `pbr_sample` are the whole stack; without layers, exactly
+// the base.
 
 /// The mean of a colour's channels.
 /// mirror: shaders/bsdf.wgsl `mean3`
@@ -299,8 +314,12 @@ pub fn fresnel_schlick(f0: Vec3, c: f32) -> Vec3 {
 /// The dielectric layer's reflectance at incident cosine `cos_i` (negative from inside a
 /// volume): the exact Fresnel of the IOR, with KHR_materials_specular's tint of F0 by
 /// `specular_color` (fading out at grazing angles, where F90 is untinted) and its scale
-/// by `specular`. mirror: shaders/bsdf.wgsl `pbr_fresnel`
+/// by `specular`; for a specular-glossiness material ([`MAT_SPEC_GLOSS`]), Schlick's of
+/// F0 = `specular_color`. mirror: shaders/bsdf.wgsl `pbr_fresnel`
 pub fn pbr_fresnel(m: &Material, cos_i: f32) -> Vec3 {
+    if m.flags & MAT_SPEC_GLOSS != 0 {
+        return fresnel_schlick(m.specular_color, cos_i.abs()) * m.specular;
+    }
     let f = fresnel_dielectric(cos_i, m.ior).0;
     let r = (m.ior - 1.0) / (m.ior + 1.0);
     let k = 1.0 - cos_i.abs();
@@ -354,8 +373,8 @@ pub fn pbr_etap(m: &Material, wo: Vec3) -> f32 {
     if wo.z > 0.0 { m.ior } else { 1.0 / m.ior }
 }
 
-/// f |cos wi| of the non-delta lobes. mirror: shaders/bsdf.wgsl `pbr_eval`
-pub fn pbr_eval(m: &Material, wo: Vec3, wi: Vec3) -> Vec3 {
+/// The base layer's f |cos wi| (its non-delta lobes). mirror: shaders/bsdf.wgsl `base_eval`
+pub fn base_eval(m: &Material, wo: Vec3, wi: Vec3) -> Vec3 {
     if wo.z == 0.0 || wi.z == 0.0 {
         return Vec3::ZERO;
     }
@@ -428,9 +447,9 @@ pub fn ggx_visible_pdf(wo: Vec3, h: Vec3, alpha: f32) -> f32 {
     ggx_g1_abs(wo, h, alpha) * ggx_d(h, alpha) * wo.dot(h).abs() / wo.z.abs()
 }
 
-/// The pdf with which `pbr_sample` draws `wi` through a non-delta lobe.
-/// mirror: shaders/bsdf.wgsl `pbr_pdf`
-pub fn pbr_pdf(m: &Material, wo: Vec3, wi: Vec3) -> f32 {
+/// The pdf with which `base_sample` draws `wi` through a non-delta lobe.
+/// mirror: shaders/bsdf.wgsl `base_pdf`
+pub fn base_pdf(m: &Material, wo: Vec3, wi: Vec3) -> f32 {
     if wo.z == 0.0 || wi.z == 0.0 {
         return 0.0;
     }
@@ -464,9 +483,9 @@ pub fn pbr_pdf(m: &Material, wo: Vec3, wi: Vec3) -> f32 {
     pdf + p[2] * ggx_visible_pdf(wo, h, alpha) * ih.abs() / (denom * denom)
 }
 
-/// Draws `wi` from one lobe chosen by `u_lobe`.
-/// mirror: shaders/bsdf.wgsl `pbr_sample`
-pub fn pbr_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+/// Draws `wi` from one of the base layer's lobes, chosen by `u_lobe`.
+/// mirror: shaders/bsdf.wgsl `base_sample`
+pub fn base_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
     if wo.z == 0.0 {
         return None;
     }
@@ -561,12 +580,205 @@ pub fn pbr_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSa
             wi
         }
     };
-    let pdf = pbr_pdf(m, wo, wi);
+    let pdf = base_pdf(m, wo, wi);
     // (Also refuses a NaN pdf.)
     if pdf.is_nan() || pdf <= 0.0 {
         return None;
     }
     let eta = if wo.z * wi.z < 0.0 && !thin {
+        pbr_etap(m, wo)
+    } else {
+        1.0
+    };
+    Some(BsdfSample {
+        wi,
+        weight: base_eval(m, wo, wi) / pdf,
+        pdf,
+        delta: false,
+        eta,
+    })
+}
+
+// ---------------------------------------------------------------------------------------
+// The sheen and clear-coat layers over the pbr base.
+
+/// Whether a `pbr` material has a sheen or a clear coat over its base.
+/// mirror: shaders/bsdf.wgsl `has_layers`
+pub fn has_layers(m: &Material) -> bool {
+    m.clearcoat > 0.0 || m.sheen_color.max_element() > 0.0
+}
+
+/// The clear coat's Fresnel reflectance at cosine `c`: Schlick's with F0 0.04 (IOR 1.5),
+/// as KHR_materials_clearcoat specifies. mirror: shaders/bsdf.wgsl `coat_fresnel`
+pub fn coat_fresnel(c: f32) -> f32 {
+    let k = (1.0 - c.abs()).clamp(0.0, 1.0);
+    let k5 = k * k * k * k * k;
+    0.04 + 0.96 * k5
+}
+
+/// The factor of light that crosses the layers over the base along `w`: the coat's
+/// 1 − c F(|nc.w|), times the sheen's 1 − S E(|w.z|).
+/// mirror: shaders/bsdf.wgsl `layers_pass`
+pub fn layers_pass(m: &Material, w: Vec3) -> (f32, f32) {
+    let coat = 1.0 - m.clearcoat * coat_fresnel(m.coat_normal.dot(w));
+    let s = m.sheen_color.max_element();
+    let sheen = if s > 0.0 {
+        1.0 - s * sheen_albedo(w.z.abs(), m.sheen_roughness)
+    } else {
+        1.0
+    };
+    (coat, sheen)
+}
+
+/// `w` in the clear coat's frame (its normal is +Z there).
+/// mirror: shaders/bsdf.wgsl `to_coat`
+pub fn to_coat(m: &Material, w: Vec3) -> Vec3 {
+    let (t, b) = onb_from_normal(m.coat_normal);
+    Vec3::new(w.dot(t), w.dot(b), w.dot(m.coat_normal))
+}
+
+/// The clear coat's f |cos wi| (wi's cosine to the shading normal) and the pdf of
+/// sampling its visible normals, for a rough coat; zero for a smooth one (a delta).
+/// mirror: shaders/bsdf.wgsl `coat_reflect`
+pub fn coat_reflect(m: &Material, wo: Vec3, wi: Vec3) -> (f32, f32) {
+    if m.clearcoat == 0.0 || m.clearcoat_roughness == 0.0 || wo.z <= 0.0 || wi.z <= 0.0 {
+        return (0.0, 0.0);
+    }
+    let (o, i) = (to_coat(m, wo), to_coat(m, wi));
+    if o.z <= 0.0 || i.z <= 0.0 {
+        return (0.0, 0.0);
+    }
+    let alpha = ggx_alpha(m.clearcoat_roughness);
+    let h = (o + i).normalize();
+    let d = ggx_d(h, alpha);
+    let f = m.clearcoat * coat_fresnel(o.dot(h)) * d * ggx_g1(o, alpha) * ggx_g1(i, alpha) * wi.z
+        / (4.0 * o.z * i.z);
+    (f, ggx_g1(o, alpha) * d / (4.0 * o.z))
+}
+
+/// The probabilities of drawing from the coat, the sheen and the base at `wo`: the coat
+/// by its weight times its Fresnel (kept within [0.25, 0.9] where rough, so that its
+/// highlights are found), the sheen by its albedo, the base by what is left; from below
+/// the surface, the base alone. All zero when nothing reflects.
+/// mirror: shaders/bsdf.wgsl `layer_pdfs`
+pub fn layer_pdfs(m: &Material, wo: Vec3) -> [f32; 3] {
+    let base = pbr_lobe_pdfs(m, wo);
+    let base_reflects = if base[0] + base[1] + base[2] + base[3] > 0.0 {
+        1.0
+    } else {
+        0.0
+    };
+    if wo.z <= 0.0 {
+        return [0.0, 0.0, base_reflects];
+    }
+    let f = coat_fresnel(m.coat_normal.dot(wo));
+    let f = if m.clearcoat_roughness > 0.0 {
+        f.clamp(0.25, 0.9)
+    } else {
+        f
+    };
+    let coat = m.clearcoat * f;
+    let s = m.sheen_color.max_element();
+    let sheen = if s > 0.0 {
+        (1.0 - coat) * s * sheen_albedo(wo.z, m.sheen_roughness)
+    } else {
+        0.0
+    };
+    let w = [coat, sheen, (1.0 - coat - sheen) * base_reflects];
+    let sum = w[0] + w[1] + w[2];
+    if sum > 0.0 {
+        w.map(|x| x / sum)
+    } else {
+        [0.0; 3]
+    }
+}
+
+/// f |cos wi| of the whole `pbr` stack (its non-delta lobes).
+/// mirror: shaders/bsdf.wgsl `pbr_eval`
+pub fn pbr_eval(m: &Material, wo: Vec3, wi: Vec3) -> Vec3 {
+    let base = base_eval(m, wo, wi);
+    if !has_layers(m) {
+        return base;
+    }
+    let (coat_o, sheen_o) = layers_pass(m, wo);
+    let (coat_i, sheen_i) = layers_pass(m, wi);
+    let sheen = sheen_reflect(m.sheen_color, m.sheen_roughness, wo, wi);
+    let under = sheen + base * sheen_o.min(sheen_i);
+    under * (coat_o * coat_i) + Vec3::splat(coat_reflect(m, wo, wi).0)
+}
+
+/// The pdf with which [`pbr_sample`] draws `wi` through a non-delta lobe.
+/// mirror: shaders/bsdf.wgsl `pbr_pdf`
+pub fn pbr_pdf(m: &Material, wo: Vec3, wi: Vec3) -> f32 {
+    if !has_layers(m) {
+        return base_pdf(m, wo, wi);
+    }
+    let p = layer_pdfs(m, wo);
+    let sheen = if wo.z > 0.0 && wi.z > 0.0 {
+        cosine_hemisphere_pdf(wi.z)
+    } else {
+        0.0
+    };
+    p[0] * coat_reflect(m, wo, wi).1 + p[1] * sheen + p[2] * base_pdf(m, wo, wi)
+}
+
+/// Draws `wi` from the coat, the sheen or the base, chosen by `u_lobe` (which the base
+/// reuses, rescaled, for its own lobes).
+/// mirror: shaders/bsdf.wgsl `pbr_sample`
+pub fn pbr_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+    if !has_layers(m) {
+        return base_sample(m, wo, u_lobe, u);
+    }
+    let p = layer_pdfs(m, wo);
+    let wi = if u_lobe < p[0] {
+        let (t, b) = onb_from_normal(m.coat_normal);
+        let o = to_coat(m, wo);
+        if m.clearcoat_roughness == 0.0 {
+            // A smooth coat: the mirror direction about its normal.
+            let wi = 2.0 * wo.dot(m.coat_normal) * m.coat_normal - wo;
+            if o.z <= 0.0 || wi.z <= 0.0 {
+                return None;
+            }
+            return Some(BsdfSample {
+                wi,
+                weight: Vec3::splat(m.clearcoat * coat_fresnel(o.z) / p[0]),
+                pdf: p[0],
+                delta: true,
+                eta: 1.0,
+            });
+        }
+        if o.z <= 0.0 {
+            return None;
+        }
+        let h = ggx_sample_visible(o, ggx_alpha(m.clearcoat_roughness), u);
+        let i = 2.0 * o.dot(h) * h - o;
+        i.x * t + i.y * b + i.z * m.coat_normal
+    } else if u_lobe < p[0] + p[1] {
+        sample_cosine_hemisphere(u)
+    } else {
+        if p[2] <= 0.0 {
+            return None;
+        }
+        let u_base = ((u_lobe - p[0] - p[1]) / p[2]).min(ONE_MINUS_EPSILON);
+        let bs = base_sample(m, wo, u_base, u)?;
+        if bs.delta {
+            let (coat_o, sheen_o) = layers_pass(m, wo);
+            let (coat_i, sheen_i) = layers_pass(m, bs.wi);
+            let pass = coat_o * coat_i * sheen_o.min(sheen_i);
+            return Some(BsdfSample {
+                weight: bs.weight * (pass / p[2]),
+                pdf: bs.pdf * p[2],
+                ..bs
+            });
+        }
+        bs.wi
+    };
+    let pdf = pbr_pdf(m, wo, wi);
+    // (Also refuses a NaN pdf.)
+    if pdf.is_nan() || pdf <= 0.0 {
+        return None;
+    }
+    let eta = if wo.z * wi.z < 0.0 && m.flags & MAT_THIN_WALLED == 0 {
         pbr_etap(m, wo)
     } else {
         1.0

@@ -5,6 +5,7 @@
 //! twin; the stages only read what it builds, and none of them imports it.
 
 use super::environment::cell_corners;
+use super::sheen::{SHEEN_TABLE_OFFSET, sheen_table};
 use super::tables::{
     CausticTarget, Environment, LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_POINT, LIGHT_SPOT, Light,
     RenderScene, SKY_EMITTER, TRI_COLOR, TRI_SMOOTH, TRI_TANGENT, TRI_UV, TRI_UV1, TriColors,
@@ -15,7 +16,6 @@ use crate::bvh::{BuildParams, Bvh, BvhError, WideBvh};
 use crate::film::srgb8_to_linear;
 use crate::geometry::{self, TriVerts};
 use crate::math::{Aabb, luminance};
-use crate::scene::material::MAT_ALPHA_MASK;
 use crate::scene::{
     Material, MaterialKind, NO_COLOR, NO_NORMAL, NO_TANGENT, NO_TEXTURE, NO_UV, PunctualLight,
     Scene, Sky, Texture,
@@ -36,7 +36,7 @@ impl RenderScene {
                 let mut t = TriVerts::new(corners[i as usize]);
                 t.set_object(mesh.object(i as usize));
                 let m = &scene.materials[mesh.triangles[i as usize].material as usize];
-                if m.flags & MAT_ALPHA_MASK != 0 {
+                if m.is_masked() {
                     t.set_masked();
                 }
                 t
@@ -68,7 +68,7 @@ impl RenderScene {
                 }
                 // The scene builder gives a triangle whose material has a normal map the
                 // texture coordinates the map reads (set 0 or 1).
-                let normal_map = scene.materials[t.material as usize].normal_texture;
+                let normal_map = scene.materials[t.material as usize].tangent_map();
                 if textured
                     && normal_map != NO_TEXTURE
                     && mesh.tangent_indices(i as usize)[0] != NO_TANGENT
@@ -141,10 +141,20 @@ impl RenderScene {
         } else {
             Vec::new()
         };
-        let texel_lut = (0..=255u8)
+        // The decoding of 8-bit texels (sRGB, then linear), and after it the sheen's
+        // albedo table where some material has sheen.
+        let mut texel_lut: Vec<f32> = (0..=255u8)
             .map(srgb8_to_linear)
             .chain((0..=255u8).map(|k| k as f32 / 255.0))
             .collect();
+        debug_assert_eq!(texel_lut.len(), SHEEN_TABLE_OFFSET as usize);
+        if scene
+            .materials
+            .iter()
+            .any(|m| m.sheen_color.max_element() > 0.0)
+        {
+            texel_lut.extend_from_slice(sheen_table());
+        }
         let scene_bounds = bounds.iter().fold(Aabb::EMPTY, |a, &b| a.union(b));
         let scene_sphere = if bounds.is_empty() {
             (Vec3::ZERO, 0.0)

@@ -55,7 +55,7 @@ use super::lights::{LightPick, pick_light, spot_falloff, triangle_emission};
 use super::rng::{self, Rng};
 use super::sampling::{ONE_MINUS_EPSILON, sample_concentric_disk, sample_uniform_triangle};
 use super::surface::{
-    ShadingFrame, SurfaceHit, geometry_agrees, offset_ray_origin, shading_frame, surface_at,
+    ShadingFrame, SurfaceHit, coated, geometry_agrees, offset_ray_origin, shading_frame, surface_at,
 };
 use super::tables::{
     CausticTarget, LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_SPOT, Light, RenderScene, SKY_EMITTER,
@@ -197,6 +197,7 @@ impl LightVertex {
             p: Vec3::ZERO,
             ng: Vec3::Z,
             ns: Vec3::Z,
+            nc: Vec3::Z,
             material: 0,
             front_face: true,
             tri: 0,
@@ -253,7 +254,7 @@ pub fn start_at_triangle(
     let tri = &scene.tris[light as usize];
     let [a, b, c] = tri.corners();
     let bary = sample_uniform_triangle(pick.u);
-    if tri.is_masked() && !alpha_test(scene, light, bary.x, bary.y) {
+    if tri.is_masked() && !alpha_test(scene, light, bary.x, bary.y, false) {
         return None;
     }
     let q = (1.0 - bary.x - bary.y) * a + bary.x * b + bary.y * c;
@@ -430,7 +431,7 @@ pub fn trace_light_subpath(scene: &RenderScene, rng: &Rng, max_segments: u32) ->
         rays += 1;
         let Some(hit) = scene
             .wide
-            .traverse_closest(&ray, T_INF, |t, u, v| alpha_test(scene, t, u, v))
+            .traverse_closest(&ray, T_INF, |t, u, v| alpha_test(scene, t, u, v, false))
         else {
             break;
         };
@@ -467,6 +468,7 @@ pub fn trace_light_subpath(scene: &RenderScene, rng: &Rng, max_segments: u32) ->
         }
         // A bounce sampled from the side the light came from.
         let frame = shading_frame(&mat, &si, wo_world);
+        let mat = coated(&mat, &si, &frame);
         let wo = frame.to_local(wo_world);
         let u_lobe = if bsdf_draws_lobe(&mat) {
             rng.rng_1d(segment, rng::DIM_CAUSTIC_LOBE)
@@ -506,7 +508,8 @@ pub fn trace_light_subpath(scene: &RenderScene, rng: &Rng, max_segments: u32) ->
             // `PathState::caustic_pdf` takes it, the other way round. (A punctual light's
             // subpath keeps its pdf of 0: no other strategy makes its paths.)
             let back = shading_frame(&mat, &si, wi_world);
-            let pdf_camera = bsdf_pdf(&mat, back.to_local(wi_world), back.to_local(wo_world));
+            let mat_b = coated(&mat, &si, &back);
+            let pdf_camera = bsdf_pdf(&mat_b, back.to_local(wi_world), back.to_local(wo_world));
             pdf *= bs.pdf * cos_in / (pdf_camera * cos_out);
             if !(pdf > 0.0 && pdf.is_finite()) {
                 break;
@@ -619,6 +622,7 @@ pub fn light_vertex_seen(
     let mat_l = material_at(scene, base, lv.si.uv, lv.si.color);
     let wo_l_world = -wc;
     let frame_l = shading_frame(&mat_l, &lv.si, wo_l_world);
+    let mat_l = coated(&mat_l, &lv.si, &frame_l);
     let wo_l = frame_l.to_local(wo_l_world);
     let wi_l = frame_l.to_local(lv.wi);
     let f_l = bsdf_eval(&mat_l, wo_l, wi_l);

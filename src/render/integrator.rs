@@ -21,7 +21,8 @@ use super::rng::{self, Rng};
 use super::sampling::power_heuristic;
 /// Also reachable here, the path that callers outside the renderer (`crate::bench`) name.
 use super::surface::{
-    ShadingFrame, SurfaceHit, geometry_agrees, offset_ray_origin, shading_frame, surface_at,
+    ShadingFrame, SurfaceHit, coated, geometry_agrees, needs_coat_normal, offset_ray_origin,
+    shading_frame, surface_at, with_coat_normal,
 };
 use super::tables::RenderScene;
 use super::texture::{alpha_test, material_at};
@@ -127,10 +128,9 @@ pub fn connect_light_path(
             && let Some(link) = caustic_link(scene, &v.si, v.mat, &v.frame, v.wo_world, v.wo, lv)
         {
             st.rays += 1;
-            if !scene
-                .wide
-                .traverse_any(&link.ray, link.t_max, |t, u, v| alpha_test(scene, t, u, v))
-            {
+            if !scene.wide.traverse_any(&link.ray, link.t_max, |t, u, v| {
+                alpha_test(scene, t, u, v, false)
+            }) {
                 st.radiance += st.beta * link.value;
             }
         }
@@ -179,7 +179,9 @@ pub fn path_vertex<'a, const CAUSTICS: bool>(
         rng.rng_2d(st.depth, rng::DIM_LIGHT_U)
     };
     st.rays += 1;
-    let Some(hit) = wide.traverse_closest(&st.ray, T_INF, |t, u, v| alpha_test(scene, t, u, v))
+    let camera = st.depth == 0;
+    let Some(hit) =
+        wide.traverse_closest(&st.ray, T_INF, |t, u, v| alpha_test(scene, t, u, v, camera))
     else {
         let w = if st.prev_delta || scene.sky_pmf == 0.0 {
             1.0
@@ -193,11 +195,14 @@ pub fn path_vertex<'a, const CAUSTICS: bool>(
     // A material without textures, at a point without a vertex colour, is used where it
     // lies (no copy); the WGSL copies anyway.
     let base = &scene.materials[si.material as usize];
-    let mat = if base.has_texture() || si.color != Vec4::ONE {
-        &*textured.write(material_at(scene, base, si.uv, si.color))
-    } else {
-        base
-    };
+    let mut local = (base.has_texture() || si.color != Vec4::ONE)
+        .then(|| material_at(scene, base, si.uv, si.color));
+    let mat = local.as_ref().unwrap_or(base);
+    if mat.kind == MaterialKind::UNLIT {
+        // Only camera rays find an unlit surface: its colour, as it is.
+        st.radiance += st.beta * mat.albedo;
+        return None;
+    }
     if si.front_face && mat.is_emissive() {
         let cos_l = -st.ray.dir.dot(si.ng);
         let w = if !st.prev_delta {
@@ -224,6 +229,13 @@ pub fn path_vertex<'a, const CAUSTICS: bool>(
     }
     let wo_world = -st.ray.dir;
     let frame = shading_frame(mat, &si, wo_world);
+    if needs_coat_normal(mat) {
+        local = Some(with_coat_normal(mat, &si, &frame));
+    }
+    let mat: &'a Material = match local {
+        Some(m) => textured.write(m),
+        None => base,
+    };
     let ng = frame.ng;
     let wo = frame.to_local(wo_world);
 
@@ -255,7 +267,7 @@ pub fn path_vertex<'a, const CAUSTICS: bool>(
             if f != Vec3::ZERO {
                 st.rays += 1;
                 if !wide.traverse_any(&Ray::new(ls.origin, ls.wi), ls.t_max, |t, u, v| {
-                    alpha_test(scene, t, u, v)
+                    alpha_test(scene, t, u, v, false)
                 }) {
                     let w = if ls.delta {
                         1.0
@@ -338,7 +350,8 @@ pub fn path_continue<const CAUSTICS: bool>(st: &mut PathState, v: &PathVertex, r
             let cos_out = wi_world.dot(si.ng).abs();
             let cos_in = wo_world.dot(si.ng).abs();
             let back = shading_frame(mat, si, wi_world);
-            let pdf_light = bsdf_pdf(mat, back.to_local(wi_world), back.to_local(wo_world));
+            let mat_b = coated(mat, si, &back);
+            let pdf_light = bsdf_pdf(&mat_b, back.to_local(wi_world), back.to_local(wo_world));
             st.caustic_pdf *= bs.pdf * cos_in / (pdf_light * cos_out);
             st.caustic_hops += 1;
             if !(st.caustic_pdf.is_finite() && st.caustic_hops < MAX_CAUSTIC_HOPS as u32) {
@@ -402,10 +415,9 @@ pub fn start_light(scene: &RenderScene, cam: &CameraRays, rng: &Rng, max_depth: 
         let u_lens = rng.rng_2d(lv.segments, rng::DIM_LENS_U);
         if let Some(link) = camera_link(scene, cam, lv, u_lens) {
             out.rays += 1;
-            if !scene
-                .wide
-                .traverse_any(&link.ray, link.t_max, |t, u, v| alpha_test(scene, t, u, v))
-            {
+            if !scene.wide.traverse_any(&link.ray, link.t_max, |t, u, v| {
+                alpha_test(scene, t, u, v, false)
+            }) {
                 (out.splat_pixels[k], out.splats[k]) = (link.pixel, link.value);
             }
         }
@@ -594,7 +606,7 @@ pub struct FirstHit {
 pub fn first_hit(scene: &RenderScene, ray: &Ray) -> FirstHit {
     let (hit, cost) =
         traverse_closest_counted(&scene.bvh.nodes, &scene.tris, ray, T_INF, |t, u, v| {
-            alpha_test(scene, t, u, v)
+            alpha_test(scene, t, u, v, true)
         });
     let Some(hit) = hit else {
         return FirstHit {

@@ -141,7 +141,7 @@ pub fn sample_light(scene: &RenderScene, p: Vec3, ng: Vec3, u: Vec2) -> Option<L
     let cos_l = -wi.dot(scene.tri_normals[light as usize]);
     // A point that an alpha mask cuts out emits nothing.
     if !(cos_l > 0.0 && dist > 0.0)
-        || (tri.is_masked() && !alpha_test(scene, light, bary.x, bary.y))
+        || (tri.is_masked() && !alpha_test(scene, light, bary.x, bary.y, false))
     {
         return None;
     }

@@ -23,6 +23,7 @@ pub mod job;
 pub mod lights;
 pub mod rng;
 pub mod sampling;
+pub mod sheen;
 pub mod surface;
 pub mod tables;
 pub mod texture;

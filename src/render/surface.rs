@@ -10,7 +10,7 @@ use super::tables::{RenderScene, TRI_SMOOTH, TRI_TANGENT};
 use super::texture::{normal_mapped, triangle_color, triangle_uv};
 use crate::bvh::Hit;
 use crate::math::{Ray, onb_from_normal};
-use crate::scene::Material;
+use crate::scene::{Material, NO_TEXTURE};
 use glam::{Vec3, Vec4};
 
 /// A ray's hit point with the frames its shading needs.
@@ -20,8 +20,12 @@ pub struct SurfaceHit {
     pub p: Vec3,
     /// Geometric normal of the front face ((v1 − v0) × (v2 − v0)).
     pub ng: Vec3,
-    /// Interpolated shading normal, on the same side as `ng`.
+    /// Interpolated shading normal (normal-mapped where the material has a map), on the
+    /// same side as `ng`.
     pub ns: Vec3,
+    /// The clear coat's normal: interpolated, and mapped by the coat's own normal map
+    /// where the material has one (the base's map does not reach the coat).
+    pub nc: Vec3,
     pub material: u32,
     pub front_face: bool,
     pub tri: u32,
@@ -49,13 +53,38 @@ pub fn surface_at(scene: &RenderScene, ray: &Ray, hit: &Hit) -> SurfaceHit {
         }
     }
     let uv = triangle_uv(scene, hit.tri, hit.u, hit.v);
+    let mut nc = ns;
     if sh.flags & TRI_TANGENT != 0 {
-        ns = normal_mapped(scene, hit.tri, hit.u, hit.v, uv, ns, ng);
+        let m = &scene.materials[sh.material as usize];
+        let interpolated = ns;
+        if m.normal_texture != NO_TEXTURE {
+            ns = normal_mapped(
+                scene,
+                hit,
+                uv,
+                interpolated,
+                ng,
+                m.normal_texture,
+                m.normal_scale,
+            );
+        }
+        if m.clearcoat_normal_texture != NO_TEXTURE {
+            nc = normal_mapped(
+                scene,
+                hit,
+                uv,
+                interpolated,
+                ng,
+                m.clearcoat_normal_texture,
+                m.clearcoat_normal_scale,
+            );
+        }
     }
     SurfaceHit {
         p: ray.at(hit.t),
         ng,
         ns,
+        nc,
         material: sh.material,
         front_face: ray.dir.dot(ng) < 0.0,
         tri: hit.tri,
@@ -117,6 +146,40 @@ pub fn shading_frame(mat: &Material, si: &SurfaceHit, wo_world: Vec3) -> Shading
     }
     let (t, b) = onb_from_normal(ns);
     ShadingFrame { ng, t, b, ns }
+}
+
+/// `mat` with its clear coat's normal in `frame` ([`Material::coat_normal`]): the hit's
+/// coat normal turned to `frame`'s side, or +Z where it lies in or behind the frame's
+/// plane. Only a coat whose normal can differ from the frame's (some normal map) needs it.
+/// mirror: shaders/surface.wgsl `with_coat_normal`
+#[inline(always)]
+pub fn with_coat_normal(mat: &Material, si: &SurfaceHit, frame: &ShadingFrame) -> Material {
+    let mut out = *mat;
+    let c = frame.to_local(si.nc);
+    let c = if c.z < 0.0 { -c } else { c };
+    out.coat_normal = if c.z > 1e-4 { c.normalize() } else { Vec3::Z };
+    out
+}
+
+/// `mat` as the BSDF in `frame` reads it: with its clear coat's normal where
+/// [`needs_coat_normal`], else as it is.
+/// mirror: shaders/surface.wgsl `coated`
+#[inline(always)]
+pub fn coated(mat: &Material, si: &SurfaceHit, frame: &ShadingFrame) -> Material {
+    if needs_coat_normal(mat) {
+        with_coat_normal(mat, si, frame)
+    } else {
+        *mat
+    }
+}
+
+/// Whether the material's clear coat needs its normal set per hit by [`with_coat_normal`]:
+/// a coat on a material with a normal map of either layer.
+/// mirror: shaders/surface.wgsl `needs_coat_normal`
+#[inline(always)]
+pub fn needs_coat_normal(mat: &Material) -> bool {
+    mat.clearcoat > 0.0
+        && (mat.normal_texture != NO_TEXTURE || mat.clearcoat_normal_texture != NO_TEXTURE)
 }
 
 /// Whether the geometry agrees with the shading frame about a pair of directions: a

@@ -136,6 +136,8 @@ pub struct RenderScene {
     pub texels: Vec<u32>,
     /// Texel values of 8-bit channels: entries 0–255 decode sRGB, 256–511 are linear
     /// (`k / 255`). The shaders read the same table, so both renderers decode alike.
+    /// Where a material has sheen, the sheen's albedo table follows
+    /// (`sheen::sheen_table`, which the CPU reads where it lies).
     pub texel_lut: Vec<f32>,
     /// Point, spot and directional lights.
     pub lights: Vec<Light>,

@@ -6,8 +6,9 @@
 //! `shaders/texture.wgsl`.
 
 use super::tables::{RenderScene, TRI_COLOR, TRI_UV, TRI_UV1, TriUvs};
-use crate::scene::material::MAT_ALPHA_MASK;
-use crate::scene::{Material, NO_TEXTURE, Texture, TextureFormat, Wrap};
+use crate::bvh::Hit;
+use crate::scene::material::{MAT_ALPHA_MASK, MAT_SPEC_GLOSS};
+use crate::scene::{Material, MaterialKind, NO_TEXTURE, Texture, TextureFormat, Wrap};
 use glam::{Vec2, Vec3, Vec4};
 
 /// Texel (`x`, `y`) of texture `t`, decoded to linear RGBA: 8-bit channels through the
@@ -150,9 +151,10 @@ pub fn scalar_lookup(scene: &RenderScene, index: u32, uv: Vec4) -> f32 {
 
 /// `m` at a surface point whose texture coordinate sets are `uv` and whose vertex colour
 /// is `color`: its base colour multiplied by the colour's RGB (glTF's `COLOR_0`; white
-/// leaves it as it is), and every textured parameter multiplied by its texture. A
-/// material without textures, at white, is returned as it is. Roughness, metallic and
-/// transmission stay within [0, 1].
+/// leaves it as it is), and every textured parameter multiplied by its texture (roughness
+/// by glossiness, where [`MAT_SPEC_GLOSS`] says the texture holds it: 1 − (1 − r) g). A
+/// material without textures, at white, is returned as it is. Scalar parameters stay
+/// within [0, 1].
 /// mirror: shaders/texture.wgsl `material_at`
 pub fn material_at(scene: &RenderScene, m: &Material, uv: Vec4, color: Vec4) -> Material {
     let mut out = *m;
@@ -165,7 +167,12 @@ pub fn material_at(scene: &RenderScene, m: &Material, uv: Vec4, color: Vec4) -> 
     }
     if m.roughness_texture != NO_TEXTURE {
         let r = scalar_lookup(scene, m.roughness_texture, uv);
-        out.roughness = (out.roughness * r).clamp(0.0, 1.0);
+        out.roughness = if m.flags & MAT_SPEC_GLOSS != 0 {
+            // The texture holds glossiness, which scales 1 − roughness.
+            (1.0 - (1.0 - out.roughness) * r).clamp(0.0, 1.0)
+        } else {
+            (out.roughness * r).clamp(0.0, 1.0)
+        };
     }
     if m.metallic_texture != NO_TEXTURE {
         let k = scalar_lookup(scene, m.metallic_texture, uv);
@@ -175,27 +182,49 @@ pub fn material_at(scene: &RenderScene, m: &Material, uv: Vec4, color: Vec4) -> 
         let k = scalar_lookup(scene, m.transmission_texture, uv);
         out.transmission = (out.transmission * k).clamp(0.0, 1.0);
     }
+    if m.specular_color_texture != NO_TEXTURE {
+        out.specular_color *= surface_lookup(scene, m.specular_color_texture, uv).truncate();
+    }
+    if m.specular_texture != NO_TEXTURE {
+        let k = scalar_lookup(scene, m.specular_texture, uv);
+        out.specular = (out.specular * k).clamp(0.0, 1.0);
+    }
+    if m.clearcoat_texture != NO_TEXTURE {
+        let k = scalar_lookup(scene, m.clearcoat_texture, uv);
+        out.clearcoat = (out.clearcoat * k).clamp(0.0, 1.0);
+    }
+    if m.clearcoat_roughness_texture != NO_TEXTURE {
+        let k = scalar_lookup(scene, m.clearcoat_roughness_texture, uv);
+        out.clearcoat_roughness = (out.clearcoat_roughness * k).clamp(0.0, 1.0);
+    }
+    if m.sheen_color_texture != NO_TEXTURE {
+        out.sheen_color *= surface_lookup(scene, m.sheen_color_texture, uv).truncate();
+    }
+    if m.sheen_roughness_texture != NO_TEXTURE {
+        let k = scalar_lookup(scene, m.sheen_roughness_texture, uv);
+        out.sheen_roughness = (out.sheen_roughness * k).clamp(0.0, 1.0);
+    }
     out
 }
 
-/// The shading normal that the normal map of triangle `tri`'s material gives at
-/// barycentrics (`b1`, `b2`) and texture coordinate sets `uv`, around the unit normal `n` (interpolated
-/// or geometric, on the side of `ng`): the map's tangent-space normal (2 · texel − 1, its
-/// x and y scaled by `normal_scale`) in the frame of the interpolated tangent made
-/// orthogonal to `n` and the bitangent w · n × tangent. `n` itself where that frame
-/// degenerates or the mapped normal would face away from `ng`.
+/// The shading normal that normal map `map` (of XY strength `scale`) gives at `hit` (its
+/// triangle and barycentrics) with texture coordinate sets `uv`, around the unit
+/// normal `n` (interpolated or geometric, on the side of `ng`): the map's tangent-space
+/// normal (2 · texel − 1, its x and y scaled by `scale`) in the frame of the interpolated
+/// tangent made orthogonal to `n` and the bitangent w · n × tangent. `n` itself where that
+/// frame degenerates or the mapped normal would face away from `ng`.
 /// mirror: shaders/texture.wgsl `normal_mapped`
 pub fn normal_mapped(
     scene: &RenderScene,
-    tri: u32,
-    b1: f32,
-    b2: f32,
+    hit: &Hit,
     uv: Vec4,
     n: Vec3,
     ng: Vec3,
+    map: u32,
+    scale: f32,
 ) -> Vec3 {
-    let m = &scene.materials[scene.shading[tri as usize].material as usize];
-    let g = &scene.tri_tangents[tri as usize];
+    let g = &scene.tri_tangents[hit.tri as usize];
+    let (b1, b2) = (hit.u, hit.v);
     let w = 1.0 - b1 - b2;
     let t4 = w * Vec4::from(g.t0) + b1 * Vec4::from(g.t1) + b2 * Vec4::from(g.t2);
     let t = (t4.truncate() - n * n.dot(t4.truncate())).normalize_or_zero();
@@ -203,22 +232,25 @@ pub fn normal_mapped(
         return n;
     }
     let b = if t4.w < 0.0 { -n.cross(t) } else { n.cross(t) };
-    let c = surface_lookup(scene, m.normal_texture, uv).truncate() * 2.0 - Vec3::ONE;
-    let mapped =
-        (t * (c.x * m.normal_scale) + b * (c.y * m.normal_scale) + n * c.z).normalize_or_zero();
+    let c = surface_lookup(scene, map, uv).truncate() * 2.0 - Vec3::ONE;
+    let mapped = (t * (c.x * scale) + b * (c.y * scale) + n * c.z).normalize_or_zero();
     if mapped.dot(ng) <= 0.0 {
         return n;
     }
     mapped
 }
 
-/// Whether a hit at barycentrics (`b1`, `b2`) of triangle `tri` counts: false where its
-/// material is an alpha mask and the base colour's alpha (factor times the vertex
-/// colour's alpha times the base colour texture's alpha) is below the cut-off, as glTF's
-/// `alphaMode` MASK says.
+/// Whether a hit at barycentrics (`b1`, `b2`) of triangle `tri` counts for a ray from the
+/// camera (`camera`) or another: false on an unlit surface for any ray but the camera's,
+/// and where the material is an alpha mask and the base colour's alpha (factor times the
+/// vertex colour's alpha times the base colour texture's alpha) is below the cut-off, as
+/// glTF's `alphaMode` MASK says.
 /// mirror: shaders/texture.wgsl `alpha_test`
-pub fn alpha_test(scene: &RenderScene, tri: u32, b1: f32, b2: f32) -> bool {
+pub fn alpha_test(scene: &RenderScene, tri: u32, b1: f32, b2: f32, camera: bool) -> bool {
     let m = &scene.materials[scene.shading[tri as usize].material as usize];
+    if m.kind == MaterialKind::UNLIT && !camera {
+        return false;
+    }
     if m.flags & MAT_ALPHA_MASK == 0 {
         return true;
     }

@@ -195,16 +195,10 @@ impl Builder {
         Ok(materials
             .into_iter()
             .zip(names)
-            .map(|(mat, name)| {
-                let mat = Material {
-                    albedo_texture: slot(mat.albedo_texture),
-                    emission_texture: slot(mat.emission_texture),
-                    roughness_texture: slot(mat.roughness_texture),
-                    metallic_texture: slot(mat.metallic_texture),
-                    transmission_texture: slot(mat.transmission_texture),
-                    normal_texture: slot(mat.normal_texture),
-                    ..mat
-                };
+            .map(|(mut mat, name)| {
+                for s in mat.texture_slots_mut() {
+                    *s = slot(*s);
+                }
                 self.add_material(name, mat)
             })
             .collect())

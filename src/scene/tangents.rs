@@ -72,7 +72,7 @@ pub fn generate_missing(mesh: &mut Mesh, materials: &[Material], textures: &[Tex
     let mut faces = Vec::new();
     let mut uvs = Vec::new();
     for (i, t) in mesh.triangles.iter().enumerate() {
-        let map = materials[t.material as usize].normal_texture;
+        let map = materials[t.material as usize].tangent_map();
         if map == NO_TEXTURE || mesh.tangent_indices(i)[0] != NO_TANGENT {
             continue;
         }

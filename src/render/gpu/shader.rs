@@ -17,12 +17,15 @@ use crate::render::caustics::{LIGHT_SUBPATH_RATE, MAX_CAUSTIC_HOPS};
 use crate::render::integrator::RR_DEPTH;
 use crate::render::rng;
 use crate::render::sampling::{ONE_MINUS_EPSILON, UNIFORM_SPHERE_PDF};
+use crate::render::sheen::{
+    SHEEN_MIN_ROUGHNESS, SHEEN_TABLE_COSINES, SHEEN_TABLE_OFFSET, SHEEN_TABLE_ROUGHNESSES,
+};
 use crate::render::tables::{
     LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_POINT, LIGHT_SPOT, RenderScene, SKY_EMITTER, TRI_COLOR,
     TRI_SMOOTH, TRI_TANGENT, TRI_UV, TRI_UV1,
 };
-use crate::scene::material::{MAT_ALPHA_MASK, MAT_THIN_WALLED};
-use crate::scene::{MaterialKind, NO_TEXTURE, TextureFormat, Wrap};
+use crate::scene::material::{MAT_ALPHA_MASK, MAT_SPEC_GLOSS, MAT_THIN_WALLED};
+use crate::scene::{Material, MaterialKind, NO_TEXTURE, TextureFormat, Wrap};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_4, PI};
 
 /// The value of a shared constant.
@@ -75,6 +78,11 @@ pub fn shared_constants() -> Vec<(String, Value)> {
         ("NO_ID", U32(NO_ID)),
         ("MAT_THIN_WALLED", U32(MAT_THIN_WALLED)),
         ("MAT_ALPHA_MASK", U32(MAT_ALPHA_MASK)),
+        ("MAT_SPEC_GLOSS", U32(MAT_SPEC_GLOSS)),
+        ("SHEEN_MIN_ROUGHNESS", F32(SHEEN_MIN_ROUGHNESS)),
+        ("SHEEN_TABLE_COSINES", U32(SHEEN_TABLE_COSINES)),
+        ("SHEEN_TABLE_ROUGHNESSES", U32(SHEEN_TABLE_ROUGHNESSES)),
+        ("SHEEN_TABLE_OFFSET", U32(SHEEN_TABLE_OFFSET)),
         ("TABLE_WIDTH_LOG2", U32(TABLE_WIDTH.ilog2())),
         ("T_INF", F32(T_INF)),
         ("GAMMA_2", F32(GAMMA_2)),
@@ -158,6 +166,7 @@ const LIBRARY: &[Source] = &[
 /// The rest of the library, which calls the traversal: these, then the caustics
 /// ([`CAUSTICS`] or [`NO_CAUSTICS`]), then the integrator.
 const SHADING: &[Source] = &[
+    shader!("sheen.wgsl"),
     shader!("bsdf.wgsl"),
     shader!("camera.wgsl"),
     shader!("texture.wgsl"),
@@ -217,7 +226,7 @@ pub enum ShaderChecks {
 pub struct Features {
     /// The scene has textures (material slots, normal maps, an environment map): `TEXTURES`.
     pub textures: bool,
-    /// Some material is an alpha mask: `ALPHA_MASKS`.
+    /// Some material is an alpha mask or unlit (rays pass through it): `ALPHA_MASKS`.
     pub alpha_masks: bool,
 }
 
@@ -226,10 +235,7 @@ impl Features {
     pub fn of(scene: &RenderScene) -> Self {
         Self {
             textures: !scene.textures.is_empty(),
-            alpha_masks: scene
-                .materials
-                .iter()
-                .any(|m| m.flags & MAT_ALPHA_MASK != 0),
+            alpha_masks: scene.materials.iter().any(Material::is_masked),
         }
     }
 

@@ -15,16 +15,24 @@ pub(super) const SUPPORTED_EXTENSIONS: &[&str] = &[
     "EXT_texture_webp",
     "KHR_draco_mesh_compression",
     "KHR_lights_punctual",
+    "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
+    "KHR_materials_pbrSpecularGlossiness",
+    "KHR_materials_sheen",
     "KHR_materials_specular",
     "KHR_materials_transmission",
+    "KHR_materials_unlit",
     "KHR_materials_volume",
     "KHR_mesh_quantization",
     "KHR_meshopt_compression",
     "KHR_texture_basisu",
     "KHR_texture_transform",
 ];
+
+/// The prefix of the material extensions' names, which each material that uses one not
+/// in [`SUPPORTED_EXTENSIONS`] warns of (`material.rs`).
+pub(super) const MATERIAL_EXTENSION: &str = "KHR_materials_";
 
 /// The GLB header's magic, `glTF`.
 const GLB_MAGIC: &[u8; 4] = b"glTF";
@@ -225,12 +233,15 @@ fn check_required(required: &[String]) -> Result<(), String> {
 }
 
 /// Warns of the extensions the file uses, without requiring them, that meshtrace ignores.
+/// Material extensions are left to the warning of each material that uses one.
 pub(super) fn check_extensions(doc: &Doc) {
     let ignored: Vec<String> = doc
         .root
         .extensions_used
         .iter()
-        .filter(|e| !SUPPORTED_EXTENSIONS.contains(&e.as_str()))
+        .filter(|e| {
+            !SUPPORTED_EXTENSIONS.contains(&e.as_str()) && !e.starts_with(MATERIAL_EXTENSION)
+        })
         .map(|e| super::quoted(e))
         .collect();
     if !ignored.is_empty() {

@@ -1,16 +1,41 @@
 //! glTF materials as meshtrace `pbr` materials: the metallic-roughness factors and
-//! textures, the normal and emissive maps, the alpha mode, and KHR_materials_ior,
-//! _specular, _transmission, _volume and _emissive_strength; texture references with
-//! KHR_texture_transform, and images from EXT_texture_webp and KHR_texture_basisu. Each material is converted
-//! when a primitive first uses it.
+//! textures (or KHR_materials_pbrSpecularGlossiness's), the normal and emissive maps, the
+//! alpha mode, and KHR_materials_ior, _specular, _transmission, _volume, _clearcoat,
+//! _sheen and _emissive_strength; KHR_materials_unlit as the `unlit` kind; texture
+//! references with KHR_texture_transform, and images from EXT_texture_webp and
+//! KHR_texture_basisu. Each material is converted when a primitive first uses it; one
+//! that uses another KHR material extension is warned of by name.
 
 use super::buffers::Buffers;
-use crate::scene::material::{MAT_ALPHA_MASK, MAT_THIN_WALLED};
+use super::container::{MATERIAL_EXTENSION, SUPPORTED_EXTENSIONS};
+use crate::scene::material::{MAT_ALPHA_MASK, MAT_SPEC_GLOSS, MAT_THIN_WALLED};
 use crate::scene::texture::{TextureRef, Usage, UvTransform, Wrap};
 use crate::scene::{Material, MaterialKind, NO_TEXTURE, SceneError};
 use glam::Vec3;
 use gltf::json;
 use gltf::json::validation::Checked;
+use serde::Deserialize;
+
+/// KHR_materials_clearcoat, which the `gltf` crate leaves as JSON.
+#[derive(Deserialize, Default)]
+#[serde(default, rename_all = "camelCase")]
+struct Clearcoat {
+    clearcoat_factor: f32,
+    clearcoat_texture: Option<json::texture::Info>,
+    clearcoat_roughness_factor: f32,
+    clearcoat_roughness_texture: Option<json::texture::Info>,
+    clearcoat_normal_texture: Option<json::material::NormalTexture>,
+}
+
+/// KHR_materials_sheen, which the `gltf` crate leaves as JSON.
+#[derive(Deserialize, Default)]
+#[serde(default, rename_all = "camelCase")]
+struct Sheen {
+    sheen_color_factor: [f32; 3],
+    sheen_color_texture: Option<json::texture::Info>,
+    sheen_roughness_factor: f32,
+    sheen_roughness_texture: Option<json::texture::Info>,
+}
 
 /// The materials the primitives read so far use, converted, with their textures.
 pub(super) struct Materials<'b, 'a> {
@@ -109,39 +134,18 @@ impl<'b, 'a> Materials<'b, 'a> {
     fn convert(&mut self, i: usize, m: &json::Material) -> Result<Material, SceneError> {
         let doc = self.buffers.doc();
         let at = format!("materials[{i}]");
-        let pbr = &m.pbr_metallic_roughness;
-        let pbr_at = format!("{at}.pbrMetallicRoughness");
         let mut mat = Material::new(MaterialKind::PBR);
-        let [r, g, b, a] = pbr.base_color_factor.0;
-        let base = format!("{pbr_at}.baseColorFactor");
-        mat.albedo = Vec3::new(
-            self.unit(r, &base)?,
-            self.unit(g, &base)?,
-            self.unit(b, &base)?,
-        );
-        mat.alpha = self.unit(a, &base)?;
-        mat.metallic = self.unit(pbr.metallic_factor.0, &format!("{pbr_at}.metallicFactor"))?;
-        mat.roughness = self.unit(pbr.roughness_factor.0, &format!("{pbr_at}.roughnessFactor"))?;
-        if let Some(info) = &pbr.base_color_texture {
-            let at = format!("{pbr_at}.baseColorTexture");
-            mat.albedo_texture = self.texture(info.into(), &at, Usage::Colour)?;
-        }
-        if let Some(info) = &pbr.metallic_roughness_texture {
-            // Roughness in green, metallic in blue.
-            let at = format!("{pbr_at}.metallicRoughnessTexture");
-            mat.roughness_texture = self.texture(info.into(), &at, Usage::Scalar { channel: 1 })?;
-            mat.metallic_texture = self.texture(info.into(), &at, Usage::Scalar { channel: 2 })?;
+        let ext = m.extensions.as_ref();
+        match ext.and_then(|e| e.pbr_specular_glossiness.as_ref()) {
+            Some(sg) => {
+                let at = format!("{at}.extensions.KHR_materials_pbrSpecularGlossiness");
+                self.specular_glossiness(&mut mat, sg, &at)?;
+            }
+            None => self.metallic_roughness(&mut mat, &m.pbr_metallic_roughness, &at)?,
         }
         if let Some(normal) = &m.normal_texture {
-            let at = format!("{at}.normalTexture");
-            mat.normal_scale = self.finite(normal.scale, &format!("{at}.scale"))?;
-            let transform = normal_transform(normal, &at).map_err(|(at, m)| doc.error(at, m))?;
-            let info = Info {
-                index: normal.index.value(),
-                tex_coord: normal.tex_coord,
-                transform: transform.as_ref(),
-            };
-            mat.normal_texture = self.texture(info, &at, Usage::Linear)?;
+            (mat.normal_texture, mat.normal_scale) =
+                self.normal_map(normal, &format!("{at}.normalTexture"))?;
         }
         let mut emission = Vec3::from(m.emissive_factor.0);
         for (k, e) in emission.to_array().into_iter().enumerate() {
@@ -207,11 +211,14 @@ impl<'b, 'a> Materials<'b, 'a> {
                     ));
                 }
                 mat.specular_color = color;
-                if s.specular_texture.is_some() || s.specular_color_texture.is_some() {
-                    doc.warn(
-                        at,
-                        "specularTexture and specularColorTexture are not supported; their factors are used",
-                    );
+                if let Some(info) = &s.specular_texture {
+                    let at = format!("{at}.specularTexture");
+                    mat.specular_texture =
+                        self.texture(info.into(), &at, Usage::Scalar { channel: 3 })?;
+                }
+                if let Some(info) = &s.specular_color_texture {
+                    let at = format!("{at}.specularColorTexture");
+                    mat.specular_color_texture = self.texture(info.into(), &at, Usage::Colour)?;
                 }
             }
             if let Some(t) = &ext.transmission {
@@ -238,9 +245,203 @@ impl<'b, 'a> Materials<'b, 'a> {
                     doc.warn(at, "attenuation is not supported; the volume is clear");
                 }
             }
+            if let Some(value) = ext.others.get("KHR_materials_clearcoat") {
+                let at = format!("{at}.KHR_materials_clearcoat");
+                self.clearcoat(&mut mat, value, &at)?;
+            }
+            if let Some(value) = ext.others.get("KHR_materials_sheen") {
+                let at = format!("{at}.KHR_materials_sheen");
+                self.sheen(&mut mat, value, &at)?;
+            }
+            for name in ext.others.keys() {
+                if name.starts_with(MATERIAL_EXTENSION)
+                    && !SUPPORTED_EXTENSIONS.contains(&name.as_str())
+                {
+                    doc.warn(
+                        format!("{at}.{name}"),
+                        "is not supported; the material is rendered without it",
+                    );
+                }
+            }
+            if ext.unlit.is_some() {
+                // Only the base colour (and its alpha) is read; the surface reflects
+                // nothing and emits nothing but what the camera sees of it.
+                mat.kind = MaterialKind::UNLIT;
+                emission = Vec3::ZERO;
+                mat.emission_texture = NO_TEXTURE;
+            }
         }
         mat.emission = emission;
         Ok(mat)
+    }
+
+    /// The core metallic-roughness parameters at `at`.pbrMetallicRoughness.
+    fn metallic_roughness(
+        &mut self,
+        mat: &mut Material,
+        pbr: &json::material::PbrMetallicRoughness,
+        at: &str,
+    ) -> Result<(), SceneError> {
+        let pbr_at = format!("{at}.pbrMetallicRoughness");
+        let [r, g, b, a] = pbr.base_color_factor.0;
+        let base = format!("{pbr_at}.baseColorFactor");
+        mat.albedo = Vec3::new(
+            self.unit(r, &base)?,
+            self.unit(g, &base)?,
+            self.unit(b, &base)?,
+        );
+        mat.alpha = self.unit(a, &base)?;
+        mat.metallic = self.unit(pbr.metallic_factor.0, &format!("{pbr_at}.metallicFactor"))?;
+        mat.roughness = self.unit(pbr.roughness_factor.0, &format!("{pbr_at}.roughnessFactor"))?;
+        if let Some(info) = &pbr.base_color_texture {
+            let at = format!("{pbr_at}.baseColorTexture");
+            mat.albedo_texture = self.texture(info.into(), &at, Usage::Colour)?;
+        }
+        if let Some(info) = &pbr.metallic_roughness_texture {
+            // Roughness in green, metallic in blue.
+            let at = format!("{pbr_at}.metallicRoughnessTexture");
+            mat.roughness_texture = self.texture(info.into(), &at, Usage::Scalar { channel: 1 })?;
+            mat.metallic_texture = self.texture(info.into(), &at, Usage::Scalar { channel: 2 })?;
+        }
+        Ok(())
+    }
+
+    /// KHR_materials_pbrSpecularGlossiness at `at`, in place of the metallic-roughness
+    /// parameters: the diffuse colour as the base colour, under a dielectric whose Fresnel
+    /// is Schlick's of F0 = the specular colour ([`MAT_SPEC_GLOSS`]), with roughness
+    /// 1 − glossiness. The specular-glossiness texture gives the specular colour (RGB,
+    /// sRGB) and the glossiness (alpha, linear).
+    fn specular_glossiness(
+        &mut self,
+        mat: &mut Material,
+        sg: &json::extensions::material::PbrSpecularGlossiness,
+        at: &str,
+    ) -> Result<(), SceneError> {
+        let [r, g, b, a] = sg.diffuse_factor.0;
+        let diffuse = format!("{at}.diffuseFactor");
+        mat.albedo = Vec3::new(
+            self.unit(r, &diffuse)?,
+            self.unit(g, &diffuse)?,
+            self.unit(b, &diffuse)?,
+        );
+        mat.alpha = self.unit(a, &diffuse)?;
+        let [r, g, b] = sg.specular_factor.0;
+        let specular = format!("{at}.specularFactor");
+        let f0 = Vec3::new(
+            self.unit(r, &specular)?,
+            self.unit(g, &specular)?,
+            self.unit(b, &specular)?,
+        );
+        mat.specular_color = f0;
+        mat.flags |= MAT_SPEC_GLOSS;
+        mat.metallic = 0.0;
+        let gloss = self.unit(sg.glossiness_factor.0, &format!("{at}.glossinessFactor"))?;
+        mat.roughness = 1.0 - gloss;
+        if let Some(info) = &sg.diffuse_texture {
+            let at = format!("{at}.diffuseTexture");
+            mat.albedo_texture = self.texture(info.into(), &at, Usage::Colour)?;
+        }
+        if let Some(info) = &sg.specular_glossiness_texture {
+            let at = format!("{at}.specularGlossinessTexture");
+            mat.specular_color_texture = self.texture(info.into(), &at, Usage::Colour)?;
+            mat.roughness_texture = self.texture(info.into(), &at, Usage::Scalar { channel: 3 })?;
+        }
+        Ok(())
+    }
+
+    /// KHR_materials_clearcoat at `at`: the coat's weight (texture: red), roughness
+    /// (texture: green) and normal map.
+    fn clearcoat(
+        &mut self,
+        mat: &mut Material,
+        value: &serde_json::Value,
+        at: &str,
+    ) -> Result<(), SceneError> {
+        let c: Clearcoat = self.extension(value, at)?;
+        mat.clearcoat = self.unit(c.clearcoat_factor, &format!("{at}.clearcoatFactor"))?;
+        mat.clearcoat_roughness = self.unit(
+            c.clearcoat_roughness_factor,
+            &format!("{at}.clearcoatRoughnessFactor"),
+        )?;
+        if let Some(info) = &c.clearcoat_texture {
+            let at = format!("{at}.clearcoatTexture");
+            mat.clearcoat_texture = self.texture(info.into(), &at, Usage::Scalar { channel: 0 })?;
+        }
+        if let Some(info) = &c.clearcoat_roughness_texture {
+            let at = format!("{at}.clearcoatRoughnessTexture");
+            mat.clearcoat_roughness_texture =
+                self.texture(info.into(), &at, Usage::Scalar { channel: 1 })?;
+        }
+        if let Some(normal) = &c.clearcoat_normal_texture {
+            (mat.clearcoat_normal_texture, mat.clearcoat_normal_scale) =
+                self.normal_map(normal, &format!("{at}.clearcoatNormalTexture"))?;
+        }
+        Ok(())
+    }
+
+    /// KHR_materials_sheen at `at`: the sheen's colour (texture: RGB, sRGB) and roughness
+    /// (texture: alpha).
+    fn sheen(
+        &mut self,
+        mat: &mut Material,
+        value: &serde_json::Value,
+        at: &str,
+    ) -> Result<(), SceneError> {
+        let s: Sheen = self.extension(value, at)?;
+        let color_at = format!("{at}.sheenColorFactor");
+        let [r, g, b] = s.sheen_color_factor;
+        mat.sheen_color = Vec3::new(
+            self.unit(r, &color_at)?,
+            self.unit(g, &color_at)?,
+            self.unit(b, &color_at)?,
+        );
+        mat.sheen_roughness = self.unit(
+            s.sheen_roughness_factor,
+            &format!("{at}.sheenRoughnessFactor"),
+        )?;
+        if let Some(info) = &s.sheen_color_texture {
+            let at = format!("{at}.sheenColorTexture");
+            mat.sheen_color_texture = self.texture(info.into(), &at, Usage::Colour)?;
+        }
+        if let Some(info) = &s.sheen_roughness_texture {
+            let at = format!("{at}.sheenRoughnessTexture");
+            mat.sheen_roughness_texture =
+                self.texture(info.into(), &at, Usage::Scalar { channel: 3 })?;
+        }
+        Ok(())
+    }
+
+    /// An extension object the `gltf` crate leaves as JSON, read as `T`; one that does not
+    /// match is an error naming `at`.
+    fn extension<T: serde::de::DeserializeOwned>(
+        &self,
+        value: &serde_json::Value,
+        at: &str,
+    ) -> Result<T, SceneError> {
+        T::deserialize(value).map_err(|e| {
+            self.buffers.doc().error(
+                at,
+                format!("is malformed: {}", e.to_string().escape_debug()),
+            )
+        })
+    }
+
+    /// A normal map at `at` (a `normalTextureInfo`): its texture slot and the scale of its
+    /// XY.
+    fn normal_map(
+        &mut self,
+        normal: &json::material::NormalTexture,
+        at: &str,
+    ) -> Result<(u32, f32), SceneError> {
+        let doc = self.buffers.doc();
+        let scale = self.finite(normal.scale, &format!("{at}.scale"))?;
+        let transform = normal_transform(normal, at).map_err(|(at, m)| doc.error(at, m))?;
+        let info = Info {
+            index: normal.index.value(),
+            tex_coord: normal.tex_coord,
+            transform: transform.as_ref(),
+        };
+        Ok((self.texture(info, at, Usage::Linear)?, scale))
     }
 
     /// A factor that must lie in [0, 1]: one outside is clamped, with a warning; one that
