@@ -474,7 +474,7 @@ fn coat_fresnel(c: f32) -> f32 {
 // (coat, sheen) factors of light crossing the layers along w.
 // mirror: src/render/bsdf.rs `layers_pass`
 fn layers_pass(m: Material, w: vec3<f32>) -> vec2<f32> {
-    let coat = 1.0 - m.clearcoat * coat_fresnel(dot(m.coat_normal, w));
+    let coat = (1.0 - m.clearcoat * coat_fresnel(dot(m.coat_normal, w))) / sqrt(1.0 - m.clearcoat * COAT_FRESNEL_AVERAGE);
     let s = max(max(m.sheen_color.x, m.sheen_color.y), m.sheen_color.z);
     var sheen = 1.0;
     if s > 0.0 {

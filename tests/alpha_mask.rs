@@ -4,7 +4,9 @@
 //! camera with a tiny field of view looks straight down (paths of two segments: no noise).
 //! From above, the camera sees through the cut-out half to the lit floor (closest-hit
 //! traversal) and sees the opaque half itself; from between quad and floor, it sees the
-//! floor lit under the cut-out half and in shadow under the opaque half (any-hit).
+//! floor lit under the cut-out half and in shadow under the opaque half (any-hit). An
+//! unlit quad (KHR_materials_unlit) is seen by the camera as its colour and by no other
+//! ray: it casts no shadow.
 
 mod common;
 
@@ -133,6 +135,15 @@ fn without_a_cutoff_the_texture_alpha_is_not_read() {
 /// The hovering quad as a glTF file: TEXCOORD_0 u along +X, a Lambertian (specular 0)
 /// material whose base colour texture carries the mask's alpha, in `mode`.
 fn gltf_quad(mode: &str) -> Asset {
+    gltf_quad_with(
+        mode,
+        json!({ "KHR_materials_specular": { "specularFactor": 0.0 } }),
+        [1.0; 3],
+    )
+}
+
+/// [`gltf_quad`] with the material's `extensions` and base colour factor `base`.
+fn gltf_quad_with(mode: &str, extensions: serde_json::Value, base: [f32; 3]) -> Asset {
     let mut a = Asset::new();
     let p = a.positions(&[
         [-50.0, 1.0, -50.0],
@@ -152,13 +163,19 @@ fn gltf_quad(mode: &str) -> Asset {
     a.push(
         "materials",
         json!({
-            "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 }, "metallicFactor": 0.0 },
+            "pbrMetallicRoughness": {
+                "baseColorTexture": { "index": 0 },
+                "baseColorFactor": [base[0], base[1], base[2], 1.0],
+                "metallicFactor": 0.0
+            },
             "alphaMode": mode,
             "alphaCutoff": 0.5,
-            "extensions": { "KHR_materials_specular": { "specularFactor": 0.0 } }
+            "extensions": extensions
         }),
     );
-    a.push("extensionsUsed", json!("KHR_materials_specular"));
+    for name in extensions.as_object().expect("an object").keys() {
+        a.push("extensionsUsed", json!(name));
+    }
     let mesh = a.mesh(
         json!({ "attributes": { "POSITION": p, "TEXCOORD_0": uv }, "indices": i, "material": 0 }),
     );
@@ -179,5 +196,31 @@ fn gltf_alpha_mode_mask_cuts_out_and_blend_is_read_as_mask() {
             "[[objects]]\nmesh = \"quad.gltf\"\n",
             lit(1.0),
         );
+    }
+}
+
+/// An unlit quad, masked as the others: from above the camera sees its colour as it is
+/// (not lit), and the floor through its cut-out; from below, the floor is lit under both
+/// halves: the unlit surface stops no light.
+#[test]
+fn an_unlit_surface_is_seen_by_the_camera_alone() {
+    let dir = TempDir::new("unlit gltf");
+    dir.write("floor.obj", FLOOR_OBJ);
+    let quad = gltf_quad_with(
+        "MASK",
+        json!({ "KHR_materials_unlit": {} }),
+        [0.3, 0.5, 0.7],
+    );
+    dir.write("quad.gltf", quad.embedded());
+    let tables = "[[objects]]\nmesh = \"quad.gltf\"\n";
+    let views = [
+        ("through the cut-out", -25.0, 3.0, lit(FLOOR)),
+        ("the opaque half", 25.0, 3.0, 0.3),
+        ("under the cut-out", -25.0, 0.5, lit(FLOOR)),
+        ("under the opaque half", 25.0, 0.5, lit(FLOOR)),
+    ];
+    for (what, x, height, want) in views {
+        let case = format!("unlit: {what}");
+        expect(&case, radiance(&dir, &case, tables, x, height), want);
     }
 }

@@ -9,7 +9,7 @@ mod common;
 use common::fs::TempDir;
 use common::gltf::*;
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
-use meshtrace::scene::material::{MAT_ALPHA_MASK, MAT_THIN_WALLED};
+use meshtrace::scene::material::{MAT_ALPHA_MASK, MAT_SPEC_GLOSS, MAT_THIN_WALLED};
 use meshtrace::scene::studio;
 use meshtrace::scene::{
     MaterialKind, NO_TANGENT, NO_TEXTURE, PunctualLight, Scene, Sky, TextureFormat, Wrap,
@@ -457,6 +457,175 @@ fn materials_become_pbr_with_every_extension() {
     );
     // An emissive material: the bare file is lit by it alone.
     assert_eq!(scene.sky, Sky::Constant(Vec3::ZERO));
+}
+
+#[test]
+fn specular_glossiness_clearcoat_sheen_and_unlit_materials() {
+    let mut a = Asset::new();
+    a.json["extensionsUsed"] = json!([
+        "KHR_materials_pbrSpecularGlossiness",
+        "KHR_materials_clearcoat",
+        "KHR_materials_sheen",
+        "KHR_materials_unlit",
+        "KHR_materials_specular",
+        "KHR_materials_iridescence",
+    ]);
+    let image_view = a.view(&two_texels(), None);
+    a.push(
+        "images",
+        json!({ "bufferView": image_view, "mimeType": "image/png" }),
+    );
+    a.push("textures", json!({ "source": 0 }));
+    let t = a.floats(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0], "VEC2");
+    let n = a.floats(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0], "VEC3");
+    let mesh = a.triangle(json!({ "attributes": { "TEXCOORD_0": t, "NORMAL": n }, "material": 0 }));
+    let prim = a.json["meshes"][mesh]["primitives"][0].clone();
+    a.json["materials"] = json!([
+        {
+            "name": "specgloss",
+            "pbrMetallicRoughness": { "baseColorFactor": [0.1, 0.1, 0.1, 1.0] },
+            "extensions": { "KHR_materials_pbrSpecularGlossiness": {
+                "diffuseFactor": [0.5, 0.25, 1.0, 0.75],
+                "diffuseTexture": { "index": 0 },
+                "specularFactor": [0.9, 0.6, 0.3],
+                "glossinessFactor": 0.8,
+                "specularGlossinessTexture": { "index": 0 },
+            } },
+        },
+        {
+            "name": "coated velvet",
+            "pbrMetallicRoughness": { "roughnessFactor": 0.5 },
+            "extensions": {
+                "KHR_materials_clearcoat": {
+                    "clearcoatFactor": 0.8, "clearcoatTexture": { "index": 0 },
+                    "clearcoatRoughnessFactor": 0.2, "clearcoatRoughnessTexture": { "index": 0 },
+                    "clearcoatNormalTexture": { "index": 0, "scale": 0.5 },
+                },
+                "KHR_materials_sheen": {
+                    "sheenColorFactor": [1.0, 0.5, 0.25], "sheenColorTexture": { "index": 0 },
+                    "sheenRoughnessFactor": 0.3, "sheenRoughnessTexture": { "index": 0 },
+                },
+                "KHR_materials_specular": {
+                    "specularTexture": { "index": 0 }, "specularColorTexture": { "index": 0 },
+                },
+                "KHR_materials_iridescence": { "iridescenceFactor": 1.0 },
+            },
+        },
+        {
+            "name": "flat",
+            "pbrMetallicRoughness": { "baseColorFactor": [0.2, 0.7, 0.3, 1.0] },
+            "emissiveFactor": [1.0, 1.0, 1.0],
+            "extensions": { "KHR_materials_unlit": {} },
+        },
+        {
+            "name": "bad coat",
+            "extensions": { "KHR_materials_clearcoat": { "clearcoatFactor": "thick" } },
+        },
+    ]);
+    for m in [1, 2] {
+        let mut p = prim.clone();
+        p["material"] = json!(m);
+        let mesh = a.mesh(p);
+        let node = a.node(json!({ "mesh": mesh }));
+        a.json["scenes"][0]["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!(node));
+    }
+    let scene = load(&a);
+    let material = |name: &str| {
+        let i = scene
+            .material_names
+            .iter()
+            .position(|n| n == name)
+            .unwrap_or_else(|| panic!("no material {name} in {:?}", scene.material_names));
+        scene.materials[i]
+    };
+    let records = &scene.textures.records;
+    let record = |slot: u32| {
+        assert_ne!(slot, NO_TEXTURE);
+        records[slot as usize]
+    };
+
+    // Specular-glossiness replaces the metallic-roughness parameters.
+    let m = material("specgloss");
+    assert_eq!(m.kind, MaterialKind::PBR);
+    assert_eq!((m.albedo, m.alpha), (Vec3::new(0.5, 0.25, 1.0), 0.75));
+    assert_eq!(m.specular_color, Vec3::new(0.9, 0.6, 0.3));
+    assert_eq!((m.metallic, m.flags), (0.0, MAT_SPEC_GLOSS));
+    assert!((m.roughness - 0.2).abs() < 1e-6, "{}", m.roughness);
+    assert_eq!(record(m.albedo_texture).format, TextureFormat::RGBA8_SRGB);
+    assert_eq!(
+        record(m.specular_color_texture).format,
+        TextureFormat::RGBA8_SRGB
+    );
+    // Glossiness in the alpha channel, linear.
+    let gloss = record(m.roughness_texture);
+    assert_eq!(
+        (gloss.format, gloss.channel),
+        (TextureFormat::RGBA8_LINEAR, 3)
+    );
+
+    let m = material("coated velvet");
+    assert_eq!((m.clearcoat, m.clearcoat_roughness), (0.8, 0.2));
+    assert_eq!(m.clearcoat_normal_scale, 0.5);
+    assert_eq!(record(m.clearcoat_texture).channel, 0);
+    assert_eq!(record(m.clearcoat_roughness_texture).channel, 1);
+    assert_eq!(
+        record(m.clearcoat_normal_texture).format,
+        TextureFormat::RGBA8_LINEAR
+    );
+    assert_eq!(
+        (m.sheen_color, m.sheen_roughness),
+        (Vec3::new(1.0, 0.5, 0.25), 0.3)
+    );
+    assert_eq!(
+        record(m.sheen_color_texture).format,
+        TextureFormat::RGBA8_SRGB
+    );
+    assert_eq!(record(m.sheen_roughness_texture).channel, 3);
+    assert_eq!(record(m.specular_texture).channel, 3);
+    assert_eq!(
+        record(m.specular_color_texture).format,
+        TextureFormat::RGBA8_SRGB
+    );
+    // The coat's normal map needs tangents, which the loader generates.
+    assert!(
+        scene.mesh.tangents.iter().all(|t| t.truncate().is_finite())
+            && !scene.mesh.tangents.is_empty()
+    );
+
+    // Unlit: the base colour alone; the emission is not read.
+    let m = material("flat");
+    assert_eq!(m.kind, MaterialKind::UNLIT);
+    assert_eq!(
+        (m.albedo, m.emission),
+        (Vec3::new(0.2, 0.7, 0.3), Vec3::ZERO)
+    );
+
+    let w = scene.warnings.join("\n");
+    assert!(
+        w.contains("materials[1].extensions.KHR_materials_iridescence: is not supported; the material is rendered without it"),
+        "{w}"
+    );
+    assert!(
+        !w.contains("extensionsUsed"),
+        "material extensions are warned of per material: {w}"
+    );
+
+    // A malformed extension object is an error naming its path.
+    let mut bad = a.clone();
+    for mesh in bad.json["meshes"].as_array_mut().unwrap() {
+        mesh["primitives"][0]["material"] = json!(3);
+    }
+    let dir = TempDir::new("bad coat");
+    let err = load_scene(&dir.write("bad.gltf", bad.embedded()))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("materials[3].extensions.KHR_materials_clearcoat: is malformed"),
+        "{err}"
+    );
 }
 
 #[test]

@@ -291,9 +291,9 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> (f32, f32, f32, f32) {
 // Charlie lobe of `sheen.rs`, the base scaled by min(1 − S E(wo), 1 − S E(wi)) for S the
 // sheen colour's largest channel), and over it KHR_materials_clearcoat (a GGX dielectric
 // of IOR 1.5 about its own normal, the layers below scaled by (1 − c F(nc.wo))
-// (1 − c F(nc.wi)) for coat weight c). The extension's single factor 1 − c F(nc.wo)
-// counts one crossing of the coat and is not reciprocal; the product counts light going
-// in and coming out, and is.
+// (1 − c F(nc.wi)) / (1 − c F_avg) for coat weight c). The extension's single factor
+// 1 − c F(nc.wo) is not reciprocal; the product is, and its normalisation keeps the energy
+// that a white diffuse base under the coat would otherwise lose.
 // `pbr_eval`, `pbr_pdf` and `pbr_sample` are the whole stack; without layers, exactly
 // the base.
 
@@ -616,11 +616,19 @@ pub fn coat_fresnel(c: f32) -> f32 {
     0.04 + 0.96 * k5
 }
 
-/// The factor of light that crosses the layers over the base along `w`: the coat's
-/// 1 − c F(|nc.w|), times the sheen's 1 − S E(|w.z|).
+/// The clear coat's Fresnel reflectance averaged over the cosine-weighted hemisphere:
+/// 2 ∫ F(μ) μ dμ = F0 + (1 − F0) / 21 for [`coat_fresnel`].
+pub const COAT_FRESNEL_AVERAGE: f32 = 0.04 + 0.96 / 21.0;
+
+/// The factors of light that crosses the layers over the base along `w`: the coat's
+/// (1 − c F(|nc.w|)) / √(1 − c F_avg), and the sheen's 1 − S E(|w.z|). The coat's pair,
+/// multiplied, is the reciprocal albedo scaling of Kelemen and Szirmay-Kalos: it keeps a
+/// white Lambertian base under the coat at unit albedo, as the extension's single factor
+/// 1 − c F(nc.wo) does.
 /// mirror: shaders/bsdf.wgsl `layers_pass`
 pub fn layers_pass(m: &Material, w: Vec3) -> (f32, f32) {
-    let coat = 1.0 - m.clearcoat * coat_fresnel(m.coat_normal.dot(w));
+    let coat = (1.0 - m.clearcoat * coat_fresnel(m.coat_normal.dot(w)))
+        / (1.0 - m.clearcoat * COAT_FRESNEL_AVERAGE).sqrt();
     let s = m.sheen_color.max_element();
     let sheen = if s > 0.0 {
         1.0 - s * sheen_albedo(w.z.abs(), m.sheen_roughness)

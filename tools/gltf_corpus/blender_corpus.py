@@ -308,6 +308,108 @@ def second_uv_map(path):
     export(path)
 
 
+# `materials`' spheres, left to right along glTF's x: (name, centre x, base colour). Each
+# layered sphere has a plain twin of the same base, so that a test can tell the layer's
+# effect from the base's.
+SPHERES = [
+    ("coated", -4.0, (0.8, 0.1, 0.1, 1.0)),
+    ("red", -2.0, (0.8, 0.1, 0.1, 1.0)),
+    ("flat", 0.0, (0.2, 0.7, 0.3, 1.0)),
+    ("velvet", 2.0, (0.1, 0.1, 0.6, 1.0)),
+    ("blue", 4.0, (0.1, 0.1, 0.6, 1.0)),
+]
+
+# The camera both renderers see `materials` through, in glTF's frame (Y up): position,
+# the point it looks at, the vertical field of view in degrees, and the image size.
+MATERIALS_CAMERA = ((0.0, 1.5, 11.0), (0.0, 0.0, 0.0), 30.0, (240, 80))
+
+
+def materials(path):
+    """Five spheres of radius 0.9, one material each, as Blender's exporter writes them: a
+    red rough base under a full clear coat (KHR_materials_clearcoat) and the same base
+    bare, a green unlit surface (the importer's light-path arrangement, which the
+    exporter writes as KHR_materials_unlit), and a blue base under white sheen
+    (KHR_materials_sheen) and the same base bare."""
+    empty_scene()
+    for name, x, color in SPHERES:
+        # Blender's (x, y, z) is glTF's (x, -z, y).
+        bpy.ops.mesh.primitive_uv_sphere_add(
+            segments=48, ring_count=24, radius=0.9, location=(x, 0.0, 0.0)
+        )
+        sphere = bpy.context.active_object
+        bpy.ops.object.shade_smooth()
+        material = bpy.data.materials.new(name)
+        material.use_nodes = True
+        nodes, links = material.node_tree.nodes, material.node_tree.links
+        bsdf = nodes["Principled BSDF"]
+        bsdf.inputs["Base Color"].default_value = color
+        bsdf.inputs["Roughness"].default_value = 0.6
+        if name == "coated":
+            bsdf.inputs["Coat Weight"].default_value = 1.0
+            bsdf.inputs["Coat Roughness"].default_value = 0.1
+        elif name in ("velvet", "blue"):
+            bsdf.inputs["Roughness"].default_value = 0.8
+        if name == "velvet":
+            bsdf.inputs["Sheen Weight"].default_value = 1.0
+            bsdf.inputs["Sheen Tint"].default_value = (1.0, 1.0, 1.0, 1.0)
+            bsdf.inputs["Sheen Roughness"].default_value = 0.3
+        elif name == "flat":
+            nodes.remove(bsdf)
+            output = nodes["Material Output"]
+            emission = nodes.new("ShaderNodeEmission")
+            emission.inputs["Color"].default_value = color
+            light_path = nodes.new("ShaderNodeLightPath")
+            transparent = nodes.new("ShaderNodeBsdfTransparent")
+            mix = nodes.new("ShaderNodeMixShader")
+            links.new(mix.inputs["Fac"], light_path.outputs["Is Camera Ray"])
+            links.new(mix.inputs[1], transparent.outputs[0])
+            links.new(mix.inputs[2], emission.outputs[0])
+            links.new(output.inputs["Surface"], mix.outputs[0])
+        sphere.data.materials.append(material)
+    export(path)
+
+
+def materials_cycles(glb, out_exr):
+    """Blender's import of `materials` rendered by Cycles on the CPU through
+    MATERIALS_CAMERA, lit by a uniform white world of radiance 1 (linear EXR, alpha
+    where the spheres are): the shaded reference `tests/gltf_corpus.rs` compares with."""
+    empty_scene()
+    bpy.ops.import_scene.gltf(filepath=str(glb))
+    scene = bpy.context.scene
+    (px, py, pz), (tx, ty, tz), vfov, (width, height) = MATERIALS_CAMERA
+    data = bpy.data.cameras.new("camera")
+    data.sensor_fit = "VERTICAL"
+    data.angle_y = math.radians(vfov)
+    camera = bpy.data.objects.new("camera", data)
+    scene.collection.objects.link(camera)
+    from mathutils import Vector
+
+    position, target = Vector((px, -pz, py)), Vector((tx, -tz, ty))
+    camera.location = position
+    camera.rotation_euler = (target - position).to_track_quat("-Z", "Y").to_euler()
+    scene.camera = camera
+    world = bpy.data.worlds.new("white")
+    world.use_nodes = True
+    world.node_tree.nodes["Background"].inputs["Color"].default_value = (1, 1, 1, 1)
+    world.node_tree.nodes["Background"].inputs["Strength"].default_value = 1.0
+    scene.world = world
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = 1024
+    scene.cycles.use_denoising = False
+    scene.cycles.seed = 1
+    scene.cycles.max_bounces = 8
+    scene.render.resolution_x, scene.render.resolution_y = width, height
+    scene.render.resolution_percentage = 100
+    scene.render.film_transparent = True
+    scene.view_settings.view_transform = "Standard"
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    scene.render.image_settings.color_depth = "32"
+    scene.render.image_settings.exr_codec = "ZIP"
+    scene.render.filepath = str(out_exr)
+    bpy.ops.render.render(write_still=True)
+
+
 # Every file, by name; `python blender_corpus.py OUT NAME...` writes only those named.
 FILES = [
     ("skinned_arm", skinned_arm),
@@ -318,6 +420,7 @@ FILES = [
     ("vertex_colors", vertex_colors),
     ("vertex_colors_draco", vertex_colors_draco),
     ("second_uv_map", second_uv_map),
+    ("materials", materials),
 ]
 
 
@@ -332,6 +435,8 @@ def main():
         make(glb)
         n = write_expected(glb, out / f"{name}.expected.json")
         print(f"{glb}: {n} triangles as Blender imports it")
+        if name == "materials":
+            materials_cycles(glb, out / "materials.cycles.exr")
 
 
 if __name__ == "__main__":

@@ -13,6 +13,7 @@ use crate::bvh::STACK_SIZE;
 use crate::film::{Aov, NO_ID};
 use crate::fixed::{FIXED_LIMIT, FIXED_ONE};
 use crate::geometry::{GAMMA_2, GAMMA_3, SLAB_SLACK, T_INF};
+use crate::render::bsdf::COAT_FRESNEL_AVERAGE;
 use crate::render::caustics::{LIGHT_SUBPATH_RATE, MAX_CAUSTIC_HOPS};
 use crate::render::integrator::RR_DEPTH;
 use crate::render::rng;
@@ -80,6 +81,7 @@ pub fn shared_constants() -> Vec<(String, Value)> {
         ("MAT_ALPHA_MASK", U32(MAT_ALPHA_MASK)),
         ("MAT_SPEC_GLOSS", U32(MAT_SPEC_GLOSS)),
         ("SHEEN_MIN_ROUGHNESS", F32(SHEEN_MIN_ROUGHNESS)),
+        ("COAT_FRESNEL_AVERAGE", F32(COAT_FRESNEL_AVERAGE)),
         ("SHEEN_TABLE_COSINES", U32(SHEEN_TABLE_COSINES)),
         ("SHEEN_TABLE_ROUGHNESSES", U32(SHEEN_TABLE_ROUGHNESSES)),
         ("SHEEN_TABLE_OFFSET", U32(SHEEN_TABLE_OFFSET)),
