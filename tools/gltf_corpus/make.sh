@@ -22,4 +22,5 @@ transform meshopt "$out/morph_box.glb" "$out/morph_box_meshopt.glb"
 transform meshopt "$out/crowd.glb" "$out/crowd_meshopt.glb"
 transform draco "$out/crowd.glb" "$out/crowd_draco.glb"
 transform draco "$out/skinned_arm.glb" "$out/skinned_arm_draco.glb"
+(cd "$TOOLS" && NODE_PATH=node_modules node "$here/spec_gloss.cjs" "$out")
 (cd "$TOOLS" && node "$here/validate.mjs" "$out"/*.glb)
