@@ -194,10 +194,18 @@ pub fn path_vertex<'a, const CAUSTICS: bool>(
     let si = surface_at(scene, &st.ray, &hit);
     // A material without textures, at a point without a vertex colour, is used where it
     // lies (no copy); the WGSL copies anyway.
+    // A clear coat's normal is set here too, where a normal map makes it differ from the
+    // frame's (a map is a texture: the material is a copy then).
     let base = &scene.materials[si.material as usize];
-    let mut local = (base.has_texture() || si.color != Vec4::ONE)
-        .then(|| material_at(scene, base, si.uv, si.color));
-    let mat = local.as_ref().unwrap_or(base);
+    let mat: &'a Material = if base.has_texture() || si.color != Vec4::ONE {
+        let mut m = material_at(scene, base, si.uv, si.color);
+        if needs_coat_normal(&m) {
+            m = with_coat_normal(&m, &si, &shading_frame(&m, &si, -st.ray.dir));
+        }
+        textured.write(m)
+    } else {
+        base
+    };
     if mat.kind == MaterialKind::UNLIT {
         // Only camera rays find an unlit surface: its colour, as it is.
         st.radiance += st.beta * mat.albedo;
@@ -229,13 +237,6 @@ pub fn path_vertex<'a, const CAUSTICS: bool>(
     }
     let wo_world = -st.ray.dir;
     let frame = shading_frame(mat, &si, wo_world);
-    if needs_coat_normal(mat) {
-        local = Some(with_coat_normal(mat, &si, &frame));
-    }
-    let mat: &'a Material = match local {
-        Some(m) => textured.write(m),
-        None => base,
-    };
     let ng = frame.ng;
     let wo = frame.to_local(wo_world);
 
