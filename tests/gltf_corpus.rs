@@ -454,10 +454,10 @@ fn the_material_spheres_shade_as_cycles_renders_blenders_import() {
         let means = |name: &str| -> (DVec3, DVec3) {
             let m = material_index(&scene, name);
             let (mut ours, mut theirs, mut n) = (DVec3::ZERO, DVec3::ZERO, 0.0);
-            for i in 0..cycles.len() {
-                if sheet.on(i, m) && cycles[i][3] > 0.999 {
+            for (i, c) in cycles.iter().enumerate() {
+                if sheet.on(i, m) && c[3] > 0.999 {
                     ours += sheet.colour[i].as_dvec3();
-                    theirs += glam::Vec3::from_slice(&cycles[i][..3]).as_dvec3();
+                    theirs += glam::Vec3::from_slice(&c[..3]).as_dvec3();
                     n += 1.0;
                 }
             }
