@@ -99,7 +99,7 @@ fn two_shards_render_every_view_once_and_resume_without_rendering() {
         assert!(out.status.success(), "shard {k}: {err}");
         assert!(
             err.contains(&format!(
-                "shard {k}/2: 6 rendered, 0 already complete, 0 failed"
+                "shard {k}/2: images: 6 rendered, 0 already complete, 0 failed"
             )),
             "{err}"
         );
@@ -321,7 +321,7 @@ fn shard_auto_reads_the_job_array() {
             ("SLURM_ARRAY_TASK_MAX", "5"),
         ],
     );
-    assert!(said.contains("shard 1/3: 1 rendered"), "{said}");
+    assert!(said.contains("shard 1/3: images: 1 rendered"), "{said}");
     let said = go(
         &[&base[..], &["auto"]].concat(),
         &[
@@ -329,12 +329,12 @@ fn shard_auto_reads_the_job_array() {
             ("SLURM_ARRAY_TASK_COUNT", "3"),
         ],
     );
-    assert!(said.contains("shard 2/3: 1 rendered"), "{said}");
+    assert!(said.contains("shard 2/3: images: 1 rendered"), "{said}");
     let said = go(
         &[&base[..], &["auto/3"]].concat(),
         &[("JOB_COMPLETION_INDEX", "0")],
     );
-    assert!(said.contains("shard 0/3: 1 rendered"), "{said}");
+    assert!(said.contains("shard 0/3: images: 1 rendered"), "{said}");
     assert_eq!(frames(&dir.path().join("out/transforms.json")).1.len(), 3);
 }
 
@@ -404,9 +404,69 @@ fn an_orthographic_input_is_reported_and_the_rest_render() {
         errors[0].contains("flat.gltf: its camera is orthographic"),
         "{stderr}"
     );
-    assert!(errors[1].contains("1 of 16 inputs failed"), "{stderr}");
     assert!(
-        stderr.contains("12 rendered, 0 already complete, 1 failed"),
+        errors[1].contains("4 of 16 images failed, from 1 input (each said above, and logged in"),
         "{stderr}"
     );
+    assert!(
+        stderr.contains("images: 12 rendered, 0 already complete, 4 failed in"),
+        "{stderr}"
+    );
+    // The failure log: one JSON line naming the input and the reason.
+    let log = dir.path().join("m.failures.jsonl");
+    let lines = |n: usize| -> Vec<serde_json::Value> {
+        let text = std::fs::read_to_string(&log).expect("the failure log");
+        let v: Vec<serde_json::Value> = text
+            .lines()
+            .map(|l| serde_json::from_str(l).expect("a JSON line"))
+            .collect();
+        assert_eq!(v.len(), n, "{text}");
+        v
+    };
+    let first = lines(1);
+    assert!(first[0]["input"].as_str().unwrap().ends_with("flat.gltf"));
+    assert!(
+        first[0]["reason"]
+            .as_str()
+            .unwrap()
+            .contains("orthographic")
+    );
+    assert_eq!(first[0]["job"], 0);
+    // A rerun skips the logged input and succeeds; --retry-failed tries it again.
+    let (code, stderr) = run(&dir, &["batch", "m.toml", "--device", "cpu"]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(
+        stderr.contains("images: 0 rendered, 12 already complete, 0 failed, 4 skipped as their inputs failed before (--retry-failed renders them)"),
+        "{stderr}"
+    );
+    let (code, stderr) = run(
+        &dir,
+        &["batch", "m.toml", "--device", "cpu", "--retry-failed"],
+    );
+    assert_eq!(code, 1, "{stderr}");
+    assert!(stderr.contains("4 of 16 images failed"), "{stderr}");
+    lines(2);
+    // No file but images and transforms.json in the output folders.
+    for entry in walk(dir.path()) {
+        let name = entry.file_name().unwrap().to_string_lossy().into_owned();
+        assert!(
+            !name.ends_with(".lock") && !name.ends_with(".tmp"),
+            "stray file {}",
+            entry.display()
+        );
+    }
+}
+
+/// Every file under `dir`.
+fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            out.extend(walk(&p));
+        } else {
+            out.push(p);
+        }
+    }
+    out
 }

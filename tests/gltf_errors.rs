@@ -99,13 +99,17 @@ fn versions_and_extensions_meshtrace_does_not_read() {
 fn extensions_used_but_not_required_are_warnings() {
     let dir = TempDir::new("gltf-used");
     let mut a = triangle();
-    a.json["extensionsUsed"] = json!(["KHR_materials_clearcoat", "EXT_foo"]);
+    a.json["extensionsUsed"] = json!(["KHR_materials_iridescence", "EXT_foo", "EXT_bar"]);
     let scene = load_scene(&dir.write("a.gltf", a.embedded())).unwrap();
     let w = scene.warnings.join("\n");
     assert!(
-        w.contains("a.gltf: extensionsUsed: KHR_materials_clearcoat, EXT_foo not supported; the file is read without them"),
+        w.contains(
+            "a.gltf: extensionsUsed: EXT_foo, EXT_bar not supported; the file is read without them"
+        ),
         "{w}"
     );
+    // A material extension is warned of by the materials that use it (tests/gltf.rs).
+    assert!(!w.contains("iridescence"), "{w}");
 }
 
 #[test]

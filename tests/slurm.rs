@@ -263,7 +263,7 @@ fn slurm_arrays_split_merge_and_batch() {
         |k: u32| std::fs::read_to_string(work.join(format!("batch-{k}.log"))).unwrap_or_default();
     for k in 0..2 {
         assert!(
-            log(k).contains(&format!("shard {k}/2: 6 rendered")),
+            log(k).contains(&format!("shard {k}/2: images: 6 rendered")),
             "shard {k}: {}",
             log(k)
         );

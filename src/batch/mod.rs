@@ -1,8 +1,9 @@
 //! Batch renders (`meshtrace batch`): a manifest of jobs ([`manifest`]) expanded into one
 //! task per (input, view), split into shards for job arrays, each view's camera, and the
-//! NeRF-style `transforms.json` of every output folder ([`transforms`]). No rendering here:
-//! the binary runs the tasks.
+//! NeRF-style `transforms.json` of every output folder ([`transforms`]), and the log of the
+//! inputs that failed ([`failures`]). No rendering here: the binary runs the tasks.
 
+pub mod failures;
 pub mod manifest;
 pub mod transforms;
 

@@ -5,9 +5,9 @@
 //! y up, looking down −z).
 //!
 //! Several processes (the shards of a job array) may add frames to one folder at once:
-//! each takes an exclusive lock on `transforms.json.lock` beside it, reads the file, adds or
-//! replaces its frames (keyed by `file_path`), and writes it to a temporary file renamed
-//! into place, so no shard's frames are lost and no reader sees half a file.
+//! each takes an exclusive lock on `transforms.json` itself, reads it, adds or replaces its
+//! frames (keyed by `file_path`), and writes it to a temporary file renamed into place, so
+//! no shard's frames are lost, no reader sees half a file, and no lock file is left.
 
 use super::BatchError;
 use crate::scene::camera::Camera;
@@ -89,7 +89,7 @@ pub fn camera_to_world(camera: &Camera) -> [[f32; 4]; 4] {
 }
 
 /// Adds `frames` to the `transforms.json` of folder `dir` (creating it), replacing frames
-/// of the same `file_path`, under the folder's lock. The top level takes the intrinsics of
+/// of the same `file_path`, under the file's lock ([`lock_file`]). The top level takes the intrinsics of
 /// the first frame (by path); a frame whose intrinsics differ carries its own, as
 /// nerfstudio allows.
 pub fn record(dir: &Path, frames: &[Frame]) -> Result<(), BatchError> {
@@ -101,15 +101,9 @@ pub fn record(dir: &Path, frames: &[Frame]) -> Result<(), BatchError> {
         path: p.display().to_string(),
         message: e.to_string(),
     };
-    let lock_path = dir.join(format!("{FILE_NAME}.lock"));
-    let lock = std::fs::OpenOptions::new()
-        .create(true)
-        .truncate(false)
-        .write(true)
-        .open(&lock_path)
-        .map_err(|e| io(&lock_path, &e))?;
-    lock.lock().map_err(|e| io(&lock_path, &e))?;
+    let lock = lock_file(&path).map_err(|e| io(&path, &e))?;
     let mut all = match std::fs::read(&path) {
+        Ok(bytes) if bytes.is_empty() => Vec::new(),
         Ok(bytes) => read(&bytes).map_err(|m| io(&path, &m))?,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
         Err(e) => return Err(io(&path, &e)),
@@ -138,6 +132,40 @@ pub fn record(dir: &Path, frames: &[Frame]) -> Result<(), BatchError> {
     crate::film::write_bytes(&path, &bytes).map_err(|e| io(&path, &e))?;
     drop(lock);
     Ok(())
+}
+
+/// An exclusive lock on the file at `path` (created empty if missing), held until the
+/// returned handle drops. The file is replaced by renaming a new one over it, so a process
+/// that waited on the lock of the file it opened may hold a file no longer at `path`: it
+/// opens and locks again until the two are the same file. No lock file is left beside it.
+fn lock_file(path: &Path) -> std::io::Result<std::fs::File> {
+    loop {
+        let file = std::fs::OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .read(true)
+            .write(true)
+            .open(path)?;
+        file.lock()?;
+        if still_at(&file, path)? {
+            return Ok(file);
+        }
+    }
+}
+
+/// Whether the open `file` is still the one at `path`.
+#[cfg(unix)]
+fn still_at(file: &std::fs::File, path: &Path) -> std::io::Result<bool> {
+    use std::os::unix::fs::MetadataExt;
+    let (a, b) = (file.metadata()?, std::fs::metadata(path));
+    Ok(b.is_ok_and(|b| a.dev() == b.dev() && a.ino() == b.ino()))
+}
+
+/// Whether the open `file` is still the one at `path` (elsewhere a file open here cannot
+/// be renamed over).
+#[cfg(not(unix))]
+fn still_at(_file: &std::fs::File, path: &Path) -> std::io::Result<bool> {
+    Ok(path.exists())
 }
 
 /// The `file_path`s the `transforms.json` of folder `dir` has frames for (none where it is

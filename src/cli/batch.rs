@@ -27,6 +27,9 @@ pub struct BatchArgs {
     /// JOB_COMPLETION_INDEX, with N given.
     #[arg(long, value_name = "K/N|auto|auto/N")]
     pub shard: Option<String>,
+    /// Render again the inputs that the failure log lists; by default a rerun skips them.
+    #[arg(long)]
+    pub retry_failed: bool,
     #[command(flatten)]
     pub on: DeviceArgs,
     /// Print nothing but warnings, errors and the closing summary.
@@ -147,7 +150,11 @@ const FLUSH_SECONDS: f64 = 2.0;
 struct Tally {
     rendered: usize,
     skipped: usize,
+    /// Images not rendered because their input failed, and the inputs that failed.
+    failed_images: usize,
     failed: Vec<String>,
+    /// Images skipped because the failure log lists their input.
+    skipped_failed: usize,
     /// The peak memory once `warm_up` images are rendered (a tenth of the shard, after
     /// the allocator's warm-up), against which the closing summary measures growth.
     first_peak: Option<u64>,
@@ -167,6 +174,12 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
         None => (0, 1),
     };
     let tasks = batch::shard(&all, k, n);
+    let failure_log = batch::failures::log_path(&manifest.path);
+    let known_failures = if args.retry_failed {
+        Default::default()
+    } else {
+        batch::failures::read(&failure_log)?
+    };
     // The command line's device options win over the manifest's.
     let request = args.on.request().over(&manifest.request);
     let backend = backend(&request, args.quiet)?;
@@ -204,6 +217,11 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
         if cancel.load(Ordering::SeqCst) {
             break;
         }
+        if known_failures.contains(&(first.job, first.input.clone())) {
+            tally.skipped_failed += group.len();
+            continue;
+        }
+        let before = tally.rendered + tally.skipped;
         let result = run_input(
             &manifest, &request, group, &backend, &cancel, args.quiet, &mut tally,
         );
@@ -215,9 +233,11 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
             if e.is::<Interrupted>() {
                 break;
             }
-            let line = format!("{}: {}", first.input.display(), crate::one_line(&e));
-            eprintln!("error: {line}");
-            tally.failed.push(line);
+            let reason = crate::one_line(&e);
+            eprintln!("error: {}: {reason}", first.input.display());
+            batch::failures::append(&failure_log, first.job, &first.input, &reason)?;
+            tally.failed_images += group.len() - (tally.rendered + tally.skipped - before);
+            tally.failed.push(reason);
         }
     }
     record(&tally.frames)?;
@@ -233,11 +253,17 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
         ),
         _ => String::new(),
     };
+    let logged = if tally.skipped_failed > 0 {
+        format!(
+            ", {} skipped as their inputs failed before (--retry-failed renders them)",
+            tally.skipped_failed
+        )
+    } else {
+        String::new()
+    };
     eprintln!(
-        "shard {k}/{n}: {} rendered, {} already complete, {} failed in {seconds:.1} s: {per_hour:.0} images/hour{memory}",
-        tally.rendered,
-        tally.skipped,
-        tally.failed.len()
+        "shard {k}/{n}: images: {} rendered, {} already complete, {} failed{logged} in {seconds:.1} s: {per_hour:.0} images/hour{memory}",
+        tally.rendered, tally.skipped, tally.failed_images
     );
     if cancel.load(Ordering::SeqCst) {
         return Err(Interrupted(format!(
@@ -249,12 +275,19 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
     }
     if !tally.failed.is_empty() {
         bail!(
-            "{} of {} inputs failed (each said above)",
-            tally.failed.len(),
-            tasks.len()
+            "{} of {} images failed, from {} (each said above, and logged in {})",
+            tally.failed_images,
+            tasks.len(),
+            count(tally.failed.len(), "input"),
+            failure_log.display()
         );
     }
     Ok(())
+}
+
+/// `n` things, singular or plural: "1 input", "2 inputs".
+fn count(n: usize, thing: &str) -> String {
+    format!("{n} {thing}{}", if n == 1 { "" } else { "s" })
 }
 
 /// Renders the views of one input that are not complete yet and records every view's
