@@ -151,12 +151,7 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     // Persistent paths: a lane whose path ends starts its next branch or sample at once, so
     // the lanes of a SIMD group do not all wait for the longest path of every sample.
-    var sums = AovSums();
-    for (var k = 0u; k < 7u; k++) {
-        if (params.aovs & (1u << k)) != 0u {
-            sums.t[k] = film[aov_texel(base, 1u << k)];
-        }
-    }
+    var sums = film_aov_sums(base);
     // Each stage of a path is called from one place in this loop, so the compiler, which
     // inlines every call, makes one copy of each: a lane runs the stages its phase needs.
     var seen = true;
@@ -250,6 +245,24 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
         }
     }
+    finish_pixel(base, s, radiance, rays, sums);
+}
+
+// A pixel's AOV sums as the film holds them so far.
+fn film_aov_sums(base: u32) -> AovSums {
+    var sums = AovSums();
+    for (var k = 0u; k < 7u; k++) {
+        if (params.aovs & (1u << k)) != 0u {
+            sums.t[k] = film[aov_texel(base, 1u << k)];
+        }
+    }
+    return sums;
+}
+
+// Writes a pixel's sums back, its next sample `s` with them, unless a driver's loop limit
+// cut its loops short (a two-round canary loop tells): the pixel is then left as it was and
+// counted in status[0], for the host to dispatch its range again in smaller parts.
+fn finish_pixel(base: u32, s: u32, radiance_sums: Texel, rays: Texel, sums: AovSums) {
     var rounds = 0u;
     let bound = 2u + atomicLoad(&status[1]);
     loop {
@@ -263,6 +276,7 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         atomicAdd(&status[0], 1u);
         return;
     }
+    var radiance = radiance_sums;
     radiance.zw.z = s;
     film[base] = radiance;
     film[base + 1u] = rays;
@@ -271,4 +285,47 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
             film[aov_texel(base, 1u << k)] = sums.t[k];
         }
     }
+}
+
+// A geometry-only job: each sample's camera ray and first hit alone, its albedo as the
+// radiance (none where it misses), one ray a sample; the film, resumption and loop-limit
+// handling of `render`. mirror: src/render/cpu.rs `geometry_pixel`
+@compute @workgroup_size(8, 8, 1)
+fn geometry(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let x = gid.x;
+    let y = params.row_start + gid.y;
+    if x >= params.width || y >= params.row_end {
+        return;
+    }
+    let pixel = y * params.width + x;
+    let base = pixel * params.film_texels;
+    if SHADER_CHECKS {
+        check(base + params.film_texels <= arrayLength(&film));
+    }
+    var radiance = film[base];
+    var rays = film[base + 1u];
+    var s = max(params.sample_start, radiance.zw.z);
+    if s >= params.sample_end {
+        report_checks();
+        return;
+    }
+    var sums = film_aov_sums(base);
+    loop {
+        let fh = first_hit(generate_camera_ray(x, y, Rng(pixel, s, params.seed)));
+        if params.aovs != 0u {
+            add_aov_sample(&sums, fh);
+            if s == 0u {
+                set_aov_ids(&sums, first_hit(pixel_centre_ray(x, y)));
+            }
+        }
+        rays = texel_add(rays, vec4<f32>(1.0, 0.0, 0.0, 0.0));
+        if fh.hit {
+            radiance = texel_add(radiance, vec4<f32>(fh.albedo, 0.0));
+        }
+        s += 1u;
+        if s >= params.sample_end {
+            break;
+        }
+    }
+    finish_pixel(base, s, radiance, rays, sums);
 }

@@ -168,6 +168,7 @@ impl Prepared {
         };
         let job = RenderJob::new(settings)
             .with_aovs(saved_aovs | guides, request.transparent())
+            .with_geometry(request.geometry_only())
             .with_samples(samples);
         Ok(Self {
             scene: RenderScene::new(&scene, &BuildParams::default())?,

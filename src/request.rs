@@ -60,6 +60,9 @@ pub struct RenderRequest {
     pub denoise: Option<bool>,
     /// Bits per channel of PNG outputs: 8 (the default) or 16.
     pub bit_depth: Option<u32>,
+    /// Whether to trace camera rays alone, for the AOVs (depth, normal, masks) without
+    /// path tracing: the image is then the first surface's base colour, unlit.
+    pub geometry_only: Option<bool>,
 }
 
 /// One part of a split render: samples `PartHeader::range(index, count, spp)`.
@@ -117,6 +120,7 @@ impl RenderRequest {
             part: r.part.or(u.part),
             denoise: r.denoise.or(u.denoise),
             bit_depth: r.bit_depth.or(u.bit_depth),
+            geometry_only: r.geometry_only.or(u.geometry_only),
         }
     }
 
@@ -190,6 +194,12 @@ impl RenderRequest {
                 "applies to a whole image: denoise when merging the parts, not in a part",
             ));
         }
+        if self.geometry_only() && self.denoise() {
+            return Err(RequestError::new(
+                "denoise",
+                "a geometry-only render has no noise to remove; drop one of the two",
+            ));
+        }
         if self.device == Some(DeviceChoice::Cpu) && self.accel == Some(Accel::Hardware) {
             return Err(RequestError::new(
                 "accel",
@@ -222,6 +232,10 @@ impl RenderRequest {
 
     pub fn denoise(&self) -> bool {
         self.denoise.unwrap_or(false)
+    }
+
+    pub fn geometry_only(&self) -> bool {
+        self.geometry_only.unwrap_or(false)
     }
 
     /// How a bare mesh is staged.

@@ -476,3 +476,72 @@ material = "white"
         );
     }
 }
+
+/// A geometry-only render (camera rays alone) fills every AOV with the bits of the full
+/// render's (the same camera rays find the same first hits), on each renderer; its image is
+/// the first surface's albedo where the camera rays hit (their albedo sum over all samples),
+/// and it traces one ray a sample.
+#[test]
+fn geometry_only_renders_the_aovs_of_the_full_render() {
+    let dir = TempDir::new("aov-geometry");
+    dir.write("plane.obj", quad_obj(-1.0, -1.0, 1.0, 1.0));
+    let scene = load(
+        &dir,
+        r#"
+[camera]
+position = [0.3, 0.2, 3.0]
+look_at = [0.0, 0.0, 0.0]
+vfov = 50.0
+[render]
+width = 20
+height = 14
+spp = 5
+[materials.red]
+type = "diffuse"
+albedo = [0.7, 0.2, 0.1]
+[[objects]]
+mesh = "plane.obj"
+material = "red"
+[[objects]]
+mesh = "plane.obj"
+translate = [0.5, 0.4, 0.5]
+scale = 0.4
+[sky]
+color = [1.0, 1.0, 1.0]
+"#,
+    );
+    let all = [
+        Aov::Depth,
+        Aov::Normal,
+        Aov::Albedo,
+        Aov::Alpha,
+        Aov::ObjectId,
+        Aov::MaterialId,
+        Aov::BvhCost,
+    ];
+    let job = RenderJob::new(scene.settings).with_aovs(Aov::mask(&all), false);
+    let full = common::render_both_job("geometry: full", &scene, &job);
+    let geometry = common::render_both_job("geometry", &scene, &job.clone().with_geometry(true));
+    let mut hits = 0;
+    for ((device, f), (_, g)) in full.iter().zip(&geometry) {
+        for aov in all {
+            assert_eq!(
+                g.channel(aov.name()).unwrap().data,
+                f.channel(aov.name()).unwrap().data,
+                "{device}: {}",
+                aov.name()
+            );
+        }
+        let albedo = g.channel(Aov::Albedo.name()).unwrap();
+        for (i, (sum, a)) in g.sum.iter().zip(&albedo.data).enumerate() {
+            // The albedo channel's first three sums are the hits' albedo sums.
+            assert_eq!(&sum[..], &a[..3], "{device}: pixel {i}");
+            hits += usize::from(a[3] != 0);
+        }
+        let rays = &g.channel(Film::RAYS).unwrap().data;
+        let one_a_sample = meshtrace::fixed::to_fixed(5.0);
+        assert!(rays.iter().all(|r| r[0] == one_a_sample), "{device}: rays");
+        assert_ne!(g.sum, f.sum, "{device}: the full render's radiance is lit");
+    }
+    assert!(hits > 100, "{hits} pixels hit");
+}

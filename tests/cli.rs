@@ -210,6 +210,11 @@ fn bad_arguments_and_outputs_fail_cleanly() {
         &["render", "-o", "out.exr", "--bit-depth", "16"],
         &["out.exr", "16-bit output is a PNG's"],
     );
+    assert_fails(
+        &dir,
+        &["render", "-o", "out.png", "--geometry-only", "--denoise"],
+        &["denoise", "a geometry-only render has no noise to remove"],
+    );
 }
 
 #[test]

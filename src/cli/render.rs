@@ -75,6 +75,11 @@ pub struct RenderArgs {
     /// gradients (alpha too, with --transparent).
     #[arg(long, value_name = "8|16")]
     pub bit_depth: Option<u32>,
+    /// Trace camera rays alone, for the AOVs (depth, normal, alpha, ids) without path
+    /// tracing; the image is the first surface's base colour, unlit. A few samples a pixel
+    /// antialias the AOVs.
+    #[arg(long)]
+    pub geometry_only: bool,
     /// On Ctrl-C or SIGTERM, write no image (by default the samples finished so far are
     /// written; checkpoints already written stay).
     #[arg(long)]
@@ -141,6 +146,7 @@ impl RenderArgs {
             aov,
             transparent: Some(self.transparent),
             bit_depth: self.bit_depth,
+            geometry_only: Some(self.geometry_only),
             up: self.up.map(UpAxis::up),
             environment: self.env.clone(),
             max_texture_size: self.max_texture_size,

@@ -199,6 +199,37 @@ pub fn first_hits(scene: &RenderScene, settings: &RenderSettings, samples: u32, 
     film
 }
 
+/// [`render_pixel`] for a geometry-only job: each sample's camera ray and first hit alone,
+/// its albedo as the radiance (none where it misses), one ray a sample.
+/// mirror: shaders/render.wgsl `geometry`
+#[allow(clippy::too_many_arguments)]
+pub fn geometry_pixel(
+    scene: &RenderScene,
+    cam: &CameraRays,
+    x: u32,
+    y: u32,
+    rng: &mut Rng,
+    samples: std::ops::Range<u32>,
+    mut acc: PixelSums,
+    mut aov: Option<&mut AovSums>,
+) -> PixelSums {
+    for sample in samples {
+        rng.set_sample(sample);
+        let fh = first_hit(scene, &generate_camera_ray(cam, x, y, rng));
+        if let Some(aov) = aov.as_deref_mut() {
+            add_aov_sample(aov, cam, &fh);
+            if sample == 0 {
+                set_aov_ids(aov, &first_hit(scene, &pixel_centre_ray(cam, x, y)));
+            }
+        }
+        acc.rays = fixed_add(acc.rays, to_fixed(1.0));
+        if fh.hit {
+            acc.radiance = fixed_add3(acc.radiance, to_fixed3(fh.albedo));
+        }
+    }
+    acc
+}
+
 /// Copies the accumulators into the film's radiance, `rays` channel and AOV channels.
 fn fill(film: &mut Film, pixels: &[PixelSums], aovs: &[AovSums]) {
     for (dst, p) in film.sum.iter_mut().zip(pixels) {
@@ -276,6 +307,9 @@ pub fn render_pixel(
     } else {
         Rng::new(pixel, samples.start, s.seed)
     };
+    if job.geometry {
+        return geometry_pixel(scene, cam, x, y, &mut rng, samples, acc, aov);
+    }
     for sample in samples {
         rng.set_sample(sample);
         let ray = generate_camera_ray(cam, x, y, &rng);

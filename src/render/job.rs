@@ -24,6 +24,9 @@ pub struct RenderJob {
     /// Whether camera rays that miss add no radiance ([`Film::transparent`]); the film
     /// then holds the alpha AOV, for the coverage.
     pub transparent: bool,
+    /// Whether to trace camera rays alone: the AOVs, and for radiance the first surface's
+    /// albedo (nothing where the ray misses), without path tracing.
+    pub geometry: bool,
     /// Told which region each worker traces and of each region's pixels once done
     /// (`render --preview`).
     pub watch: Option<Arc<dyn watch::Watch>>,
@@ -41,6 +44,7 @@ impl RenderJob {
             checkpoint: None,
             aovs: 0,
             transparent: false,
+            geometry: false,
             watch: None,
         }
     }
@@ -49,6 +53,12 @@ impl RenderJob {
     pub fn with_aovs(mut self, aovs: u32, transparent: bool) -> Self {
         self.aovs = aovs;
         self.transparent = transparent;
+        self
+    }
+
+    /// The job tracing camera rays alone ([`RenderJob::geometry`]) or not.
+    pub fn with_geometry(mut self, geometry: bool) -> Self {
+        self.geometry = geometry;
         self
     }
 

@@ -8,8 +8,8 @@ use super::shader::{self, Features, ShaderChecks};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-/// A device's render kernels by (caustics, [`Features`]).
-type RenderKernels = HashMap<(bool, Features), Arc<Pipeline>>;
+/// A device's render kernels by (caustics, geometry-only, [`Features`]).
+type RenderKernels = HashMap<(bool, bool, Features), Arc<Pipeline>>;
 
 /// An open device and its render kernels. Cloning is cheap and shares both. It reads as
 /// the [`GpuDevice`] it holds (`ctx.device`, `ctx.check()`), which is all the stages below
@@ -20,7 +20,8 @@ pub struct GpuContext {
     /// How the render kernel is compiled: trusted unless [`GpuContext::with_shader_checks`].
     checks: ShaderChecks,
     /// The render kernels, each compiled by the first render on this device that needs it:
-    /// without and with the caustics code (`CAUSTICS`), for each set of [`Features`].
+    /// without and with the caustics code (`CAUSTICS`), and the geometry-only kernel, for
+    /// each set of [`Features`].
     render: Arc<Mutex<RenderKernels>>,
 }
 
@@ -68,8 +69,24 @@ impl GpuContext {
         caustics: bool,
         features: Features,
     ) -> Result<Arc<Pipeline>, GpuError> {
+        self.kernel(caustics, false, features)
+    }
+
+    /// The geometry-only kernel (`geometry` in `shaders/render.wgsl`): camera rays and
+    /// their first hits alone, compiled on first use without the caustic stage.
+    pub fn geometry_pipeline(&self, features: Features) -> Result<Arc<Pipeline>, GpuError> {
+        self.kernel(false, true, features)
+    }
+
+    /// The render kernel or (`geometry`) the geometry-only one, from the cache.
+    fn kernel(
+        &self,
+        caustics: bool,
+        geometry: bool,
+        features: Features,
+    ) -> Result<Arc<Pipeline>, GpuError> {
         let mut kernels = self.render.lock().unwrap_or_else(|p| p.into_inner());
-        if let Some(p) = kernels.get(&(caustics, features)) {
+        if let Some(p) = kernels.get(&(caustics, geometry, features)) {
             return Ok(p.clone());
         }
         let p = Arc::new(Pipeline::new(
@@ -80,12 +97,12 @@ impl GpuContext {
             } else {
                 shader::render_source_without_caustics
             },
-            "render",
+            if geometry { "geometry" } else { "render" },
             (0, 3),
             self.checks,
             features,
         )?);
-        kernels.insert((caustics, features), p.clone());
+        kernels.insert((caustics, geometry, features), p.clone());
         Ok(p)
     }
 }

@@ -82,6 +82,8 @@ pub struct GpuRenderer {
     render: Option<Arc<Pipeline>>,
     /// The optional parts of the path tracer the scene uses, which its kernels compile in.
     features: Features,
+    /// Whether the films begun trace camera rays alone ([`RenderJob::geometry`]).
+    geometry: bool,
     /// The parameters of the scene and of the film's settings; dispatches set the ranges.
     base: Params,
     params: wgpu::Buffer,
@@ -107,6 +109,7 @@ impl GpuRenderer {
             tables,
             render: None,
             features: Features::of(scene),
+            geometry: false,
             base: scene_params,
             params,
             scene_group,
@@ -203,6 +206,9 @@ impl GpuRenderer {
         let splat_bytes = template.sum.len() as u64 * SPLAT_BYTES;
         let buffer = buffer_of("film", bytes, true);
         let splats = buffer_of("splats", splat_bytes, true);
+        if self.geometry {
+            self.base.num_caustic_targets = 0;
+        }
         let caustics = self.base.num_caustic_targets > 0;
         let backup = caustics.then(|| {
             (
@@ -218,7 +224,11 @@ impl GpuRenderer {
                 | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let render = self.ctx.render_pipeline(caustics, self.features)?;
+        let render = if self.geometry {
+            self.ctx.geometry_pipeline(self.features)?
+        } else {
+            self.ctx.render_pipeline(caustics, self.features)?
+        };
         let io_group = render.io_group(&self.ctx, &[&buffer, &status, &splats]);
         self.render = Some(render);
         self.film = Some(DeviceFilm {
@@ -379,6 +389,7 @@ impl GpuRenderer {
     /// the film's `samples` says how many it holds.
     pub fn render(&mut self, job: &RenderJob, progress: &dyn Fn(u64)) -> Result<Film, GpuError> {
         let (w, h) = (job.settings.width, job.settings.height);
+        self.geometry = job.geometry;
         self.begin_film(&job.settings, job.film(), job.samples.start)?;
         let mut checkpoints = Checkpoints::new(job);
         for (samples, rows) in plan_dispatches(job) {
