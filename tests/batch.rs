@@ -500,3 +500,79 @@ fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
     }
     out
 }
+
+/// An input over the time limit fails on its own line and in the failure log, and the
+/// batch goes on: with the manifest's `time_limit` too short to load anything, every input
+/// fails; with `--time-limit` over it and renders too long for it, each input fails at its
+/// first view.
+#[test]
+fn inputs_over_the_time_limit_fail_and_the_batch_goes_on() {
+    let dir = TempDir::new("batch-time-limit");
+    models(&dir);
+    let manifest = format!("time_limit = 0.000001\n{MANIFEST}");
+    std::fs::write(dir.path().join("m.toml"), manifest).unwrap();
+    let (code, stderr) = run(&dir, &["batch", "m.toml", "--device", "cpu"]);
+    assert_eq!(code, 1, "{stderr}");
+    let over: Vec<&str> = stderr
+        .lines()
+        .filter(|l| {
+            l.contains("took longer than the time limit of 0.000001 s") && l.contains("to load)")
+        })
+        .collect();
+    assert_eq!(over.len(), 3, "{stderr}");
+    assert!(
+        stderr.contains("12 of 12 images failed, from 3 inputs"),
+        "{stderr}"
+    );
+    let log = std::fs::read_to_string(dir.path().join("m.failures.jsonl")).unwrap();
+    assert_eq!(log.lines().count(), 3, "{log}");
+
+    // Renders of many samples, cut at the next pass once half a second has gone.
+    let slow = MANIFEST
+        .replace("spp = 2", "spp = 100000")
+        .replace("width = 24", "width = 64");
+    std::fs::write(dir.path().join("slow.toml"), slow).unwrap();
+    let start = std::time::Instant::now();
+    let (code, stderr) = run(
+        &dir,
+        &[
+            "batch",
+            "slow.toml",
+            "--device",
+            "cpu",
+            "--time-limit",
+            "0.5",
+        ],
+    );
+    let seconds = start.elapsed().as_secs_f64();
+    assert_eq!(code, 1, "{stderr}");
+    let cut = stderr
+        .lines()
+        .filter(|l| {
+            l.contains("took longer than the time limit of 0.5 s") && l.contains("by view 0)")
+        })
+        .count();
+    assert_eq!(cut, 3, "{stderr}");
+    assert!(seconds < 30.0, "the batch took {seconds} s");
+    // Bad limits are refused.
+    let (code, stderr) = run(
+        &dir,
+        &["batch", "slow.toml", "--device", "cpu", "--time-limit=-1"],
+    );
+    assert_eq!(code, 1);
+    assert!(
+        stderr.contains("--time-limit: must be a positive number of seconds, got -1"),
+        "{stderr}"
+    );
+    std::fs::write(
+        dir.path().join("bad.toml"),
+        format!("time_limit = 0\n{MANIFEST}"),
+    )
+    .unwrap();
+    let (code, stderr) = run(&dir, &["batch", "bad.toml", "--device", "cpu"]);
+    assert_eq!(code, 1);
+    assert!(
+        stderr.contains("bad.toml: time_limit: must be a positive number of seconds, got 0"),
+        "{stderr}"
+    );
+}

@@ -11,6 +11,8 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ManifestFile {
+    /// Seconds one input may take, loading and every view.
+    time_limit: Option<f64>,
     render: Option<RenderRequest>,
     jobs: Option<Vec<JobFile>>,
 }
@@ -67,6 +69,9 @@ pub struct Manifest {
     /// in it resolved against the manifest's folder).
     pub request: RenderRequest,
     pub jobs: Vec<Job>,
+    /// The most time one input may take, loading and every view (`time_limit`, seconds):
+    /// one over it fails, and the batch goes on.
+    pub time_limit: Option<std::time::Duration>,
 }
 
 /// The placeholders an output pattern may use.
@@ -106,6 +111,16 @@ impl Manifest {
         request
             .validate()
             .map_err(|e| invalid(format!("render.{}", e.field), e.message))?;
+        let time_limit = match file.time_limit {
+            None => None,
+            Some(t) if t.is_finite() && t > 0.0 => Some(std::time::Duration::from_secs_f64(t)),
+            Some(t) => {
+                return Err(invalid(
+                    "time_limit".into(),
+                    format!("must be a positive number of seconds, got {t}"),
+                ));
+            }
+        };
         let jobs = file.jobs.unwrap_or_default();
         if jobs.is_empty() {
             return Err(invalid(
@@ -196,6 +211,7 @@ impl Manifest {
             path: path.to_path_buf(),
             request,
             jobs: out,
+            time_limit,
         })
     }
 }

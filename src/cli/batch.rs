@@ -14,7 +14,8 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
 
 #[derive(clap::Args)]
 pub struct BatchArgs {
@@ -30,6 +31,11 @@ pub struct BatchArgs {
     /// Render again the inputs that the failure log lists; by default a rerun skips them.
     #[arg(long)]
     pub retry_failed: bool,
+    /// The most seconds one input may take, loading and all its views (over the manifest's
+    /// `time_limit`): one over it fails, logged, and the batch goes on. It is checked once
+    /// the input is loaded and between sample passes.
+    #[arg(long, value_name = "SECONDS")]
+    pub time_limit: Option<f64>,
     #[command(flatten)]
     pub on: DeviceArgs,
     /// Print nothing but warnings, errors and the closing summary.
@@ -174,6 +180,11 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
         None => (0, 1),
     };
     let tasks = batch::shard(&all, k, n);
+    let limit = match args.time_limit {
+        None => manifest.time_limit,
+        Some(t) if t.is_finite() && t > 0.0 => Some(Duration::from_secs_f64(t)),
+        Some(t) => bail!("--time-limit: must be a positive number of seconds, got {t}"),
+    };
     let failure_log = batch::failures::log_path(&manifest.path);
     let known_failures = if args.retry_failed {
         Default::default()
@@ -222,9 +233,11 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
             continue;
         }
         let before = tally.rendered + tally.skipped;
+        let watchdog = Watchdog::start(cancel.clone(), limit);
         let result = run_input(
-            &manifest, &request, group, &backend, &cancel, args.quiet, &mut tally,
+            &manifest, &request, group, &backend, &watchdog, args.quiet, &mut tally,
         );
+        drop(watchdog);
         if flushed.elapsed().as_secs_f64() > FLUSH_SECONDS {
             record(&std::mem::take(&mut tally.frames))?;
             flushed = Instant::now();
@@ -285,6 +298,66 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
     Ok(())
 }
 
+/// Stops one input's renders: on Ctrl-C (the batch's flag) and once the input has taken
+/// longer than the time limit. A thread watches both, every few milliseconds, and raises
+/// [`Watchdog::stop`], which the renders poll between sample passes.
+struct Watchdog {
+    stop: Arc<AtomicBool>,
+    start: Instant,
+    limit: Option<Duration>,
+    done: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl Watchdog {
+    fn start(cancel: Arc<AtomicBool>, limit: Option<Duration>) -> Self {
+        let stop = Arc::new(AtomicBool::new(false));
+        let done = Arc::new(AtomicBool::new(false));
+        let start = Instant::now();
+        let thread = {
+            let (stop, done) = (stop.clone(), done.clone());
+            std::thread::spawn(move || {
+                while !done.load(Ordering::SeqCst) {
+                    let late = limit.is_some_and(|l| start.elapsed() > l);
+                    if late || cancel.load(Ordering::SeqCst) {
+                        stop.store(true, Ordering::SeqCst);
+                    }
+                    std::thread::sleep(Duration::from_millis(5));
+                }
+            })
+        };
+        Self {
+            stop,
+            start,
+            limit,
+            done,
+            thread: Some(thread),
+        }
+    }
+
+    /// An error saying the input took too long (`what`: "to load", "by view 3") where it
+    /// has taken longer than the limit.
+    fn check(&self, what: &str) -> Result<()> {
+        match self.limit {
+            Some(limit) if self.start.elapsed() > limit => bail!(
+                "took longer than the time limit of {} s ({:.2} s {what})",
+                limit.as_secs_f64(),
+                self.start.elapsed().as_secs_f64()
+            ),
+            _ => Ok(()),
+        }
+    }
+}
+
+impl Drop for Watchdog {
+    fn drop(&mut self) {
+        self.done.store(true, Ordering::SeqCst);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
 /// `n` things, singular or plural: "1 input", "2 inputs".
 fn count(n: usize, thing: &str) -> String {
     format!("{n} {thing}{}", if n == 1 { "" } else { "s" })
@@ -297,7 +370,7 @@ fn run_input(
     request: &RenderRequest,
     group: &[Task],
     backend: &Backend,
-    cancel: &Arc<AtomicBool>,
+    watchdog: &Watchdog,
     quiet: bool,
     tally: &mut Tally,
 ) -> Result<()> {
@@ -320,6 +393,7 @@ fn run_input(
         }
         e => pipeline_error(e),
     })?;
+    watchdog.check("to load")?;
     let settings = prepared.job.settings;
     let own = prepared.scene.camera.clone();
     if own.is_orthographic() {
@@ -330,7 +404,7 @@ fn run_input(
     }
     let framed = prepared.framed;
     let mut views = prepared.views(backend).map_err(pipeline_error)?;
-    views.job_mut().cancel = Some(cancel.clone());
+    views.job_mut().cancel = Some(watchdog.stop.clone());
     for (task, done) in group.iter().zip(done) {
         let camera = batch::view_camera(job, task.view, &own, framed.as_ref())
             .with_context(|| format!("view {} cannot be framed", task.view))?;
@@ -345,6 +419,7 @@ fn run_input(
         if film.samples < settings.spp {
             // An image cut short is not written (nor its frame): a resumed run renders it.
             tally.frames.pop();
+            watchdog.check(&format!("by view {}", task.view))?;
             return Err(Interrupted("interrupted".into()).into());
         }
         if let Some(dir) = task.output.parent() {
