@@ -138,6 +138,13 @@ impl Prepared {
         Self::build(scene, request)
     }
 
+    /// Prepares `scene`, loaded by [`load`] and changed by the caller (a batch preset lights
+    /// it), for `request`.
+    pub fn from_scene(scene: Scene, request: &RenderRequest) -> Result<Self, PipelineError> {
+        request.validate()?;
+        Self::build(scene, request)
+    }
+
     /// Prepares a loaded scene for a validated request: resolves the settings over the
     /// scene's own and builds its tables.
     fn build(mut scene: Scene, request: &RenderRequest) -> Result<Self, PipelineError> {

@@ -63,6 +63,10 @@ pub struct RenderRequest {
     /// Whether to trace camera rays alone, for the AOVs (depth, normal, masks) without
     /// path tracing: the image is then the first surface's base colour, unlit.
     pub geometry_only: Option<bool>,
+    /// A bare mesh without the studio (its ground and environment): a batch preset lights
+    /// it itself.
+    #[serde(skip)]
+    pub without_studio: bool,
 }
 
 /// One part of a split render: samples `PartHeader::range(index, count, spp)`.
@@ -121,6 +125,7 @@ impl RenderRequest {
             denoise: r.denoise.or(u.denoise),
             bit_depth: r.bit_depth.or(u.bit_depth),
             geometry_only: r.geometry_only.or(u.geometry_only),
+            without_studio: r.without_studio || u.without_studio,
         }
     }
 
@@ -240,7 +245,10 @@ impl RenderRequest {
 
     /// How a bare mesh is staged.
     pub fn bare_options(&self) -> BareOptions {
-        BareOptions { up: self.up }
+        BareOptions {
+            up: self.up,
+            unlit: self.without_studio,
+        }
     }
 
     /// The renderer this request asks for, opened; with, when the CPU was chosen for want

@@ -522,7 +522,10 @@ fn obj_without_faces_is_an_error_for_a_bare_load() {
 /// corner and whose vertical field of view the bounding sphere fills to 80%.
 #[test]
 fn bare_obj_is_shown_in_the_studio() {
-    let options = BareOptions { up: Some(Up::Y) };
+    let options = BareOptions {
+        up: Some(Up::Y),
+        ..BareOptions::default()
+    };
     let s = load_scene_with(&data("box.obj"), &Fs, &options).unwrap();
     assert!(matches!(s.sky, Sky::Environment { .. }), "{:?}", s.sky);
     assert_eq!(s.mesh.triangles.len(), 14, "the box and the ground");
@@ -585,8 +588,17 @@ fn bare_obj_is_shown_in_the_studio() {
 #[test]
 fn the_up_axis_is_detected_or_given() {
     let turned = |up: Option<Up>| {
-        let s =
-            without_ground(load_scene_with(&data("box.obj"), &Fs, &BareOptions { up }).unwrap());
+        let s = without_ground(
+            load_scene_with(
+                &data("box.obj"),
+                &Fs,
+                &BareOptions {
+                    up,
+                    ..BareOptions::default()
+                },
+            )
+            .unwrap(),
+        );
         s.mesh.positions.iter().fold(Aabb::EMPTY, |b, &p| b.grow(p))
     };
     // box.obj spans (1, 2, 3) to (3, 3, 7): longest along Z.
@@ -625,7 +637,10 @@ fn a_bare_obj_with_its_own_light_gets_no_studio() {
 /// `--up` belongs to bare meshes: a scene file turns its objects itself.
 #[test]
 fn up_for_a_scene_file_is_an_error() {
-    let options = BareOptions { up: Some(Up::Z) };
+    let options = BareOptions {
+        up: Some(Up::Z),
+        ..BareOptions::default()
+    };
     let message = load_scene_with(&data("full.toml"), &Fs, &options)
         .map(|_| ())
         .unwrap_err()

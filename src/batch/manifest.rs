@@ -3,6 +3,7 @@
 //! error names the manifest and the field (`jobs[1].output`) or line.
 
 use super::BatchError;
+use super::preset::Preset;
 use crate::request::RenderRequest;
 use crate::scene::studio::Up;
 use serde::Deserialize;
@@ -22,9 +23,12 @@ struct ManifestFile {
 struct JobFile {
     meshes: Option<String>,
     scene: Option<String>,
+    preset: Option<String>,
     views: Option<u32>,
     elevation: Option<f32>,
     azimuth: Option<f32>,
+    distance: Option<f32>,
+    fov: Option<f32>,
     up: Option<String>,
     output: Option<String>,
 }
@@ -54,8 +58,13 @@ pub struct Job {
     /// The up axis of the meshes, as `render --up`; by default detected as `render` does.
     pub up: Option<Up>,
     /// The output path pattern, relative to the manifest: `{stem}` (the input's file
-    /// name without extension), `{view}` (0 to views − 1) and `{job}` (the job's index).
+    /// name without extension), `{uid}` (its file name up to the first dot, as the
+    /// dataset scripts name their folders), `{view}` (0 to views − 1; `{view:03}` pads
+    /// it to three digits) and `{job}` (the job's index).
     pub output: String,
+    /// A dataset script's way of rendering (`preset = "objaverse"`), its parameters
+    /// overridden by the job's `views`, `elevation`, `distance` and `fov`.
+    pub preset: Option<Preset>,
 }
 
 /// A parsed and checked manifest.
@@ -74,8 +83,8 @@ pub struct Manifest {
     pub time_limit: Option<std::time::Duration>,
 }
 
-/// The placeholders an output pattern may use.
-const PLACEHOLDERS: [&str; 3] = ["stem", "view", "job"];
+/// The placeholders an output pattern may use (and `view:0N`, the view padded to N digits).
+const PLACEHOLDERS: [&str; 4] = ["stem", "uid", "view", "job"];
 
 impl Manifest {
     /// Reads and checks the manifest at `path`.
@@ -147,7 +156,60 @@ impl Manifest {
                     ));
                 }
             };
-            let views = j.views.unwrap_or(1);
+            let preset = match &j.preset {
+                None => None,
+                Some(name) => {
+                    if !matches!(source, Source::Meshes(_)) {
+                        return Err(invalid(
+                            field("preset"),
+                            "renders meshes as a dataset script does: give meshes = \"GLOB\""
+                                .into(),
+                        ));
+                    }
+                    let mut p = Preset::named(name).map_err(|m| invalid(field("preset"), m))?;
+                    if let Some(v) = j.views {
+                        p.views = v;
+                    }
+                    if let Some(e) = j.elevation {
+                        p.elevation = e;
+                    }
+                    for (key, value, slot) in [
+                        ("distance", j.distance, &mut p.distance),
+                        ("fov", j.fov, &mut p.fov),
+                    ] {
+                        if let Some(v) = value {
+                            let fine = v.is_finite() && v > 0.0 && (key != "fov" || v < 180.0);
+                            if !fine {
+                                return Err(invalid(
+                                    field(key),
+                                    format!(
+                                        "{v}: must be positive (and a field of view below 180 degrees)"
+                                    ),
+                                ));
+                            }
+                            *slot = v;
+                        }
+                    }
+                    if j.azimuth.is_some() {
+                        return Err(invalid(
+                            field("azimuth"),
+                            "a preset's cameras follow its script; give elevation, distance, fov or views".into(),
+                        ));
+                    }
+                    Some(p)
+                }
+            };
+            if preset.is_none() {
+                for (key, given) in [("distance", j.distance.is_some()), ("fov", j.fov.is_some())] {
+                    if given {
+                        return Err(invalid(
+                            field(key),
+                            "applies to a preset's cameras; add preset = \"...\"".into(),
+                        ));
+                    }
+                }
+            }
+            let views = j.views.unwrap_or(preset.as_ref().map_or(1, |p| p.views));
             if views == 0 {
                 return Err(invalid(field("views"), "must be at least 1".into()));
             }
@@ -173,17 +235,20 @@ impl Manifest {
                     return Err(invalid(field("up"), format!("`{other}`: use x, y or z")));
                 }
             };
-            let output = j.output.ok_or_else(|| {
-                invalid(
-                    field("output"),
-                    "missing: give the output path pattern, such as \"out/{stem}_{view}.png\""
-                        .into(),
-                )
-            })?;
+            let output = j
+                .output
+                .or_else(|| preset.as_ref().map(|p| p.output().to_string()))
+                .ok_or_else(|| {
+                    invalid(
+                        field("output"),
+                        "missing: give the output path pattern, such as \"out/{stem}_{view}.png\""
+                            .into(),
+                    )
+                })?;
             check_pattern(&output, views).map_err(|m| invalid(field("output"), m))?;
             let format = crate::film::Format::from_path(Path::new(&output))
                 .map_err(|e| invalid(field("output"), e.to_string()))?;
-            if request.transparent() && format != crate::film::Format::Png {
+            if (request.transparent() || preset.is_some()) && format != crate::film::Format::Png {
                 return Err(invalid(
                     field("output"),
                     "render.transparent writes RGBA PNGs (alpha is the coverage); give a .png pattern".into(),
@@ -204,6 +269,7 @@ impl Manifest {
                 azimuth: j.azimuth,
                 up,
                 output,
+                preset,
             });
         }
         Ok(Self {
@@ -225,14 +291,14 @@ fn check_pattern(pattern: &str, views: u32) -> Result<(), String> {
             .find('}')
             .ok_or_else(|| format!("`{pattern}`: a `{{` without its `}}`"))?;
         let name = &rest[open + 1..open + close];
-        if !PLACEHOLDERS.contains(&name) {
+        if !PLACEHOLDERS.contains(&name) && padding(name).is_none() {
             return Err(format!(
-                "`{pattern}`: unknown placeholder {{{name}}}; there are {{stem}}, {{view}} and {{job}}"
+                "`{pattern}`: unknown placeholder {{{name}}}; there are {{stem}}, {{uid}}, {{view}} (or {{view:03}}, padded) and {{job}}"
             ));
         }
         rest = &rest[open + close + 1..];
     }
-    if views > 1 && !pattern.contains("{view}") {
+    if views > 1 && !pattern.contains("{view") {
         return Err(format!(
             "`{pattern}` has no {{view}}, so its {views} views would overwrite each other"
         ));
@@ -240,10 +306,23 @@ fn check_pattern(pattern: &str, views: u32) -> Result<(), String> {
     Ok(())
 }
 
-/// The output path of view `view` of input `stem` in job `job`.
-pub fn output_path(pattern: &str, stem: &str, view: u32, job: usize) -> String {
-    pattern
+/// The width N of a `view:0N` placeholder (1 to 9).
+fn padding(name: &str) -> Option<usize> {
+    let n = name.strip_prefix("view:0")?;
+    let n: usize = n.parse().ok()?;
+    (1..=9).contains(&n).then_some(n)
+}
+
+/// The output path of view `view` of input `stem` (`uid`: its file name up to the first
+/// dot) in job `job`.
+pub fn output_path(pattern: &str, stem: &str, uid: &str, view: u32, job: usize) -> String {
+    let mut out = pattern
         .replace("{stem}", stem)
+        .replace("{uid}", uid)
         .replace("{view}", &view.to_string())
-        .replace("{job}", &job.to_string())
+        .replace("{job}", &job.to_string());
+    for n in 1..=9 {
+        out = out.replace(&format!("{{view:0{n}}}"), &format!("{view:0n$}"));
+    }
+    out
 }

@@ -5,6 +5,7 @@
 
 pub mod failures;
 pub mod manifest;
+pub mod preset;
 pub mod transforms;
 
 pub use manifest::{Job, Manifest, Source};
@@ -67,8 +68,13 @@ impl Manifest {
                     .map(|s| s.to_string_lossy().into_owned())
                     .unwrap_or_default();
                 let stem = stem.strip_prefix("builtin:").unwrap_or(&stem).to_string();
+                let name = input
+                    .file_name()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default();
+                let uid = name.split('.').next().unwrap_or_default();
                 for view in 0..job.views {
-                    let output = manifest::output_path(&job.output, &stem, view, j);
+                    let output = manifest::output_path(&job.output, &stem, uid, view, j);
                     out.push(Task {
                         job: j,
                         input: input.clone(),

@@ -4,6 +4,7 @@
 
 use super::{DeviceArgs, Interrupted, backend, pipeline_error, set_threads, warn};
 use anyhow::{Context, Result, bail};
+use meshtrace::batch::preset::{self, Normalisation, Preset};
 use meshtrace::batch::transforms::{self, Frame, Intrinsics};
 use meshtrace::batch::{self, Manifest, Task};
 use meshtrace::film::{Film, Format};
@@ -377,26 +378,51 @@ fn run_input(
     let job = &manifest.jobs[group[0].job];
     let aovs = request.aov_mask() != 0;
     let done: Vec<bool> = group.iter().map(|t| complete(t, aovs)).collect();
-    if done.iter().all(|&d| d) && all_recorded(group) {
+    // A preset writes its script's files alone: no transforms.json.
+    let recorded = job.preset.is_some() || all_recorded(group);
+    if done.iter().all(|&d| d) && recorded {
         tally.skipped += group.len();
         return Ok(());
     }
-    // The job's up axis, where it gives one, over the request's.
+    // The job's up axis, where it gives one, over the request's, over the preset's.
+    let preset_request = job.preset.as_ref().map(Preset::request).unwrap_or_default();
     let request = RenderRequest {
         up: job.up,
         ..Default::default()
     }
-    .over(request);
-    let prepared = Prepared::new(&group[0].input, &request, &warn).map_err(|e| match e {
+    .over(&request.over(&preset_request));
+    let request_error = |e| match e {
         meshtrace::pipeline::PipelineError::Request(e) => {
             anyhow::anyhow!("{}: render.{e}", manifest.path.display())
         }
         e => pipeline_error(e),
-    })?;
+    };
+    let (prepared, norm) = match &job.preset {
+        None => (
+            Prepared::new(&group[0].input, &request, &warn).map_err(request_error)?,
+            None,
+        ),
+        Some(preset) => {
+            let mut scene =
+                meshtrace::pipeline::load(&group[0].input, &request).map_err(request_error)?;
+            for w in &scene.warnings {
+                warn(w);
+            }
+            let norm = Normalisation::of(&preset::mesh_bounds(&scene))
+                .context("the mesh has no extent to normalise")?;
+            preset
+                .light(&mut scene)
+                .map_err(|e| pipeline_error(e.into()))?;
+            (
+                Prepared::from_scene(scene, &request).map_err(request_error)?,
+                Some(norm),
+            )
+        }
+    };
     watchdog.check("to load")?;
     let settings = prepared.job.settings;
     let own = prepared.scene.camera.clone();
-    if own.is_orthographic() {
+    if own.is_orthographic() && job.preset.is_none() {
         bail!(
             "its camera is orthographic, which transforms.json's pinhole intrinsics cannot \
              describe; give it a perspective camera, or render it with `meshtrace render`"
@@ -406,10 +432,15 @@ fn run_input(
     let mut views = prepared.views(backend).map_err(pipeline_error)?;
     views.job_mut().cancel = Some(watchdog.stop.clone());
     for (task, done) in group.iter().zip(done) {
-        let camera = batch::view_camera(job, task.view, &own, framed.as_ref())
-            .with_context(|| format!("view {} cannot be framed", task.view))?;
-        let f = frame(task, &camera, settings.width, settings.height);
-        tally.frames.push((task.output.clone(), f));
+        let camera = match (&job.preset, &norm) {
+            (Some(preset), Some(norm)) => preset.camera(task.view, norm),
+            _ => batch::view_camera(job, task.view, &own, framed.as_ref()),
+        }
+        .with_context(|| format!("view {} cannot be framed", task.view))?;
+        if job.preset.is_none() {
+            let f = frame(task, &camera, settings.width, settings.height);
+            tally.frames.push((task.output.clone(), f));
+        }
         if done {
             tally.skipped += 1;
             continue;
@@ -418,7 +449,9 @@ fn run_input(
         let film = views.render(&camera, &|_| {}).map_err(pipeline_error)?;
         if film.samples < settings.spp {
             // An image cut short is not written (nor its frame): a resumed run renders it.
-            tally.frames.pop();
+            if job.preset.is_none() {
+                tally.frames.pop();
+            }
             watchdog.check(&format!("by view {}", task.view))?;
             return Err(Interrupted("interrupted".into()).into());
         }

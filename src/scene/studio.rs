@@ -55,6 +55,9 @@ pub struct BareOptions {
     /// The mesh's up axis; `None` detects it ([`Up::detect`]) for an OBJ and takes glTF's
     /// +Y for a glTF file.
     pub up: Option<Up>,
+    /// Leave the studio out: no ground and no studio environment (a black sky), for a
+    /// caller that lights the mesh itself (a batch preset).
+    pub unlit: bool,
 }
 
 /// Vertical field of view of the studio camera, in degrees.
@@ -203,7 +206,7 @@ pub(super) fn load_bare_obj(
             bounds.min, bounds.max
         ))
     })?;
-    builder.finish_in_studio(path, camera, bounds, files)
+    builder.finish_in_studio(path, camera, bounds, files, options)
 }
 
 /// A bare glTF file in the studio: its materials and lights, turned so that its up axis
@@ -259,19 +262,25 @@ pub(super) fn load_bare_gltf(
             ),
         )
     })?;
-    builder.finish_in_studio(path, camera, bounds, files)
+    builder.finish_in_studio(path, camera, bounds, files, options)
 }
 
 impl Builder {
-    /// The bare mesh's scene: lit in the studio, seen by `camera`, `bounds` framed.
+    /// The bare mesh's scene: lit in the studio (unless `options` leave it out), seen by
+    /// `camera`, `bounds` framed.
     fn finish_in_studio(
         mut self,
         path: &Path,
         camera: Camera,
         bounds: Aabb,
         files: &dyn FileSource,
+        options: &BareOptions,
     ) -> Result<Scene, SceneError> {
-        let sky = self.light_the_studio(&bounds, files)?;
+        let sky = if options.unlit {
+            Sky::Constant(Vec3::ZERO)
+        } else {
+            self.light_the_studio(&bounds, files)?
+        };
         let mut scene = self.finish(
             Some(path.to_path_buf()),
             camera,
