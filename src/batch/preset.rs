@@ -10,13 +10,25 @@
 use crate::math::Aabb;
 use crate::request::RenderRequest;
 use crate::scene::camera::Camera;
+use crate::scene::light::PunctualLight;
 use crate::scene::studio::Up;
 use crate::scene::texture::{ImageType, TextureError, TextureRef, TextureSource, Textures};
 use crate::scene::{Scene, SceneError, Sky};
 use glam::{DVec3, Vec3};
 
 /// The presets there are, by their manifest names.
-pub const NAMES: [&str; 1] = ["objaverse"];
+pub const NAMES: [&str; 2] = ["objaverse", "syncdreamer"];
+
+/// How a script lights the object.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Lighting {
+    /// objaverse-rendering's area light of 30,000 W, 100 m × 100 m, 0.5 over the object,
+    /// with the factory world's grey (0.0509) below.
+    AreaAbove,
+    /// Blender's factory point light (1,000 W at (4.0762, 1.0055, 5.9039), moved with the
+    /// object by the normalisation) in a uniform world of this grey.
+    FactoryPoint { world: f32 },
+}
 
 /// A dataset script's way of rendering, with the parameters a manifest may override.
 #[derive(Clone, Debug, PartialEq)]
@@ -35,6 +47,7 @@ pub struct Preset {
     pub size: u32,
     /// Samples per pixel.
     pub spp: u32,
+    pub lighting: Lighting,
 }
 
 impl Preset {
@@ -52,9 +65,24 @@ impl Preset {
                 fov: fov_of_lens(35.0, 32.0),
                 size: 512,
                 spp: 64,
+                lighting: Lighting::AreaAbove,
+            }),
+            // liuyuan-pal/SyncDreamer blender_script.py, --camera_type fixed (its target
+            // views): 16 views on a ring at 30° elevation, distance 1.5, the same lens,
+            // 256², no lights of its own (the factory point light stays) and a world of
+            // grey 0.5.
+            "syncdreamer" => Ok(Self {
+                name: "syncdreamer",
+                views: 16,
+                elevation: 30.0,
+                distance: 1.5,
+                fov: fov_of_lens(35.0, 32.0),
+                size: 256,
+                spp: 128,
+                lighting: Lighting::FactoryPoint { world: 0.5 },
             }),
             _ => Err(format!(
-                "`{name}` is not a preset; there is {}",
+                "`{name}` is not a preset; there are {}",
                 NAMES.map(|n| format!("\"{n}\"")).join(", ")
             )),
         }
@@ -106,21 +134,42 @@ impl Preset {
         )
     }
 
-    /// Lights `scene` as the script does: a 100 m × 100 m area light of 30,000 W, 0.5 over
-    /// the normalised object's centre and facing down, whose radiance is 30,000 / (π ·
-    /// 100²) as Cycles emits it, and the factory world's grey, 0.0509. Seen from the object,
-    /// which lies below it, the light fills the sky down to within a degree of the
-    /// horizon; in Blender it neither occludes nor is seen by the camera. So it is this
-    /// environment: the light's radiance above the horizon, the grey below.
-    pub fn light(&self, scene: &mut Scene) -> Result<(), SceneError> {
-        let side = 100.0f32;
-        let radiance = 30_000.0 / (std::f32::consts::PI * side * side);
-        let texture = split_sky(&mut scene.textures, radiance, 0.0509)?;
-        scene.sky = Sky::Environment {
-            texture,
-            strength: 1.0,
-            rotation: 0.0,
-        };
+    /// Lights `scene`, normalised by `norm`, as the script does ([`Lighting`]).
+    ///
+    /// objaverse-rendering's area light emits 30,000 / (π · 100²) as Cycles emits a watt
+    /// of an area light (P / (π A)). Seen from the object, below it, it fills the sky down
+    /// to within a degree of the horizon, and in Blender it neither occludes nor is seen by
+    /// the camera: so it is this environment, the light's radiance above the horizon and
+    /// the world's grey below.
+    ///
+    /// The factory point light is a root object when the script normalises, so it moves
+    /// with the object: in the mesh's own frame it stays at its Blender position divided
+    /// by the scale, and its intensity, P / (4π) W/sr as Cycles emits a point light's
+    /// watts, is divided by the scale squared, so that the object receives what it does in
+    /// the script. (Blender's light is a sphere of radius 0.1 m, meshtrace's a point: the
+    /// shadows are harder.)
+    pub fn light(&self, scene: &mut Scene, norm: &Normalisation) -> Result<(), SceneError> {
+        match self.lighting {
+            Lighting::AreaAbove => {
+                let side = 100.0f32;
+                let radiance = 30_000.0 / (std::f32::consts::PI * side * side);
+                let texture = split_sky(&mut scene.textures, radiance, 0.0509)?;
+                scene.sky = Sky::Environment {
+                    texture,
+                    strength: 1.0,
+                    rotation: 0.0,
+                };
+            }
+            Lighting::FactoryPoint { world } => {
+                let position = to_meshtrace(DVec3::new(4.0762, 1.0055, 5.9039)) / norm.scale;
+                let intensity = 1000.0 / (4.0 * std::f32::consts::PI) / (norm.scale * norm.scale);
+                scene.lights.push(PunctualLight::Point {
+                    position,
+                    intensity: Vec3::splat(intensity),
+                });
+                scene.sky = Sky::Constant(Vec3::splat(world));
+            }
+        }
         Ok(())
     }
 }

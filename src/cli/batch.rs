@@ -411,7 +411,7 @@ fn run_input(
             let norm = Normalisation::of(&preset::mesh_bounds(&scene))
                 .context("the mesh has no extent to normalise")?;
             preset
-                .light(&mut scene)
+                .light(&mut scene, &norm)
                 .map_err(|e| pipeline_error(e.into()))?;
             (
                 Prepared::from_scene(scene, &request).map_err(request_error)?,

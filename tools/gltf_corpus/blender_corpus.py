@@ -410,6 +410,99 @@ def materials_cycles(glb, out_exr):
     bpy.ops.render.render(write_still=True)
 
 
+def materials_joined(path):
+    """`materials`' five spheres joined into one object (one root node), its origin moved
+    off the centre: a file that the dataset scripts, which scale each root object about
+    its own origin, normalise as meshtrace does."""
+    materials(path.with_name("materials_joined_source.glb"))
+    empty_scene()
+    bpy.ops.import_scene.gltf(filepath=str(path.with_name("materials_joined_source.glb")))
+    path.with_name("materials_joined_source.glb").unlink()
+    spheres = [o for o in bpy.context.scene.objects if o.type == "MESH"]
+    for o in spheres:
+        o.select_set(True)
+    bpy.context.view_layer.objects.active = spheres[0]
+    bpy.ops.object.join()
+    joined = bpy.context.active_object
+    bpy.ops.object.origin_set(type="ORIGIN_GEOMETRY")
+    joined.location = (0.3, -0.2, 0.1)
+    export(path)
+
+
+def syncdreamer_cycles(glb, out_dir, views):
+    """SyncDreamer's blender_script.py (`--camera_type fixed`) on `glb`, rendered by Cycles
+    on the CPU: the factory scene with its Cube removed, the import, the script's
+    normalisation (each root scaled about its own origin, then the box centred), the
+    factory point light kept, a world of grey 0.5, 16 views on a ring at 30° and 1.5, a
+    35 mm lens on 32 mm, 256², the script's bounces; 256 samples without denoising, linear
+    EXR with alpha (`VIEW.exr`). The reference for meshtrace's syncdreamer preset."""
+    from mathutils import Vector
+
+    bpy.ops.wm.read_factory_settings()
+    scene = bpy.context.scene
+    for o in list(scene.objects):
+        if o.type not in ("CAMERA", "LIGHT"):
+            bpy.data.objects.remove(o, do_unlink=True)
+    bpy.ops.import_scene.gltf(filepath=str(glb), merge_vertices=True)
+
+    def bbox():
+        lo, hi = Vector((math.inf,) * 3), Vector((-math.inf,) * 3)
+        for o in scene.objects:
+            if o.type == "MESH":
+                for c in o.bound_box:
+                    p = o.matrix_world @ Vector(c)
+                    lo = Vector(map(min, lo, p))
+                    hi = Vector(map(max, hi, p))
+        return lo, hi
+
+    lo, hi = bbox()
+    scale = 1 / max(hi - lo)
+    for o in scene.objects:
+        if o.parent is None:
+            o.scale = o.scale * scale
+    bpy.context.view_layer.update()
+    lo, hi = bbox()
+    offset = -(lo + hi) / 2
+    for o in scene.objects:
+        if o.parent is None:
+            o.matrix_world.translation += offset
+    bpy.context.view_layer.update()
+    camera = scene.objects["Camera"]
+    camera.data.lens, camera.data.sensor_width = 35, 32
+    target = bpy.data.objects.new("Empty", None)
+    scene.collection.objects.link(target)
+    track = camera.constraints.new(type="TRACK_TO")
+    track.track_axis, track.up_axis, track.target = "TRACK_NEGATIVE_Z", "UP_Y", target
+    background = scene.world.node_tree.nodes["Background"]
+    background.inputs["Color"].default_value = (0.5, 0.5, 0.5, 1.0)
+    background.inputs["Strength"].default_value = 1.0
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = 256
+    scene.cycles.use_denoising = False
+    scene.cycles.diffuse_bounces, scene.cycles.glossy_bounces = 1, 1
+    scene.cycles.transparent_max_bounces, scene.cycles.transmission_bounces = 3, 3
+    scene.cycles.filter_width = 0.01
+    scene.cycles.seed = 1
+    scene.render.resolution_x = scene.render.resolution_y = 256
+    scene.render.resolution_percentage = 100
+    scene.render.film_transparent = True
+    scene.view_settings.view_transform = "Standard"
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    scene.render.image_settings.color_depth = "32"
+    scene.render.image_settings.exr_codec = "ZIP"
+    for i in views:
+        az, el, d = i / 16 * 2 * math.pi, math.radians(30), 1.5
+        camera.location = (
+            d * math.cos(az) * math.cos(el),
+            d * math.sin(az) * math.cos(el),
+            d * math.sin(el),
+        )
+        bpy.context.view_layer.update()
+        scene.render.filepath = str(out_dir / f"{i:03d}.exr")
+        bpy.ops.render.render(write_still=True)
+
+
 # Every file, by name; `python blender_corpus.py OUT NAME...` writes only those named.
 FILES = [
     ("skinned_arm", skinned_arm),
@@ -421,6 +514,7 @@ FILES = [
     ("vertex_colors_draco", vertex_colors_draco),
     ("second_uv_map", second_uv_map),
     ("materials", materials),
+    ("materials_joined", materials_joined),
 ]
 
 
@@ -437,6 +531,10 @@ def main():
         print(f"{glb}: {n} triangles as Blender imports it")
         if name == "materials":
             materials_cycles(glb, out / "materials.cycles.exr")
+        if name == "materials_joined":
+            folder = out / "syncdreamer.cycles"
+            folder.mkdir(exist_ok=True)
+            syncdreamer_cycles(glb, folder, [0, 5])
 
 
 if __name__ == "__main__":
