@@ -429,13 +429,10 @@ def materials_joined(path):
     export(path)
 
 
-def syncdreamer_cycles(glb, out_dir, views):
-    """SyncDreamer's blender_script.py (`--camera_type fixed`) on `glb`, rendered by Cycles
-    on the CPU: the factory scene with its Cube removed, the import, the script's
-    normalisation (each root scaled about its own origin, then the box centred), the
-    factory point light kept, a world of grey 0.5, 16 views on a ring at 30° and 1.5, a
-    35 mm lens on 32 mm, 256², the script's bounces; 256 samples without denoising, linear
-    EXR with alpha (`VIEW.exr`). The reference for meshtrace's syncdreamer preset."""
+def normalised_scene(glb):
+    """The factory scene with its Cube removed and `glb` imported and normalised as the
+    Zero123, objaverse-rendering and SyncDreamer scripts do (each root object scaled about
+    its own origin, then the box centred on the origin); the factory Camera and Light kept."""
     from mathutils import Vector
 
     bpy.ops.wm.read_factory_settings()
@@ -467,15 +464,20 @@ def syncdreamer_cycles(glb, out_dir, views):
         if o.parent is None:
             o.matrix_world.translation += offset
     bpy.context.view_layer.update()
+    return scene
+
+
+def ring_cycles(scene, out_dir, views, count, size, distance):
+    """Renders `scene` by Cycles on the CPU (256 samples, no denoising, the scripts'
+    bounces, linear EXR with alpha, `VIEW.exr`) from views `views` of `count` on a ring at
+    30° and `distance`, through the factory Camera with a 35 mm lens on 32 mm, tracking the
+    origin as the scripts' TRACK_TO constraint does."""
     camera = scene.objects["Camera"]
     camera.data.lens, camera.data.sensor_width = 35, 32
     target = bpy.data.objects.new("Empty", None)
     scene.collection.objects.link(target)
     track = camera.constraints.new(type="TRACK_TO")
     track.track_axis, track.up_axis, track.target = "TRACK_NEGATIVE_Z", "UP_Y", target
-    background = scene.world.node_tree.nodes["Background"]
-    background.inputs["Color"].default_value = (0.5, 0.5, 0.5, 1.0)
-    background.inputs["Strength"].default_value = 1.0
     scene.render.engine = "CYCLES"
     scene.cycles.device = "CPU"
     scene.cycles.samples = 256
@@ -484,7 +486,7 @@ def syncdreamer_cycles(glb, out_dir, views):
     scene.cycles.transparent_max_bounces, scene.cycles.transmission_bounces = 3, 3
     scene.cycles.filter_width = 0.01
     scene.cycles.seed = 1
-    scene.render.resolution_x = scene.render.resolution_y = 256
+    scene.render.resolution_x = scene.render.resolution_y = size
     scene.render.resolution_percentage = 100
     scene.render.film_transparent = True
     scene.view_settings.view_transform = "Standard"
@@ -492,15 +494,41 @@ def syncdreamer_cycles(glb, out_dir, views):
     scene.render.image_settings.color_depth = "32"
     scene.render.image_settings.exr_codec = "ZIP"
     for i in views:
-        az, el, d = i / 16 * 2 * math.pi, math.radians(30), 1.5
+        az, el = i / count * 2 * math.pi, math.radians(30)
         camera.location = (
-            d * math.cos(az) * math.cos(el),
-            d * math.sin(az) * math.cos(el),
-            d * math.sin(el),
+            distance * math.cos(az) * math.cos(el),
+            distance * math.sin(az) * math.cos(el),
+            distance * math.sin(el),
         )
         bpy.context.view_layer.update()
         scene.render.filepath = str(out_dir / f"{i:03d}.exr")
         bpy.ops.render.render(write_still=True)
+
+
+def syncdreamer_cycles(glb, out_dir, views):
+    """SyncDreamer's blender_script.py (`--camera_type fixed`) on `glb`: the factory point
+    light kept, a world of grey 0.5, 16 views at 1.5, 256². The reference for meshtrace's
+    syncdreamer preset."""
+    scene = normalised_scene(glb)
+    background = scene.world.node_tree.nodes["Background"]
+    background.inputs["Color"].default_value = (0.5, 0.5, 0.5, 1.0)
+    background.inputs["Strength"].default_value = 1.0
+    ring_cycles(scene, out_dir, views, 16, 256, 1.5)
+
+
+def objaverse_cycles(glb, out_dir, views):
+    """allenai/objaverse-rendering's blender_script.py on `glb`, run with `--engine
+    CYCLES` (its default is EEVEE, which needs a display): the factory Light deleted, its
+    area light of 30,000 W (1 m, scale 100) at (0, 0, 0.5), the factory world, 12 views at
+    1.5, 512². The reference for meshtrace's objaverse preset."""
+    scene = normalised_scene(glb)
+    bpy.data.objects.remove(scene.objects["Light"], do_unlink=True)
+    bpy.ops.object.light_add(type="AREA")
+    light = bpy.context.active_object
+    light.data.energy = 30000
+    light.location = (0, 0, 0.5)
+    light.scale = (100, 100, 100)
+    ring_cycles(scene, out_dir, views, 12, 512, 1.5)
 
 
 # Every file, by name; `python blender_corpus.py OUT NAME...` writes only those named.
@@ -532,9 +560,13 @@ def main():
         if name == "materials":
             materials_cycles(glb, out / "materials.cycles.exr")
         if name == "materials_joined":
-            folder = out / "syncdreamer.cycles"
-            folder.mkdir(exist_ok=True)
-            syncdreamer_cycles(glb, folder, [0, 5])
+            for preset, views, render in [
+                ("syncdreamer", [0, 5], syncdreamer_cycles),
+                ("objaverse", [0, 7], objaverse_cycles),
+            ]:
+                folder = out / f"{preset}.cycles"
+                folder.mkdir(exist_ok=True)
+                render(glb, folder, views)
 
 
 if __name__ == "__main__":
