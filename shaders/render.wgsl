@@ -131,24 +131,17 @@ const PHASE_BRANCH: u32 = 2u;
 // splat is added twice.
 @compute @workgroup_size(8, 8, 1)
 fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let x = gid.x;
-    let y = params.row_start + gid.y;
-    if x >= params.width || y >= params.row_end {
+    let start = pixel_start(gid);
+    if !start.run {
         return;
     }
-    let pixel = y * params.width + x;
-    let base = pixel * params.film_texels;
-    if SHADER_CHECKS {
-        check(base + params.film_texels <= arrayLength(&film));
-    }
-    // The radiance texel's w holds the next sample's index as is (adding 0 keeps it).
-    var radiance = film[base];
-    var rays = film[base + 1u];
-    var s = max(params.sample_start, radiance.zw.z);
-    if s >= params.sample_end {
-        report_checks();
-        return;
-    }
+    let x = start.x;
+    let y = start.y;
+    let pixel = start.pixel;
+    let base = start.base;
+    var radiance = start.radiance;
+    var rays = start.rays;
+    var s = start.s;
     // Persistent paths: a lane whose path ends starts its next branch or sample at once, so
     // the lanes of a SIMD group do not all wait for the longest path of every sample.
     var sums = film_aov_sums(base);
@@ -248,6 +241,46 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     finish_pixel(base, s, radiance, rays, sums);
 }
 
+// Where an invocation's pixel stands: its coordinates, its first film texel, its
+// radiance and rays sums so far, the next sample it traces, and whether it traces any.
+struct PixelStart {
+    x: u32,
+    y: u32,
+    pixel: u32,
+    base: u32,
+    radiance: Texel,
+    rays: Texel,
+    s: u32,
+    run: bool,
+}
+
+// The pixel of invocation `gid`: none outside the image or the dispatch's rows, and none
+// to trace where it has this dispatch's samples already (a resumed dispatch). The radiance
+// texel's w holds the next sample's index as is (adding 0 keeps it).
+fn pixel_start(gid: vec3<u32>) -> PixelStart {
+    var p: PixelStart;
+    p.run = false;
+    p.x = gid.x;
+    p.y = params.row_start + gid.y;
+    if p.x >= params.width || p.y >= params.row_end {
+        return p;
+    }
+    p.pixel = p.y * params.width + p.x;
+    p.base = p.pixel * params.film_texels;
+    if SHADER_CHECKS {
+        check(p.base + params.film_texels <= arrayLength(&film));
+    }
+    p.radiance = film[p.base];
+    p.rays = film[p.base + 1u];
+    p.s = max(params.sample_start, p.radiance.zw.z);
+    if p.s >= params.sample_end {
+        report_checks();
+        return p;
+    }
+    p.run = true;
+    return p;
+}
+
 // A pixel's AOV sums as the film holds them so far.
 fn film_aov_sums(base: u32) -> AovSums {
     var sums = AovSums();
@@ -292,23 +325,17 @@ fn finish_pixel(base: u32, s: u32, radiance_sums: Texel, rays: Texel, sums: AovS
 // handling of `render`. mirror: src/render/cpu.rs `geometry_pixel`
 @compute @workgroup_size(8, 8, 1)
 fn geometry(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let x = gid.x;
-    let y = params.row_start + gid.y;
-    if x >= params.width || y >= params.row_end {
+    let start = pixel_start(gid);
+    if !start.run {
         return;
     }
-    let pixel = y * params.width + x;
-    let base = pixel * params.film_texels;
-    if SHADER_CHECKS {
-        check(base + params.film_texels <= arrayLength(&film));
-    }
-    var radiance = film[base];
-    var rays = film[base + 1u];
-    var s = max(params.sample_start, radiance.zw.z);
-    if s >= params.sample_end {
-        report_checks();
-        return;
-    }
+    let x = start.x;
+    let y = start.y;
+    let pixel = start.pixel;
+    let base = start.base;
+    var radiance = start.radiance;
+    var rays = start.rays;
+    var s = start.s;
     var sums = film_aov_sums(base);
     loop {
         let fh = first_hit(generate_camera_ray(x, y, Rng(pixel, s, params.seed)));

@@ -122,51 +122,39 @@ fn material_at(m: Material, uv: vec4<f32>, color: vec4<f32>) -> Material {
     if !TEXTURES {
         return out;
     }
-    if m.albedo_texture != NO_TEXTURE {
-        out.albedo *= surface_lookup(m.albedo_texture, uv).xyz;
+    out.albedo = textured_colour(m.albedo_texture, uv, out.albedo);
+    out.emission = textured_colour(m.emission_texture, uv, m.emission);
+    if m.roughness_texture != NO_TEXTURE && (m.flags & MAT_SPEC_GLOSS) != 0u {
+        let g = scalar_lookup(m.roughness_texture, uv);
+        out.roughness = clamp(1.0 - (1.0 - m.roughness) * g, 0.0, 1.0);
+    } else {
+        out.roughness = textured_scalar(m.roughness_texture, uv, m.roughness);
     }
-    if m.emission_texture != NO_TEXTURE {
-        out.emission *= surface_lookup(m.emission_texture, uv).xyz;
-    }
-    if m.roughness_texture != NO_TEXTURE {
-        let r = scalar_lookup(m.roughness_texture, uv);
-        if (m.flags & MAT_SPEC_GLOSS) != 0u {
-            out.roughness = clamp(1.0 - (1.0 - out.roughness) * r, 0.0, 1.0);
-        } else {
-            out.roughness = clamp(out.roughness * r, 0.0, 1.0);
-        }
-    }
-    if m.metallic_texture != NO_TEXTURE {
-        let k = scalar_lookup(m.metallic_texture, uv);
-        out.metallic = clamp(out.metallic * k, 0.0, 1.0);
-    }
-    if m.transmission_texture != NO_TEXTURE {
-        let k = scalar_lookup(m.transmission_texture, uv);
-        out.transmission = clamp(out.transmission * k, 0.0, 1.0);
-    }
-    if m.specular_color_texture != NO_TEXTURE {
-        out.specular_color *= surface_lookup(m.specular_color_texture, uv).xyz;
-    }
-    if m.specular_texture != NO_TEXTURE {
-        let k = scalar_lookup(m.specular_texture, uv);
-        out.specular = clamp(out.specular * k, 0.0, 1.0);
-    }
-    if m.clearcoat_texture != NO_TEXTURE {
-        let k = scalar_lookup(m.clearcoat_texture, uv);
-        out.clearcoat = clamp(out.clearcoat * k, 0.0, 1.0);
-    }
-    if m.clearcoat_roughness_texture != NO_TEXTURE {
-        let k = scalar_lookup(m.clearcoat_roughness_texture, uv);
-        out.clearcoat_roughness = clamp(out.clearcoat_roughness * k, 0.0, 1.0);
-    }
-    if m.sheen_color_texture != NO_TEXTURE {
-        out.sheen_color *= surface_lookup(m.sheen_color_texture, uv).xyz;
-    }
-    if m.sheen_roughness_texture != NO_TEXTURE {
-        let k = scalar_lookup(m.sheen_roughness_texture, uv);
-        out.sheen_roughness = clamp(out.sheen_roughness * k, 0.0, 1.0);
-    }
+    out.metallic = textured_scalar(m.metallic_texture, uv, m.metallic);
+    out.transmission = textured_scalar(m.transmission_texture, uv, m.transmission);
+    out.specular_color = textured_colour(m.specular_color_texture, uv, m.specular_color);
+    out.specular = textured_scalar(m.specular_texture, uv, m.specular);
+    out.clearcoat = textured_scalar(m.clearcoat_texture, uv, m.clearcoat);
+    out.clearcoat_roughness = textured_scalar(m.clearcoat_roughness_texture, uv, m.clearcoat_roughness);
+    out.sheen_color = textured_colour(m.sheen_color_texture, uv, m.sheen_color);
+    out.sheen_roughness = textured_scalar(m.sheen_roughness_texture, uv, m.sheen_roughness);
     return out;
+}
+
+// mirror: src/render/texture.rs `textured_colour`
+fn textured_colour(slot: u32, uv: vec4<f32>, value: vec3<f32>) -> vec3<f32> {
+    if slot == NO_TEXTURE {
+        return value;
+    }
+    return value * surface_lookup(slot, uv).xyz;
+}
+
+// mirror: src/render/texture.rs `textured_scalar`
+fn textured_scalar(slot: u32, uv: vec4<f32>, value: f32) -> f32 {
+    if slot == NO_TEXTURE {
+        return value;
+    }
+    return clamp(value * scalar_lookup(slot, uv), 0.0, 1.0);
 }
 
 // mirror: src/render/texture.rs `normal_mapped`

@@ -158,53 +158,47 @@ pub fn scalar_lookup(scene: &RenderScene, index: u32, uv: Vec4) -> f32 {
 /// mirror: shaders/texture.wgsl `material_at`
 pub fn material_at(scene: &RenderScene, m: &Material, uv: Vec4, color: Vec4) -> Material {
     let mut out = *m;
-    out.albedo *= color.truncate();
-    if m.albedo_texture != NO_TEXTURE {
-        out.albedo *= surface_lookup(scene, m.albedo_texture, uv).truncate();
+    out.albedo = textured_colour(scene, m.albedo_texture, uv, m.albedo * color.truncate());
+    out.emission = textured_colour(scene, m.emission_texture, uv, m.emission);
+    if m.roughness_texture != NO_TEXTURE && m.flags & MAT_SPEC_GLOSS != 0 {
+        // The texture holds glossiness, which scales 1 − roughness.
+        let g = scalar_lookup(scene, m.roughness_texture, uv);
+        out.roughness = (1.0 - (1.0 - m.roughness) * g).clamp(0.0, 1.0);
+    } else {
+        out.roughness = textured_scalar(scene, m.roughness_texture, uv, m.roughness);
     }
-    if m.emission_texture != NO_TEXTURE {
-        out.emission *= surface_lookup(scene, m.emission_texture, uv).truncate();
-    }
-    if m.roughness_texture != NO_TEXTURE {
-        let r = scalar_lookup(scene, m.roughness_texture, uv);
-        out.roughness = if m.flags & MAT_SPEC_GLOSS != 0 {
-            // The texture holds glossiness, which scales 1 − roughness.
-            (1.0 - (1.0 - out.roughness) * r).clamp(0.0, 1.0)
-        } else {
-            (out.roughness * r).clamp(0.0, 1.0)
-        };
-    }
-    if m.metallic_texture != NO_TEXTURE {
-        let k = scalar_lookup(scene, m.metallic_texture, uv);
-        out.metallic = (out.metallic * k).clamp(0.0, 1.0);
-    }
-    if m.transmission_texture != NO_TEXTURE {
-        let k = scalar_lookup(scene, m.transmission_texture, uv);
-        out.transmission = (out.transmission * k).clamp(0.0, 1.0);
-    }
-    if m.specular_color_texture != NO_TEXTURE {
-        out.specular_color *= surface_lookup(scene, m.specular_color_texture, uv).truncate();
-    }
-    if m.specular_texture != NO_TEXTURE {
-        let k = scalar_lookup(scene, m.specular_texture, uv);
-        out.specular = (out.specular * k).clamp(0.0, 1.0);
-    }
-    if m.clearcoat_texture != NO_TEXTURE {
-        let k = scalar_lookup(scene, m.clearcoat_texture, uv);
-        out.clearcoat = (out.clearcoat * k).clamp(0.0, 1.0);
-    }
-    if m.clearcoat_roughness_texture != NO_TEXTURE {
-        let k = scalar_lookup(scene, m.clearcoat_roughness_texture, uv);
-        out.clearcoat_roughness = (out.clearcoat_roughness * k).clamp(0.0, 1.0);
-    }
-    if m.sheen_color_texture != NO_TEXTURE {
-        out.sheen_color *= surface_lookup(scene, m.sheen_color_texture, uv).truncate();
-    }
-    if m.sheen_roughness_texture != NO_TEXTURE {
-        let k = scalar_lookup(scene, m.sheen_roughness_texture, uv);
-        out.sheen_roughness = (out.sheen_roughness * k).clamp(0.0, 1.0);
-    }
+    out.metallic = textured_scalar(scene, m.metallic_texture, uv, m.metallic);
+    out.transmission = textured_scalar(scene, m.transmission_texture, uv, m.transmission);
+    out.specular_color = textured_colour(scene, m.specular_color_texture, uv, m.specular_color);
+    out.specular = textured_scalar(scene, m.specular_texture, uv, m.specular);
+    out.clearcoat = textured_scalar(scene, m.clearcoat_texture, uv, m.clearcoat);
+    out.clearcoat_roughness = textured_scalar(
+        scene,
+        m.clearcoat_roughness_texture,
+        uv,
+        m.clearcoat_roughness,
+    );
+    out.sheen_color = textured_colour(scene, m.sheen_color_texture, uv, m.sheen_color);
+    out.sheen_roughness = textured_scalar(scene, m.sheen_roughness_texture, uv, m.sheen_roughness);
     out
+}
+
+/// `value` times the RGB of texture `slot` at `uv`, or `value` where the slot holds none.
+/// mirror: shaders/texture.wgsl `textured_colour`
+pub fn textured_colour(scene: &RenderScene, slot: u32, uv: Vec4, value: Vec3) -> Vec3 {
+    if slot == NO_TEXTURE {
+        return value;
+    }
+    value * surface_lookup(scene, slot, uv).truncate()
+}
+
+/// `value` times texture `slot`'s channel at `uv`, kept within [0, 1]; `value` where the
+/// slot holds none. mirror: shaders/texture.wgsl `textured_scalar`
+pub fn textured_scalar(scene: &RenderScene, slot: u32, uv: Vec4, value: f32) -> f32 {
+    if slot == NO_TEXTURE {
+        return value;
+    }
+    (value * scalar_lookup(scene, slot, uv)).clamp(0.0, 1.0)
 }
 
 /// The shading normal that normal map `map` (of XY strength `scale`) gives at `hit` (its

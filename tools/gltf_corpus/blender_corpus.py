@@ -369,6 +369,23 @@ def materials(path):
     export(path)
 
 
+def cycles_exr(scene, samples, width, height):
+    """Cycles on the CPU at `samples` a pixel, seed 1, no denoising, `width` × `height`,
+    the film transparent, the Standard view transform, writing 32-bit linear EXR."""
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = samples
+    scene.cycles.use_denoising = False
+    scene.cycles.seed = 1
+    scene.render.resolution_x, scene.render.resolution_y = width, height
+    scene.render.resolution_percentage = 100
+    scene.render.film_transparent = True
+    scene.view_settings.view_transform = "Standard"
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    scene.render.image_settings.color_depth = "32"
+    scene.render.image_settings.exr_codec = "ZIP"
+
+
 def materials_cycles(glb, out_exr):
     """Blender's import of `materials` rendered by Cycles on the CPU through
     MATERIALS_CAMERA, lit by a uniform white world of radiance 1 (linear EXR, alpha
@@ -393,19 +410,8 @@ def materials_cycles(glb, out_exr):
     world.node_tree.nodes["Background"].inputs["Color"].default_value = (1, 1, 1, 1)
     world.node_tree.nodes["Background"].inputs["Strength"].default_value = 1.0
     scene.world = world
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = 1024
-    scene.cycles.use_denoising = False
-    scene.cycles.seed = 1
+    cycles_exr(scene, 1024, width, height)
     scene.cycles.max_bounces = 8
-    scene.render.resolution_x, scene.render.resolution_y = width, height
-    scene.render.resolution_percentage = 100
-    scene.render.film_transparent = True
-    scene.view_settings.view_transform = "Standard"
-    scene.render.image_settings.file_format = "OPEN_EXR"
-    scene.render.image_settings.color_depth = "32"
-    scene.render.image_settings.exr_codec = "ZIP"
     scene.render.filepath = str(out_exr)
     bpy.ops.render.render(write_still=True)
 
@@ -478,21 +484,10 @@ def ring_cycles(scene, out_dir, views, count, size, distance):
     scene.collection.objects.link(target)
     track = camera.constraints.new(type="TRACK_TO")
     track.track_axis, track.up_axis, track.target = "TRACK_NEGATIVE_Z", "UP_Y", target
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = 256
-    scene.cycles.use_denoising = False
+    cycles_exr(scene, 256, size, size)
     scene.cycles.diffuse_bounces, scene.cycles.glossy_bounces = 1, 1
     scene.cycles.transparent_max_bounces, scene.cycles.transmission_bounces = 3, 3
     scene.cycles.filter_width = 0.01
-    scene.cycles.seed = 1
-    scene.render.resolution_x = scene.render.resolution_y = size
-    scene.render.resolution_percentage = 100
-    scene.render.film_transparent = True
-    scene.view_settings.view_transform = "Standard"
-    scene.render.image_settings.file_format = "OPEN_EXR"
-    scene.render.image_settings.color_depth = "32"
-    scene.render.image_settings.exr_codec = "ZIP"
     for i in views:
         az, el = i / count * 2 * math.pi, math.radians(30)
         camera.location = (

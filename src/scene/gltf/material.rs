@@ -285,11 +285,7 @@ impl<'b, 'a> Materials<'b, 'a> {
         let pbr_at = format!("{at}.pbrMetallicRoughness");
         let [r, g, b, a] = pbr.base_color_factor.0;
         let base = format!("{pbr_at}.baseColorFactor");
-        mat.albedo = Vec3::new(
-            self.unit(r, &base)?,
-            self.unit(g, &base)?,
-            self.unit(b, &base)?,
-        );
+        mat.albedo = self.unit3([r, g, b], &base)?;
         mat.alpha = self.unit(a, &base)?;
         mat.metallic = self.unit(pbr.metallic_factor.0, &format!("{pbr_at}.metallicFactor"))?;
         mat.roughness = self.unit(pbr.roughness_factor.0, &format!("{pbr_at}.roughnessFactor"))?;
@@ -319,20 +315,9 @@ impl<'b, 'a> Materials<'b, 'a> {
     ) -> Result<(), SceneError> {
         let [r, g, b, a] = sg.diffuse_factor.0;
         let diffuse = format!("{at}.diffuseFactor");
-        mat.albedo = Vec3::new(
-            self.unit(r, &diffuse)?,
-            self.unit(g, &diffuse)?,
-            self.unit(b, &diffuse)?,
-        );
+        mat.albedo = self.unit3([r, g, b], &diffuse)?;
         mat.alpha = self.unit(a, &diffuse)?;
-        let [r, g, b] = sg.specular_factor.0;
-        let specular = format!("{at}.specularFactor");
-        let f0 = Vec3::new(
-            self.unit(r, &specular)?,
-            self.unit(g, &specular)?,
-            self.unit(b, &specular)?,
-        );
-        mat.specular_color = f0;
+        mat.specular_color = self.unit3(sg.specular_factor.0, &format!("{at}.specularFactor"))?;
         mat.flags |= MAT_SPEC_GLOSS;
         mat.metallic = 0.0;
         let gloss = self.unit(sg.glossiness_factor.0, &format!("{at}.glossinessFactor"))?;
@@ -388,13 +373,7 @@ impl<'b, 'a> Materials<'b, 'a> {
         at: &str,
     ) -> Result<(), SceneError> {
         let s: Sheen = self.extension(value, at)?;
-        let color_at = format!("{at}.sheenColorFactor");
-        let [r, g, b] = s.sheen_color_factor;
-        mat.sheen_color = Vec3::new(
-            self.unit(r, &color_at)?,
-            self.unit(g, &color_at)?,
-            self.unit(b, &color_at)?,
-        );
+        mat.sheen_color = self.unit3(s.sheen_color_factor, &format!("{at}.sheenColorFactor"))?;
         mat.sheen_roughness = self.unit(
             s.sheen_roughness_factor,
             &format!("{at}.sheenRoughnessFactor"),
@@ -454,6 +433,15 @@ impl<'b, 'a> Materials<'b, 'a> {
                 .warn(at, format!("{x} is outside [0, 1] and is clamped"));
         }
         Ok(x.clamp(0.0, 1.0))
+    }
+
+    /// Three factors that must lie in [0, 1], as [`Materials::unit`] checks each.
+    fn unit3(&self, [r, g, b]: [f32; 3], at: &str) -> Result<Vec3, SceneError> {
+        Ok(Vec3::new(
+            self.unit(r, at)?,
+            self.unit(g, at)?,
+            self.unit(b, at)?,
+        ))
     }
 
     fn finite(&self, x: f32, at: &str) -> Result<f32, SceneError> {
