@@ -166,6 +166,24 @@ impl Display {
         let (w, h) = (field("Width:"), field("Height:"));
         image::imageops::crop_imm(&screen, x, y, w, h).to_image()
     }
+
+    /// Screenshots every half second until one shows what `ready` looks for, or 30 s have
+    /// gone (then the last, for the caller's assertion to report).
+    fn screenshot_until(
+        &self,
+        window: &str,
+        path: &Path,
+        ready: impl Fn(&RgbImage) -> bool,
+    ) -> RgbImage {
+        let start = std::time::Instant::now();
+        loop {
+            let shot = self.screenshot(window, path);
+            if ready(&shot) || start.elapsed() > Duration::from_secs(30) {
+                return shot;
+            }
+            std::thread::sleep(Duration::from_millis(500));
+        }
+    }
 }
 
 impl Drop for Display {
@@ -310,19 +328,27 @@ fn the_window_shows_the_render_its_views_and_closing_it_writes_the_samples() {
         ],
     );
     let window = display.window(&mut child);
-    // Let a few passes land.
-    std::thread::sleep(Duration::from_secs(3));
     let shots = screenshot_dir();
-    let beauty = display.screenshot(&window, &shots.join("beauty.png"));
+    // Let passes land: on a busy machine (the CI's tests run beside each other) the first
+    // pass over the whole image takes a few seconds, so look until it is there.
+    let walls = |img: &RgbImage| {
+        let rows = 0..img.height() - 80;
+        let (red, red_x) = share(img, rows.clone(), |[r, g, b]| {
+            r > 60 && r as u32 > 2 * g as u32 && r as u32 > 2 * b as u32
+        });
+        let (green, green_x) = share(img, rows, |[r, g, b]| {
+            g > 40 && g as u32 > r as u32 * 3 / 2 && g as u32 > b as u32 * 3 / 2
+        });
+        (red, red_x, green, green_x)
+    };
+    let beauty = display.screenshot_until(&window, &shots.join("beauty.png"), |img| {
+        let (red, _, green, _) = walls(img);
+        red > 0.05 && green > 0.05
+    });
     let (w, h) = beauty.dimensions();
     let image_rows = 0..h - 80;
     // The Cornell box: the red wall on the left, the green one on the right.
-    let (red, red_x) = share(&beauty, image_rows.clone(), |[r, g, b]| {
-        r > 60 && r as u32 > 2 * g as u32 && r as u32 > 2 * b as u32
-    });
-    let (green, green_x) = share(&beauty, image_rows.clone(), |[r, g, b]| {
-        g > 40 && g as u32 > r as u32 * 3 / 2 && g as u32 > b as u32 * 3 / 2
-    });
+    let (red, red_x, green, green_x) = walls(&beauty);
     assert!(
         red > 0.05 && green > 0.05 && red_x < 0.4 && green_x > 0.6,
         "a {w}x{h} window: red {red:.3} at x {red_x:.2}, green {green:.3} at x {green_x:.2}"
@@ -334,15 +360,16 @@ fn the_window_shows_the_render_its_views_and_closing_it_writes_the_samples() {
     assert!(ink > 0.003, "panel ink {ink:.4}");
 
     // Key 3: the normal view. The floor faces up, +y: (0.5, 1, 0.5) as colour.
+    // The views are traced once beside the render, which shares their threads: wait for
+    // them as for the passes.
     display.keys(&window, &["3"]);
-    let normals = display.screenshot(&window, &shots.join("normal.png"));
-    let (floor, _) = share(&normals, image_rows.clone(), |[r, g, b]| {
-        r.abs_diff(128) < 8 && g > 245 && b.abs_diff(128) < 8
+    let up = |[r, g, b]: [u8; 3]| r.abs_diff(128) < 8 && g > 245 && b.abs_diff(128) < 8;
+    let normals = display.screenshot_until(&window, &shots.join("normal.png"), |img| {
+        share(img, 0..img.height() - 80, up).0 > 0.05
     });
+    let (floor, _) = share(&normals, image_rows.clone(), up);
     assert!(floor > 0.05, "floor normals {floor:.3}");
-    let (floor_before, _) = share(&beauty, image_rows.clone(), |[r, g, b]| {
-        r.abs_diff(128) < 8 && g > 245 && b.abs_diff(128) < 8
-    });
+    let (floor_before, _) = share(&beauty, image_rows.clone(), up);
     assert!(
         floor_before < 0.001,
         "the beauty view has {floor_before:.3} of them"
