@@ -201,6 +201,20 @@ impl Drop for Display {
     }
 }
 
+/// Kills process `pid` when dropped: a test that fails while its window is open must not
+/// leave the render running (a window whose display has gone does not notice).
+struct KillOnDrop(u32);
+
+impl Drop for KillOnDrop {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            let _ = Command::new("kill")
+                .args(["-9", &self.0.to_string()])
+                .status();
+        }
+    }
+}
+
 /// Waits for `child` to end; returns its exit code and standard error.
 fn wait(mut child: Child, within: Duration) -> (i32, String) {
     let deadline = Instant::now() + within;
@@ -327,6 +341,7 @@ fn the_window_shows_the_render_its_views_and_closing_it_writes_the_samples() {
             "out.exr",
         ],
     );
+    let _kill = KillOnDrop(child.id());
     let window = display.window(&mut child);
     let shots = screenshot_dir();
     // Let passes land: on a busy machine (the CI's tests run beside each other) the first
@@ -414,6 +429,7 @@ fn finished_render_matches(test: &str, device: &str, size: [&str; 2], spp: &str,
     let mut with = args("window.exr");
     with.push("--preview");
     let mut child = display.meshtrace(&dir, &with);
+    let _kill = KillOnDrop(child.id());
     let window = display.window(&mut child);
     wait_for_file(
         &dir.join("window.exr"),
