@@ -242,11 +242,3 @@ impl Normalisation {
         n / self.scale + self.centre
     }
 }
-
-/// The bounds of every triangle of `scene`.
-pub fn mesh_bounds(scene: &Scene) -> Aabb {
-    let mesh = &scene.mesh;
-    mesh.triangles.iter().fold(Aabb::EMPTY, |b, t| {
-        b.union(Aabb::from_points(&mesh.vertices(t)))
-    })
-}

@@ -4,7 +4,7 @@
 
 use super::{DeviceArgs, Interrupted, backend, pipeline_error, set_threads, warn};
 use anyhow::{Context, Result, bail};
-use meshtrace::batch::preset::{self, Normalisation, Preset};
+use meshtrace::batch::preset::{Normalisation, Preset};
 use meshtrace::batch::transforms::{self, Frame, Intrinsics};
 use meshtrace::batch::{self, Manifest, Task};
 use meshtrace::film::{Film, Format};
@@ -408,7 +408,11 @@ fn run_input(
             for w in &scene.warnings {
                 warn(w);
             }
-            let norm = Normalisation::of(&preset::mesh_bounds(&scene))
+            // The bare mesh's bounds, as the studio frames them (the preset has no ground).
+            let norm = scene
+                .framed
+                .as_ref()
+                .and_then(Normalisation::of)
                 .context("the mesh has no extent to normalise")?;
             preset
                 .light(&mut scene, &norm)
