@@ -147,6 +147,21 @@ fn start_at_triangle(light: u32, pick: LightPick, rng: Rng) -> LightSubpathStart
     return LightSubpathStart(Ray(offset_ray_origin(q, n, dir), dir), le * (cos_m / (pdf_point * pdf_dir)), pdf, true);
 }
 
+// mirror: src/render/caustics.rs `start_at_rect`
+fn start_at_rect(l: Light, pmf: f32, u: vec2<f32>, rng: Rng) -> LightSubpathStart {
+    let q = l.position + u.x * l.direction + u.y * l.edge;
+    let n = normalize(cross(l.direction, l.edge));
+    let st = sample_target(q, rng_2d(rng, 0u, DIM_CAUSTIC_DIR_U));
+    let dir = st.xyz;
+    let pdf_dir = st.w;
+    let cos_m = dot(dir, n);
+    let pdf_point = LIGHT_SUBPATH_RATE * pmf / l.area;
+    if !(cos_m > 0.0 && pdf_dir > 0.0 && pdf_point > 0.0) {
+        return no_light_subpath_start();
+    }
+    return LightSubpathStart(Ray(q, dir), l.intensity * (cos_m / (pdf_point * pdf_dir)), 0.0, true);
+}
+
 // mirror: src/render/caustics.rs `start_at_directional`
 fn start_at_directional(l: Light, pmf: f32, rng: Rng) -> LightSubpathStart {
     let d = l.direction;
@@ -187,10 +202,13 @@ fn start_at_directional(l: Light, pmf: f32, rng: Rng) -> LightSubpathStart {
 }
 
 // mirror: src/render/caustics.rs `start_at_punctual`
-fn start_at_punctual(index: u32, pmf: f32, rng: Rng) -> LightSubpathStart {
+fn start_at_punctual(index: u32, pmf: f32, u_pick: vec2<f32>, rng: Rng) -> LightSubpathStart {
     let l = load_light(index);
     if l.kind == LIGHT_DIRECTIONAL {
         return start_at_directional(l, pmf, rng);
+    }
+    if l.kind == LIGHT_RECT {
+        return start_at_rect(l, pmf, u_pick, rng);
     }
     let u = rng_2d(rng, 0u, DIM_CAUSTIC_DIR_U);
     let spot = TargetCone(l.direction, l.cos_cutoff, 1.0 - l.cos_cutoff);
@@ -228,7 +246,7 @@ fn trace_light_subpath(rng: Rng, max_segments: u32) -> TracedLight {
     }
     var start: LightSubpathStart;
     if (light & LIGHT_EMITTER) != 0u {
-        start = start_at_punctual(light & ~LIGHT_EMITTER, pick.pmf, rng);
+        start = start_at_punctual(light & ~LIGHT_EMITTER, pick.pmf, pick.u, rng);
     } else {
         start = start_at_triangle(light, pick, rng);
     }

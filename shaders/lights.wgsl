@@ -77,7 +77,7 @@ fn sample_light(p: vec3<f32>, ng: vec3<f32>, u_pair: vec2<f32>) -> LightSample {
         return LightSample(offset_ray_origin(p, ng, wi), wi, T_INF, sky_radiance(wi), params.sky_pmf * pdf, false, true);
     }
     if (light & LIGHT_EMITTER) != 0u {
-        return sample_punctual(light & ~LIGHT_EMITTER, p, ng, pick.pmf);
+        return sample_punctual(light & ~LIGHT_EMITTER, p, ng, pick.pmf, u);
     }
     let tri = load_tri(light);
     let bary = sample_uniform_triangle(u);
@@ -103,12 +103,26 @@ fn triangle_emission(light: u32, bary: vec2<f32>) -> vec3<f32> {
 }
 
 // mirror: src/render/lights.rs `sample_punctual`
-fn sample_punctual(index: u32, p: vec3<f32>, ng: vec3<f32>, pmf: f32) -> LightSample {
+fn sample_punctual(index: u32, p: vec3<f32>, ng: vec3<f32>, pmf: f32, u: vec2<f32>) -> LightSample {
     var none = LightSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, false, false);
     let l = load_light(index);
     if l.kind == LIGHT_DIRECTIONAL {
         let wi = -l.direction;
-        return LightSample(offset_ray_origin(p, ng, wi), wi, T_INF, l.intensity, pmf, true, true);
+        let t_max = select(0.0, T_INF, l.shadows != 0u);
+        return LightSample(offset_ray_origin(p, ng, wi), wi, t_max, l.intensity, pmf, true, true);
+    }
+    if l.kind == LIGHT_RECT {
+        let r = sample_rect(l, p, u);
+        if !r.valid {
+            return none;
+        }
+        let origin = offset_ray_origin(p, ng, r.q - p);
+        let to_light = r.q - origin;
+        let dist = length(to_light);
+        if !(dist > 0.0 && r.pdf > 0.0) {
+            return none;
+        }
+        return LightSample(origin, to_light * (1.0 / dist), dist * (1.0 - 1e-4), l.intensity * (1.0 / r.pdf), pmf, true, true);
     }
     let origin = offset_ray_origin(p, ng, l.position - p);
     let to_light = l.position - origin;
@@ -126,6 +140,76 @@ fn sample_punctual(index: u32, p: vec3<f32>, ng: vec3<f32>, pmf: f32) -> LightSa
         return none;
     }
     return LightSample(origin, wi, dist * (1.0 - 1e-4), le, pmf, true, true);
+}
+
+// A point of a rectangle light and the solid-angle density of its direction (valid stands
+// for the Option around the Rust twin's pair).
+struct RectSample {
+    q: vec3<f32>,
+    pdf: f32,
+    valid: bool,
+}
+
+// mirror: src/render/lights.rs `sample_rect`
+fn sample_rect(l: Light, p: vec3<f32>, u: vec2<f32>) -> RectSample {
+    let s = l.position;
+    let ex = l.direction;
+    let ey = l.edge;
+    let exl = length(ex);
+    let eyl = length(ey);
+    let x = ex * (1.0 / exl);
+    let y = ey * (1.0 / eyl);
+    let n = cross(x, y);
+    let d = s - p;
+    let z0 = dot(d, n);
+    if !(z0 < 0.0) {
+        return RectSample(vec3<f32>(0.0), 0.0, false);
+    }
+    let x0 = dot(d, x);
+    let y0 = dot(d, y);
+    let x1 = x0 + exl;
+    let y1 = y0 + eyl;
+    let v00 = vec3<f32>(x0, y0, z0);
+    let v01 = vec3<f32>(x0, y1, z0);
+    let v10 = vec3<f32>(x1, y0, z0);
+    let v11 = vec3<f32>(x1, y1, z0);
+    let n0 = normalize(cross(v00, v10));
+    let n1 = normalize(cross(v10, v11));
+    let n2 = normalize(cross(v11, v01));
+    let n3 = normalize(cross(v01, v00));
+    let g0 = angle_between(-n0, n1);
+    let g1 = angle_between(-n1, n2);
+    let g2 = angle_between(-n2, n3);
+    let g3 = angle_between(-n3, n0);
+    let solid_angle = g0 + g1 + g2 + g3 - 2.0 * PI;
+    if !(solid_angle >= 1e-3) {
+        let q = s + u.x * ex + u.y * ey;
+        let to = q - p;
+        let dist2 = dot(to, to);
+        let cos_l = -dot(to, n) / sqrt(dist2);
+        return RectSample(q, dist2 / (cos_l * l.area), true);
+    }
+    let b0 = n0.z;
+    let b1 = n2.z;
+    let au = u.x * (g0 + g1 - 2.0 * PI) + (u.x - 1.0) * (g2 + g3);
+    let fu = (cos(au) * b0 - b1) / sin(au);
+    let cu = clamp(select(-1.0, 1.0, fu >= 0.0) / sqrt(fu * fu + b0 * b0), -ONE_MINUS_EPSILON, ONE_MINUS_EPSILON);
+    let xu = clamp(-(cu * z0) / sqrt(max(1.0 - cu * cu, 0.0)), x0, x1);
+    let dd = sqrt(xu * xu + z0 * z0);
+    let h0 = y0 / sqrt(dd * dd + y0 * y0);
+    let h1 = y1 / sqrt(dd * dd + y1 * y1);
+    let hv = h0 + u.y * (h1 - h0);
+    let hv2 = hv * hv;
+    var yv = y1;
+    if hv2 < 1.0 - 1e-4 {
+        yv = hv * dd / sqrt(1.0 - hv2);
+    }
+    return RectSample(p + xu * x + yv * y + z0 * n, 1.0 / solid_angle, true);
+}
+
+// mirror: src/render/lights.rs `angle_between`
+fn angle_between(a: vec3<f32>, b: vec3<f32>) -> f32 {
+    return atan2(length(cross(a, b)), dot(a, b));
 }
 
 // mirror: src/render/lights.rs `spot_falloff`

@@ -66,7 +66,8 @@ struct Texture {
     _pad2: u32,
 }
 
-// mirror: src/render/tables.rs `Light` (64 bytes): a punctual light; kind is a LIGHT_* code.
+// mirror: src/render/tables.rs `Light` (80 bytes): a light that is not a surface; kind is a
+// LIGHT_* code.
 struct Light {
     position: vec3<f32>,
     kind: u32,
@@ -76,8 +77,10 @@ struct Light {
     cos_beam: f32,
     cutoff: f32,
     inv_transition: f32,
-    _pad0: u32,
-    _pad1: u32,
+    shadows: u32,
+    area: f32,
+    edge: vec3<f32>,
+    _pad: u32,
 }
 
 // mirror: src/render/tables.rs `CausticTarget` (16 bytes): a sphere around specular

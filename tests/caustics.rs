@@ -226,6 +226,7 @@ fn sun_mirror_scene(image: bool, settings: RenderSettings) -> RenderScene {
     let sun = |y: f32| PunctualLight::Directional {
         direction: Vec3::new(-1.0, y, 0.0).normalize(),
         irradiance: Vec3::new(2.0, 1.8, 1.5),
+        shadows: true,
     };
     s.lights = vec![sun(-1.0)];
     if image {

@@ -957,6 +957,7 @@ fn punctual_lights_in_radiometric_units() {
     let PunctualLight::Directional {
         direction,
         irradiance,
+        shadows: true,
     } = scene.lights[2]
     else {
         panic!("{:?}", scene.lights[2]);

@@ -1,8 +1,9 @@
-//! Punctual lights (`[[lights]]`: point, spot, directional) against their closed forms, on
-//! both renderers: a camera with a tiny field of view looks straight down at a Lambertian
-//! floor of albedo rho, which a punctual light alone lights, so every pixel sees
+//! Lights that are not surfaces (`[[lights]]`: point, spot, directional, rect) against their
+//! closed forms, on both renderers: a camera with a tiny field of view looks straight down
+//! at a Lambertian floor of albedo rho, which one light alone lights, so every pixel sees
 //! rho / pi × E, E the irradiance the light gives that point: I cos / d² for a point or
-//! spot (times the spot's falloff), E cos for a directional light.
+//! spot (times the spot's falloff), E cos for a directional light, Lambert's polygon
+//! formula for a rectangle.
 
 mod common;
 
@@ -11,10 +12,17 @@ use meshtrace::scene::load_scene;
 
 const RHO: f32 = 0.6;
 
-/// The radiance every pixel sees under `light` (a `[[lights]]` table's body), on both
-/// renderers: the mean pixel (the view spans 0.2 degrees, over which the irradiance
-/// varies by under 1%; its mean is the centre's to second order).
-fn floor_radiance(name: &str, light: &str) -> Vec<(&'static str, [f32; 3])> {
+/// The radiance every pixel sees under `light` (a `[[lights]]` table's body) with `extra`
+/// scene text, at `spp` samples a pixel, on both renderers: the mean pixel (the view spans
+/// 0.2 degrees, over which the irradiance varies by under 1%; its mean is the centre's to
+/// second order). Pixels may differ from the mean by `spread` of it.
+fn floor_radiance(
+    name: &str,
+    light: &str,
+    extra: &str,
+    spp: u32,
+    spread: f32,
+) -> Vec<(&'static str, [f32; 3])> {
     let dir = TempDir::new(name);
     dir.write(
         "floor.obj",
@@ -22,9 +30,9 @@ fn floor_radiance(name: &str, light: &str) -> Vec<(&'static str, [f32; 3])> {
     );
     let toml = format!(
         "[camera]\nposition = [0.0, 1.0, 0.0]\nlook_at = [0.0, 0.0, 0.0]\nup = [0.0, 0.0, -1.0]\n\
-         vfov = 0.2\n[render]\nwidth = 8\nheight = 8\nspp = 4\nmax_depth = 2\n\
+         vfov = 0.2\n[render]\nwidth = 8\nheight = 8\nspp = {spp}\nmax_depth = 2\n\
          [materials.floor]\ntype = \"diffuse\"\nalbedo = [{RHO}, {RHO}, {RHO}]\n\
-         [[objects]]\nmesh = \"floor.obj\"\nmaterial = \"floor\"\n[[lights]]\n{light}\n"
+         [[objects]]\nmesh = \"floor.obj\"\nmaterial = \"floor\"\n{extra}\n[[lights]]\n{light}\n"
     );
     let scene = load_scene(&dir.write("scene.toml", toml)).unwrap_or_else(|e| panic!("{e}"));
     common::render_both(name, &scene)
@@ -34,7 +42,7 @@ fn floor_radiance(name: &str, light: &str) -> Vec<(&'static str, [f32; 3])> {
             let avg = mean.iter().sum::<glam::Vec3>() / mean.len() as f32;
             for p in &mean {
                 assert!(
-                    (*p - avg).abs().max_element() <= 1e-2 * avg.max_element() + 1e-7,
+                    (*p - avg).abs().max_element() <= spread * avg.max_element() + 1e-7,
                     "{name} on the {device}: pixels vary: {p} against {avg}"
                 );
             }
@@ -44,11 +52,25 @@ fn floor_radiance(name: &str, light: &str) -> Vec<(&'static str, [f32; 3])> {
 }
 
 fn assert_radiance(name: &str, light: &str, irradiance: [f32; 3]) {
-    for (device, l) in floor_radiance(name, light) {
+    assert_radiance_within(name, light, "", 4, 1e-3, irradiance);
+}
+
+/// [`assert_radiance`] with `extra` scene text, at `spp` samples, within `tolerance` of
+/// the closed form (and pixels within 5 times that of their mean).
+fn assert_radiance_within(
+    name: &str,
+    light: &str,
+    extra: &str,
+    spp: u32,
+    tolerance: f32,
+    irradiance: [f32; 3],
+) {
+    let spread = (5.0 * tolerance).max(1e-2);
+    for (device, l) in floor_radiance(name, light, extra, spp, spread) {
         for c in 0..3 {
             let want = RHO / std::f32::consts::PI * irradiance[c];
             assert!(
-                (l[c] - want).abs() <= 1e-3 * want.max(1e-3),
+                (l[c] - want).abs() <= tolerance * want.max(1e-3),
                 "{name} on the {device}: channel {c}: {} against {want}",
                 l[c]
             );
@@ -130,6 +152,107 @@ fn a_directional_light_gives_irradiance_times_cosine() {
     );
 }
 
+/// A sun with `shadows = false` shines through a quad in its way; with shadows it does not.
+#[test]
+fn a_directional_light_without_shadows_passes_through_what_is_in_its_way() {
+    let t = 60f32.to_radians();
+    // The shadow ray from the floor's centre crosses y = 0.5 at x = -0.5 tan 60°: a quad
+    // 0.4 wide there, out of the camera's view, blocks it.
+    let blocker = format!(
+        "[[objects]]\nmesh = \"floor.obj\"\nmaterial = \"floor\"\nscale = [0.004, 1.0, 0.004]\n\
+         translate = [{}, 0.5, 0.0]",
+        -0.5 * t.tan()
+    );
+    let sun = |shadows: bool| {
+        format!(
+            "type = \"directional\"\ndirection = [{}, {}, 0.0]\nirradiance = [2.0, 3.0, 4.0]\n\
+             shadows = {shadows}",
+            t.sin(),
+            -t.cos()
+        )
+    };
+    let c = t.cos();
+    assert_radiance_within(
+        "sun without shadows",
+        &sun(false),
+        &blocker,
+        4,
+        1e-3,
+        [2.0 * c, 3.0 * c, 4.0 * c],
+    );
+    assert_radiance_within("sun with shadows", &sun(true), &blocker, 4, 1e-3, [0.0; 3]);
+}
+
+/// The irradiance at the origin, facing +Y, from a polygon of uniform radiance 1 with
+/// corners `v` (Lambert: half the sum over its edges of the angle each subtends times the
+/// Y component of the unit normal of the plane through the edge and the point).
+fn polygon_irradiance(v: &[glam::Vec3]) -> f32 {
+    let mut e = 0.0;
+    for i in 0..v.len() {
+        let (a, b) = (v[i].normalize(), v[(i + 1) % v.len()].normalize());
+        e += a.dot(b).clamp(-1.0, 1.0).acos() * a.cross(b).normalize().y;
+    }
+    0.5 * e.abs()
+}
+
+/// A rectangle light gives the irradiance of Lambert's polygon formula: small and high,
+/// wide as the sky and low, tilted and off to the side; and nothing from behind.
+#[test]
+fn a_rect_light_gives_lamberts_polygon_irradiance() {
+    use glam::Vec3;
+    let radiance = [1.0f32, 2.0, 3.0];
+    for (name, center, direction, size) in [
+        (
+            "rect above",
+            Vec3::new(0.0, 2.0, 0.0),
+            Vec3::NEG_Y,
+            [1.0f32, 3.0],
+        ),
+        (
+            "rect as wide as the sky",
+            Vec3::new(0.3, 0.5, -0.2),
+            Vec3::NEG_Y,
+            [1000.0, 1000.0],
+        ),
+        (
+            "rect tilted",
+            Vec3::new(1.5, 1.0, 0.5),
+            Vec3::new(-1.0, -0.5, 0.2),
+            [0.8, 0.5],
+        ),
+        (
+            "rect far",
+            Vec3::new(0.0, 40.0, 0.0),
+            Vec3::NEG_Y,
+            [0.5, 0.5],
+        ),
+    ] {
+        // The corners as the scene format places them: the width along direction × Y (X
+        // when the light faces straight down), the height along direction × width.
+        let n = direction.normalize();
+        let u = if n.y.abs() < 0.9999 {
+            n.cross(Vec3::Y).normalize()
+        } else {
+            Vec3::X
+        };
+        let (eu, ev) = (size[0] * u, size[1] * n.cross(u));
+        let c = center - 0.5 * (eu + ev);
+        let e = polygon_irradiance(&[c, c + eu, c + eu + ev, c + ev]);
+        let light = format!(
+            "type = \"rect\"\nposition = [{}, {}, {}]\ndirection = [{}, {}, {}]\n\
+             size = [{}, {}]\nradiance = [1.0, 2.0, 3.0]",
+            center.x, center.y, center.z, direction.x, direction.y, direction.z, size[0], size[1]
+        );
+        assert_radiance_within(name, &light, "", 1024, 1e-2, radiance.map(|l| l * e));
+    }
+    assert_radiance(
+        "rect facing away",
+        "type = \"rect\"\nposition = [0.0, 2.0, 0.0]\ndirection = [0.0, 1.0, 0.0]\n\
+         size = [1.0, 1.0]\nradiance = [1.0, 1.0, 1.0]",
+        [0.0; 3],
+    );
+}
+
 #[test]
 fn bad_lights_are_errors_naming_the_field() {
     let dir = TempDir::new("bad-lights");
@@ -153,6 +276,14 @@ fn bad_lights_are_errors_naming_the_field() {
         (
             "type = \"directional\"\ndirection = [0.0, -1.0, 0.0]\nirradiance = [-1.0, 1.0, 1.0]",
             "lights[0].irradiance: must not be negative",
+        ),
+        (
+            "type = \"rect\"\nposition = [0.0, 1.0, 0.0]\ndirection = [0.0, -1.0, 0.0]\nsize = [1.0, 0.0]\nradiance = [1.0, 1.0, 1.0]",
+            "lights[0].size[1]: must be positive",
+        ),
+        (
+            "type = \"point\"\nposition = [0.0, 1.0, 0.0]\nintensity = [1.0, 1.0, 1.0]\nshadows = false",
+            "lights[0].shadows: is not a parameter of point lights",
         ),
         ("type = \"area\"", "scene.toml:"),
     ] {

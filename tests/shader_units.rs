@@ -1104,6 +1104,8 @@ const CAUSTICS_SCENE: &str = "tests/scenes/box_area.toml";
 /// tests/scenes/lights.toml: light subpaths of an area light and of point, spot and
 /// directional lights, through a glass sphere.
 const PUNCTUAL_CAUSTICS_SCENE: &str = "tests/scenes/lights.toml";
+/// tests/scenes/rect_lights.toml: rectangle lights and a sun without shadows.
+const RECT_LIGHTS_SCENE: &str = "tests/scenes/rect_lights.toml";
 
 /// Test scene `file` with caustic light subpaths.
 fn caustics_scene(file: &str) -> (RenderScene, RenderSettings) {
@@ -1138,6 +1140,22 @@ fn trace_path_matches_with_caustics_of_punctual_lights() {
         return;
     };
     trace_path_check(&ctx, PUNCTUAL_CAUSTICS_SCENE);
+}
+
+#[test]
+fn trace_path_matches_with_rect_lights() {
+    let Some(ctx) = common::gpu("trace_path_matches_with_rect_lights") else {
+        return;
+    };
+    trace_path_check(&ctx, RECT_LIGHTS_SCENE);
+}
+
+#[test]
+fn light_subpath_matches_for_rect_lights() {
+    let Some(ctx) = common::gpu("light_subpath_matches_for_rect_lights") else {
+        return;
+    };
+    light_subpath_check(&ctx, RECT_LIGHTS_SCENE);
 }
 
 #[test]

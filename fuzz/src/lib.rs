@@ -428,7 +428,14 @@ fn check_gltf_scene(scene: &Scene) {
             PunctualLight::Directional {
                 direction,
                 irradiance,
+                ..
             } => direction.is_normalized() && irradiance.is_finite(),
+            PunctualLight::Rect {
+                center,
+                edge_u,
+                edge_v,
+                radiance,
+            } => center.is_finite() && edge_u.cross(edge_v).length() > 0.0 && radiance.is_finite(),
         };
         assert!(finite, "a light that is not finite: {light:?}");
     }

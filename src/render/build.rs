@@ -7,9 +7,9 @@
 use super::environment::cell_corners;
 use super::sheen::{SHEEN_TABLE_OFFSET, sheen_table};
 use super::tables::{
-    CausticTarget, Environment, LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_POINT, LIGHT_SPOT, Light,
-    RenderScene, SKY_EMITTER, TRI_COLOR, TRI_SMOOTH, TRI_TANGENT, TRI_UV, TRI_UV1, TriColors,
-    TriShading, TriTangents, TriUvs,
+    CausticTarget, Environment, LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_POINT, LIGHT_RECT,
+    LIGHT_SPOT, Light, RenderScene, SKY_EMITTER, TRI_COLOR, TRI_SMOOTH, TRI_TANGENT, TRI_UV,
+    TRI_UV1, TriColors, TriShading, TriTangents, TriUvs,
 };
 use super::texture::texel;
 use crate::bvh::{BuildParams, Bvh, BvhError, WideBvh};
@@ -266,6 +266,18 @@ impl RenderScene {
                 PunctualLight::Directional { irradiance, .. } => {
                     std::f64::consts::PI * radius * radius * luminance(irradiance) as f64
                 }
+                // What leaves it, but no more than a rectangle as wide as the scene sends:
+                // a light far wider than the scene lights it as a directional light would.
+                PunctualLight::Rect {
+                    edge_u,
+                    edge_v,
+                    radiance,
+                    ..
+                } => {
+                    let area = edge_u.cross(edge_v).length() as f64;
+                    let wide = std::f64::consts::PI * radius * radius;
+                    std::f64::consts::PI * area.min(wide) * luminance(radiance) as f64
+                }
             };
             if power > 0.0 {
                 emitters.push(LIGHT_EMITTER | k as u32);
@@ -333,7 +345,10 @@ impl RenderScene {
 impl Light {
     /// The table entry of a scene light.
     pub fn new(l: &PunctualLight) -> Self {
-        let mut out = Self::default();
+        let mut out = Self {
+            shadows: 1,
+            ..Self::default()
+        };
         match *l {
             PunctualLight::Point {
                 position,
@@ -362,15 +377,33 @@ impl Light {
                     } else {
                         0.0
                     },
-                    _pad: [0; 2],
+                    ..out
                 };
             }
             PunctualLight::Directional {
                 direction,
                 irradiance,
+                shadows,
             } => {
                 (out.kind, out.direction, out.intensity) =
                     (LIGHT_DIRECTIONAL, direction.into(), irradiance.into());
+                out.shadows = shadows as u32;
+            }
+            PunctualLight::Rect {
+                center,
+                edge_u,
+                edge_v,
+                radiance,
+            } => {
+                out = Self {
+                    position: (center - 0.5 * (edge_u + edge_v)).into(),
+                    kind: LIGHT_RECT,
+                    direction: edge_u.into(),
+                    intensity: radiance.into(),
+                    area: edge_u.cross(edge_v).length(),
+                    edge: edge_v.into(),
+                    ..out
+                };
             }
         }
         out

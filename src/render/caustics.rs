@@ -58,7 +58,8 @@ use super::surface::{
     ShadingFrame, SurfaceHit, coated, geometry_agrees, offset_ray_origin, shading_frame, surface_at,
 };
 use super::tables::{
-    CausticTarget, LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_SPOT, Light, RenderScene, SKY_EMITTER,
+    CausticTarget, LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_RECT, LIGHT_SPOT, Light, RenderScene,
+    SKY_EMITTER,
 };
 use super::texture::{alpha_test, material_at};
 use crate::geometry::{self, T_INF};
@@ -283,18 +284,22 @@ pub fn start_at_triangle(
 /// direction that both carries light and meets a specular object first), carrying the
 /// light's intensity that way. Its pdf is 0: BSDF sampling never reaches a point, so the
 /// light subpath is the only strategy for its paths, and their weight is 1. A directional
-/// light starts as [`start_at_directional`] says. `None` where a spot sends nothing that
-/// way.
+/// light starts as [`start_at_directional`] says, a rectangle as [`start_at_rect`].
+/// `None` where a spot sends nothing that way.
 /// mirror: shaders/caustics.wgsl `start_at_punctual`
 pub fn start_at_punctual(
     scene: &RenderScene,
     index: u32,
     pmf: f32,
+    u: Vec2,
     rng: &Rng,
 ) -> Option<LightSubpathStart> {
     let l = &scene.lights[index as usize];
     if l.kind == LIGHT_DIRECTIONAL {
         return start_at_directional(scene, l, pmf, rng);
+    }
+    if l.kind == LIGHT_RECT {
+        return start_at_rect(scene, l, pmf, u, rng);
     }
     let q = Vec3::from(l.position);
     let u = rng.rng_2d(0, rng::DIM_CAUSTIC_DIR_U);
@@ -322,6 +327,35 @@ pub fn start_at_punctual(
     Some(LightSubpathStart {
         ray: Ray::new(q, dir),
         beta: intensity * (1.0 / pdf_dir),
+        pdf: 0.0,
+    })
+}
+
+/// A light subpath's start on rectangle light `l` (picked with probability `pmf`): the
+/// point the pick's pair `u` puts on it, uniform in area, and a direction towards the
+/// targets from the pair `DIM_CAUSTIC_DIR_U` of bounce 0, as an emissive triangle's. Its pdf
+/// is 0: no ray hits a rectangle light, so the light subpath is the only strategy for its
+/// caustics. `None` where the direction leaves by its back.
+/// mirror: shaders/caustics.wgsl `start_at_rect`
+pub fn start_at_rect(
+    scene: &RenderScene,
+    l: &Light,
+    pmf: f32,
+    u: Vec2,
+    rng: &Rng,
+) -> Option<LightSubpathStart> {
+    let (ex, ey) = (Vec3::from(l.direction), Vec3::from(l.edge));
+    let q = Vec3::from(l.position) + u.x * ex + u.y * ey;
+    let n = ex.cross(ey).normalize();
+    let (dir, pdf_dir) = sample_target(scene, q, rng.rng_2d(0, rng::DIM_CAUSTIC_DIR_U));
+    let cos_m = dir.dot(n);
+    let pdf_point = LIGHT_SUBPATH_RATE * pmf / l.area;
+    if !(cos_m > 0.0 && pdf_dir > 0.0 && pdf_point > 0.0) {
+        return None;
+    }
+    Some(LightSubpathStart {
+        ray: Ray::new(q, dir),
+        beta: Vec3::from(l.intensity) * (cos_m / (pdf_point * pdf_dir)),
         pdf: 0.0,
     })
 }
@@ -417,7 +451,7 @@ pub fn trace_light_subpath(scene: &RenderScene, rng: &Rng, max_segments: u32) ->
     let Some(start) = (if light == SKY_EMITTER {
         None
     } else if light & LIGHT_EMITTER != 0 {
-        start_at_punctual(scene, light & !LIGHT_EMITTER, pick.pmf, rng)
+        start_at_punctual(scene, light & !LIGHT_EMITTER, pick.pmf, pick.u, rng)
     } else {
         start_at_triangle(scene, light, pick, rng)
     }) else {

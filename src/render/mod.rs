@@ -31,7 +31,7 @@ pub mod watch;
 
 pub use job::{CheckpointFn, Checkpoints, RenderJob};
 pub use tables::{
-    CausticTarget, Environment, LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_POINT, LIGHT_SPOT, Light,
-    RenderScene, SKY_EMITTER, TRI_COLOR, TRI_SMOOTH, TRI_TANGENT, TRI_UV, TRI_UV1, TriColors,
-    TriShading, TriTangents, TriUvs,
+    CausticTarget, Environment, LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_POINT, LIGHT_RECT,
+    LIGHT_SPOT, Light, RenderScene, SKY_EMITTER, TRI_COLOR, TRI_SMOOTH, TRI_TANGENT, TRI_UV,
+    TRI_UV1, TriColors, TriShading, TriTangents, TriUvs,
 };

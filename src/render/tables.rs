@@ -71,19 +71,22 @@ pub struct TriUvs {
     pub _pad: [u32; 2],
 }
 
-/// A punctual light as both renderers read it (64 bytes), from
+/// A light that is not a surface as both renderers read it (80 bytes), from
 /// [`PunctualLight`](crate::scene::PunctualLight). mirror: shaders/types.wgsl `Light`
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Light {
+    /// A point or spot's position, or a rectangle's corner.
     pub position: [f32; 3],
-    /// [`LIGHT_POINT`], [`LIGHT_SPOT`] or [`LIGHT_DIRECTIONAL`].
+    /// [`LIGHT_POINT`], [`LIGHT_SPOT`], [`LIGHT_DIRECTIONAL`] or [`LIGHT_RECT`].
     pub kind: u32,
-    /// A spot's axis, or the direction a directional light travels (unit).
+    /// A spot's axis, the direction a directional light travels (unit), or a rectangle's
+    /// first edge.
     pub direction: [f32; 3],
     /// cos of a spot's cutoff angle.
     pub cos_cutoff: f32,
-    /// Radiant intensity (W/sr), or a directional light's irradiance (W/m²).
+    /// Radiant intensity (W/sr), a directional light's irradiance (W/m²), or a
+    /// rectangle's radiance.
     pub intensity: [f32; 3],
     /// cos of a spot's full-intensity beam width.
     pub cos_beam: f32,
@@ -91,13 +94,20 @@ pub struct Light {
     /// in the angle from the axis.
     pub cutoff: f32,
     pub inv_transition: f32,
-    pub _pad: [u32; 2],
+    /// 1 where shadow rays are traced to the light, 0 where it shines through everything.
+    pub shadows: u32,
+    /// A rectangle's area.
+    pub area: f32,
+    /// A rectangle's second edge: its light leaves on the side of `direction × edge`.
+    pub edge: [f32; 3],
+    pub _pad: u32,
 }
 
 /// [`Light::kind`] codes.
 pub const LIGHT_POINT: u32 = 0;
 pub const LIGHT_SPOT: u32 = 1;
 pub const LIGHT_DIRECTIONAL: u32 = 2;
+pub const LIGHT_RECT: u32 = 3;
 
 /// The bit of an entry of [`RenderScene::emitters`] that marks a punctual light: the other
 /// bits are its index in [`RenderScene::lights`].

@@ -464,6 +464,9 @@ impl Ctx<'_> {
             ("irradiance", l.irradiance.is_some()),
             ("cutoff_angle", l.cutoff_angle.is_some()),
             ("beam_width", l.beam_width.is_some()),
+            ("shadows", l.shadows.is_some()),
+            ("size", l.size.is_some()),
+            ("radiance", l.radiance.is_some()),
         ];
         let takes: &[&str] = match l.kind {
             LightType::Point => &["position", "intensity"],
@@ -474,7 +477,8 @@ impl Ctx<'_> {
                 "cutoff_angle",
                 "beam_width",
             ],
-            LightType::Directional => &["direction", "irradiance"],
+            LightType::Directional => &["direction", "irradiance", "shadows"],
+            LightType::Rect => &["position", "direction", "size", "radiance"],
         };
         if let Some((key, _)) = given.iter().find(|(k, g)| *g && !takes.contains(k)) {
             return Err(self.invalid(
@@ -526,7 +530,35 @@ impl Ctx<'_> {
                 direction: direction(l.direction)?,
                 irradiance: self
                     .color(&field("irradiance"), required("irradiance", l.irradiance)?)?,
+                shadows: l.shadows.unwrap_or(true),
             },
+            LightType::Rect => {
+                let n = direction(l.direction)?;
+                let [w, h] = l
+                    .size
+                    .ok_or_else(|| self.invalid(field("size"), "is required for rect lights"))?;
+                for (k, x) in [w, h].into_iter().enumerate() {
+                    self.scalar(
+                        &format!("{}[{k}]", field("size")),
+                        x,
+                        |x| x > 0.0,
+                        "positive",
+                    )?;
+                }
+                // Its width runs horizontally (along X when it faces straight up or down),
+                // its height across it.
+                let u = n
+                    .cross(Vec3::Y)
+                    .try_normalize()
+                    .filter(|_| n.y.abs() < 0.9999)
+                    .unwrap_or(Vec3::X);
+                PunctualLight::Rect {
+                    center: self.vec3(&field("position"), required("position", l.position)?)?,
+                    edge_u: w * u,
+                    edge_v: h * n.cross(u),
+                    radiance: self.color(&field("radiance"), required("radiance", l.radiance)?)?,
+                }
+            }
         })
     }
 

@@ -28,6 +28,7 @@ pub enum LightType {
     Point,
     Spot,
     Directional,
+    Rect,
 }
 
 impl LightType {
@@ -37,6 +38,7 @@ impl LightType {
             Self::Point => "point",
             Self::Spot => "spot",
             Self::Directional => "directional",
+            Self::Rect => "rect",
         }
     }
 }
@@ -53,6 +55,12 @@ pub struct LightFile {
     pub irradiance: Option<[f32; 3]>,
     pub cutoff_angle: Option<f32>,
     pub beam_width: Option<f32>,
+    /// A directional light's shadows (default true).
+    pub shadows: Option<bool>,
+    /// A rectangle's width and height.
+    pub size: Option<[f32; 2]>,
+    /// A rectangle's radiance.
+    pub radiance: Option<[f32; 3]>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -1,6 +1,7 @@
-//! Punctual lights: points, spots and directional lights, from `[[lights]]` tables and
-//! glTF's KHR_lights_punctual. They are delta lights: next event estimation reaches them,
-//! and no ray ever hits one.
+//! Lights that are not surfaces: points, spots and directional lights, from `[[lights]]`
+//! tables and glTF's KHR_lights_punctual, and the rectangular lights of dataset presets and
+//! `[[lights]]`. Next event estimation reaches them, and no ray ever hits one: a rectangle
+//! is seen by no camera and casts no shadow, as a Blender area light in Cycles.
 
 use glam::{Mat4, Vec3};
 
@@ -20,8 +21,22 @@ pub enum PunctualLight {
         beam_width: f32,
     },
     /// Parallel light travelling along unit `direction`, of irradiance `irradiance`
-    /// (W/m²) on a surface facing it.
-    Directional { direction: Vec3, irradiance: Vec3 },
+    /// (W/m²) on a surface facing it; with `shadows` false it passes through everything
+    /// (Blender's sun with `use_shadow` off, which dataset scripts use).
+    Directional {
+        direction: Vec3,
+        irradiance: Vec3,
+        shadows: bool,
+    },
+    /// A rectangle of uniform `radiance` (W/m²/sr) centred on `center`, spanned by the
+    /// perpendicular edges `edge_u` and `edge_v` (their full lengths), emitting on the side
+    /// of `edge_u × edge_v`.
+    Rect {
+        center: Vec3,
+        edge_u: Vec3,
+        edge_v: Vec3,
+        radiance: Vec3,
+    },
 }
 
 impl PunctualLight {
@@ -55,10 +70,29 @@ impl PunctualLight {
             PunctualLight::Directional {
                 direction: d,
                 irradiance,
+                shadows,
             } => PunctualLight::Directional {
                 direction: direction(d)?,
                 irradiance,
+                shadows,
             },
+            PunctualLight::Rect {
+                center,
+                edge_u,
+                edge_v,
+                radiance,
+            } => {
+                // A transform that shears or scales the plane changes the area; the
+                // radiance stays, as a surface's does.
+                let (u, v) = (m.transform_vector3(edge_u), m.transform_vector3(edge_v));
+                u.cross(v).try_normalize()?;
+                PunctualLight::Rect {
+                    center: point(center)?,
+                    edge_u: u,
+                    edge_v: v,
+                    radiance,
+                }
+            }
         })
     }
 }

@@ -22,8 +22,8 @@ use crate::render::sheen::{
     SHEEN_MIN_ROUGHNESS, SHEEN_TABLE_COSINES, SHEEN_TABLE_OFFSET, SHEEN_TABLE_ROUGHNESSES,
 };
 use crate::render::tables::{
-    LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_POINT, LIGHT_SPOT, RenderScene, SKY_EMITTER, TRI_COLOR,
-    TRI_SMOOTH, TRI_TANGENT, TRI_UV, TRI_UV1,
+    LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_POINT, LIGHT_RECT, LIGHT_SPOT, RenderScene,
+    SKY_EMITTER, TRI_COLOR, TRI_SMOOTH, TRI_TANGENT, TRI_UV, TRI_UV1,
 };
 use crate::scene::material::{MAT_ALPHA_MASK, MAT_SPEC_GLOSS, MAT_THIN_WALLED};
 use crate::scene::{Material, MaterialKind, NO_TEXTURE, TextureFormat, Wrap};
@@ -70,6 +70,7 @@ pub fn shared_constants() -> Vec<(String, Value)> {
         ("LIGHT_POINT", U32(LIGHT_POINT)),
         ("LIGHT_SPOT", U32(LIGHT_SPOT)),
         ("LIGHT_DIRECTIONAL", U32(LIGHT_DIRECTIONAL)),
+        ("LIGHT_RECT", U32(LIGHT_RECT)),
         ("LIGHT_EMITTER", U32(LIGHT_EMITTER)),
         ("SKY_EMITTER", U32(SKY_EMITTER)),
         ("SKY_CONSTANT", U32(SKY_CONSTANT)),

@@ -185,7 +185,7 @@ pub const TABLES: &[Table] = &[
         bytes: |s| bytemuck::cast_slice(&s.texel_lut),
     },
     Table {
-        what: "punctual lights",
+        what: "lights",
         texture: "lights_tex",
         loader: "load_light",
         element: || {
@@ -198,6 +198,9 @@ pub const TABLES: &[Table] = &[
                 cos_beam,
                 cutoff,
                 inv_transition,
+                shadows,
+                area,
+                edge,
                 _pad,
             }))
         },

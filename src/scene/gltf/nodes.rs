@@ -493,6 +493,7 @@ fn punctual_light(
         Checked::Valid(lights::Type::Directional) => PunctualLight::Directional {
             direction: Vec3::NEG_Z,
             irradiance: power,
+            shadows: true,
         },
         Checked::Valid(lights::Type::Spot) => {
             let spot = light.spot.as_ref().ok_or_else(|| {
