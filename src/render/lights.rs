@@ -266,7 +266,7 @@ pub fn sample_rect(l: &Light, p: Vec3, u: Vec2) -> Option<(Vec3, f32)> {
     let d = s - p;
     let z0 = d.dot(n);
     // The light leaves on the side of n: p must be there, so z0 < 0.
-    if !(z0 < 0.0) {
+    if z0.is_nan() || z0 >= 0.0 {
         return None;
     }
     let (x0, y0) = (d.dot(x), d.dot(y));
@@ -284,7 +284,7 @@ pub fn sample_rect(l: &Light, p: Vec3, u: Vec2) -> Option<(Vec3, f32)> {
     let g2 = angle_between(-n2, n3);
     let g3 = angle_between(-n3, n0);
     let solid_angle = g0 + g1 + g2 + g3 - 2.0 * PI;
-    if !(solid_angle >= 1e-3) {
+    if solid_angle.is_nan() || solid_angle < 1e-3 {
         let q = s + u.x * ex + u.y * ey;
         let to = q - p;
         let dist2 = to.length_squared();
