@@ -6,7 +6,7 @@ mod common;
 
 use common::cli::{assert_fails, run};
 use common::fs::{TempDir, data};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// Copies three small meshes of the fixtures into `dir/models`.
@@ -260,11 +260,26 @@ fn bad_manifests_fail_cleanly() {
             &["jobs[0].output", "same.png would be written by"],
         ),
         (
-            "[[jobs]]\nmeshes = \"models/*.obj\"\npreset = \"zero123\"\n",
+            "[[jobs]]\nmeshes = \"models/*.obj\"\npreset = \"trellis\"\n",
             &[
                 "jobs[0].preset",
-                "`zero123` is not a preset; there are \"objaverse\", \"syncdreamer\"",
+                "`trellis` is not a preset; there are \"objaverse\", \"syncdreamer\", \"zero123\"",
             ],
+        ),
+        (
+            "[[jobs]]\nmeshes = \"models/*.obj\"\npreset = \"zero123\"\ndistance = 2.0\n",
+            &[
+                "jobs[0].distance",
+                "`zero123` draws its cameras on a shell: give radius = [min, max]",
+            ],
+        ),
+        (
+            "[[jobs]]\nmeshes = \"models/*.obj\"\npreset = \"zero123\"\nradius = [2.0, 1.0]\n",
+            &["jobs[0].radius", "[2, 1]: must be 0 < min <= max"],
+        ),
+        (
+            "[[jobs]]\nmeshes = \"models/*.obj\"\npreset = \"objaverse\"\nradius = [1.0, 2.0]\n",
+            &["jobs[0].radius", "`objaverse` puts its cameras on a ring"],
         ),
         (
             "[[jobs]]\nmeshes = \"models/*.obj\"\ndistance = 2.0\noutput = \"{stem}.png\"\n",
@@ -507,7 +522,7 @@ fn an_orthographic_input_is_reported_and_the_rest_render() {
 }
 
 /// Every file under `dir`.
-fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
+fn walk(dir: &Path) -> Vec<PathBuf> {
     let mut out = Vec::new();
     for e in std::fs::read_dir(dir).unwrap() {
         let p = e.unwrap().path();
@@ -596,6 +611,112 @@ fn inputs_over_the_time_limit_fail_and_the_batch_goes_on() {
     );
 }
 
+/// The normalised vertices of `file` as the dataset scripts see it: read with +Y up, as
+/// Blender's importers read glTF and OBJ, turned into Blender's Z-up frame, scaled to a
+/// largest extent of 1 and centred on the origin.
+fn normalised_vertices(file: &Path) -> Vec<glam::DVec3> {
+    let scene = meshtrace::scene::load::load_scene_with(
+        file,
+        &meshtrace::scene::source::Fs,
+        &meshtrace::scene::studio::BareOptions {
+            up: Some(meshtrace::scene::studio::Up::Y),
+            unlit: true,
+        },
+    )
+    .unwrap();
+    let points: Vec<glam::DVec3> = scene
+        .mesh
+        .positions
+        .iter()
+        .map(|p| glam::DVec3::new(p.x as f64, -(p.z as f64), p.y as f64))
+        .collect();
+    let (lo, hi) = points.iter().fold(
+        (glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY),
+        |(lo, hi), &p| (lo.min(p), hi.max(p)),
+    );
+    let (scale, centre) = (1.0 / (hi - lo).max_element(), (lo + hi) / 2.0);
+    points.iter().map(|p| (*p - centre) * scale).collect()
+}
+
+/// The fraction of `points` that the world→camera pose `rt` (Blender's camera convention:
+/// rows right, up, back) and a focal length of `fx` pixels put on the alpha of `image`
+/// (square, `size` wide), dilated by one pixel.
+fn on_mask(points: &[glam::DVec3], rt: &[[f64; 4]; 3], fx: f64, image: &image::RgbaImage) -> f64 {
+    let size = image.width() as i64;
+    let row = |r: &[f64; 4]| glam::DVec3::new(r[0], r[1], r[2]);
+    let inside = points
+        .iter()
+        .filter(|p| {
+            let [x, y, z] = [0, 1, 2].map(|k| row(&rt[k]).dot(**p) + rt[k][3]);
+            let u = size as f64 / 2.0 + fx * x / -z;
+            let v = size as f64 / 2.0 - fx * y / -z;
+            let (i, j) = (u.floor() as i64, v.floor() as i64);
+            (-1..=1).any(|di| {
+                (-1..=1).any(|dj| {
+                    let (a, b) = (i + di, j + dj);
+                    (0..size).contains(&a)
+                        && (0..size).contains(&b)
+                        && image.get_pixel(a as u32, b as u32)[3] > 0
+                })
+            })
+        })
+        .count();
+    inside as f64 / points.len() as f64
+}
+
+/// A `.npy` file of a 3 × 4 float32 matrix, as `np.load` reads it: the header checked.
+fn read_npy(path: &Path) -> [[f64; 4]; 3] {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(&bytes[..8], b"\x93NUMPY\x01\x00", "{}", path.display());
+    let len = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    let header = std::str::from_utf8(&bytes[10..10 + len]).unwrap();
+    assert!(
+        header.contains("'descr': '<f4'")
+            && header.contains("'fortran_order': False")
+            && header.contains("'shape': (3, 4)")
+            && (10 + len) % 64 == 0
+            && header.ends_with('\n'),
+        "{header}"
+    );
+    let data = &bytes[10 + len..];
+    assert_eq!(data.len(), 48);
+    let mut out = [[0.0; 4]; 3];
+    for (k, c) in data.chunks(4).enumerate() {
+        out[k / 4][k % 4] = f32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64;
+    }
+    out
+}
+
+/// Renders `crowd.glb` and an off-centre box (named `box.v1.obj`: its uid stops at the
+/// first dot) with preset `preset` at `size`², `views` views, and returns the folder of
+/// each, with the file it came from.
+fn preset_views(dir: &TempDir, preset: &str, size: u32, views: u32) -> Vec<(PathBuf, PathBuf)> {
+    let models = dir.path().join("models");
+    std::fs::create_dir_all(&models).unwrap();
+    std::fs::copy(data("gltf/corpus/crowd.glb"), models.join("crowd.glb")).unwrap();
+    std::fs::copy(data("box.obj"), models.join("box.v1.obj")).unwrap();
+    let manifest = format!(
+        "[render]\nspp = 2\nwidth = {size}\nheight = {size}\n\n[[jobs]]\nmeshes = \"models/*\"\npreset = \"{preset}\"\nviews = {views}\n"
+    );
+    std::fs::write(dir.path().join("m.toml"), manifest).unwrap();
+    let (code, stderr) = run(dir, &["batch", "m.toml", "--device", "cpu"]);
+    assert_eq!(code, 0, "{stderr}");
+    [("crowd.glb", "crowd"), ("box.v1.obj", "box")]
+        .into_iter()
+        .map(|(file, uid)| (dir.path().join("views").join(uid), models.join(file)))
+        .collect()
+}
+
+/// The files in `folder`, sorted.
+fn files_in(folder: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(folder)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
 /// The objaverse preset, checked by reprojection: each mesh normalised as the script
 /// normalises it (largest extent 1, box centred on the origin, in Blender's Z-up frame of
 /// the file), its vertices projected with the script's camera (a ring at 30° elevation,
@@ -605,51 +726,14 @@ fn inputs_over_the_time_limit_fail_and_the_batch_goes_on() {
 #[test]
 fn the_objaverse_preset_projects_the_normalised_mesh_onto_its_masks() {
     let dir = TempDir::new("batch-objaverse");
-    let models = dir.path().join("models");
-    std::fs::create_dir_all(&models).unwrap();
-    std::fs::copy(data("gltf/corpus/crowd.glb"), models.join("crowd.glb")).unwrap();
-    std::fs::copy(data("box.obj"), models.join("box.v1.obj")).unwrap();
     let size = 96;
-    let manifest = format!(
-        "[render]\nspp = 2\nwidth = {size}\nheight = {size}\n\n[[jobs]]\nmeshes = \"models/*\"\npreset = \"objaverse\"\nviews = 5\n"
-    );
-    std::fs::write(dir.path().join("m.toml"), manifest).unwrap();
-    let (code, stderr) = run(&dir, &["batch", "m.toml", "--device", "cpu"]);
-    assert_eq!(code, 0, "{stderr}");
-    for (file, uid) in [("crowd.glb", "crowd"), ("box.v1.obj", "box")] {
-        let folder = dir.path().join("views").join(uid);
-        let mut names: Vec<String> = std::fs::read_dir(&folder)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        names.sort();
+    let fx = size as f64 / 2.0 / (16.0f64 / 35.0);
+    for (folder, file) in preset_views(&dir, "objaverse", size, 5) {
         assert_eq!(
-            names,
+            files_in(&folder),
             ["000.png", "001.png", "002.png", "003.png", "004.png"]
         );
-        // The mesh as Blender's importer places it (glTF's and OBJ's +Y up), Z up.
-        let scene = meshtrace::scene::load::load_scene_with(
-            &models.join(file),
-            &meshtrace::scene::source::Fs,
-            &meshtrace::scene::studio::BareOptions {
-                up: Some(meshtrace::scene::studio::Up::Y),
-                unlit: true,
-            },
-        )
-        .unwrap();
-        let points: Vec<glam::DVec3> = scene
-            .mesh
-            .positions
-            .iter()
-            .map(|p| glam::DVec3::new(p.x as f64, -(p.z as f64), p.y as f64))
-            .collect();
-        let (lo, hi) = points.iter().fold(
-            (glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY),
-            |(lo, hi), &p| (lo.min(p), hi.max(p)),
-        );
-        let scale = 1.0 / (hi - lo).max_element();
-        let centre = (lo + hi) / 2.0;
-        let fx = size as f64 / 2.0 / (16.0f64 / 35.0);
+        let points = normalised_vertices(&file);
         for view in 0..5 {
             let image = image::open(folder.join(format!("{view:03}.png")))
                 .unwrap()
@@ -662,27 +746,17 @@ fn the_objaverse_preset_projects_the_normalised_mesh_onto_its_masks() {
             let back = eye.normalize();
             let right = glam::DVec3::Z.cross(back).normalize();
             let up = back.cross(right);
-            let (mut inside, mut total) = (0, 0);
-            for p in &points {
-                let n = (*p - centre) * scale - eye;
-                let (x, y, z) = (n.dot(right), n.dot(up), n.dot(back));
-                let u = size as f64 / 2.0 + fx * x / -z;
-                let v = size as f64 / 2.0 - fx * y / -z;
-                total += 1;
-                let (i, j) = (u.floor() as i64, v.floor() as i64);
-                let covered = (-1..=1).any(|di| {
-                    (-1..=1).any(|dj| {
-                        let (a, b) = (i + di, j + dj);
-                        (0..size as i64).contains(&a)
-                            && (0..size as i64).contains(&b)
-                            && image.get_pixel(a as u32, b as u32)[3] > 0
-                    })
-                });
-                inside += usize::from(covered);
-            }
-            let fraction = inside as f64 / total as f64;
-            eprintln!("{uid} view {view}: {inside} of {total} vertices on the mask");
-            assert!(fraction >= 0.99, "{uid} view {view}: {fraction}");
+            let rt = [right, up, back].map(|a| [a.x, a.y, a.z, -a.dot(eye)]);
+            let fraction = on_mask(&points, &rt, fx, &image);
+            eprintln!(
+                "{} view {view}: {fraction} of the vertices on the mask",
+                folder.display()
+            );
+            assert!(
+                fraction >= 0.99,
+                "{} view {view}: {fraction}",
+                folder.display()
+            );
         }
     }
     // Poses would lie without the normalisation: a mask is not all of the image.
@@ -691,8 +765,68 @@ fn the_objaverse_preset_projects_the_normalised_mesh_onto_its_masks() {
         .to_rgba8();
     let covered = image.pixels().filter(|p| p[3] > 0).count();
     assert!(
-        covered > 100 && covered < size * size / 2,
+        covered > 100 && covered < (size * size / 2) as usize,
         "{covered} pixels covered"
+    );
+}
+
+/// The zero123 preset, checked by reprojection through the pose files it writes: each
+/// view's `.npy` is NumPy's 3 × 4 float32 world→camera matrix in Blender's camera
+/// convention, its camera on a shell of radius 1.5–2.2 looking at the origin, and the
+/// normalised vertices it projects land on the view's mask. The views differ (drawn per
+/// view) and are the same in a second run (seeded by the object and view).
+#[test]
+fn the_zero123_preset_writes_poses_that_project_the_normalised_mesh_onto_its_masks() {
+    let dir = TempDir::new("batch-zero123");
+    let size = 96;
+    let fx = size as f64 / 2.0 / (16.0f64 / 35.0);
+    let views = 6;
+    let mut centres = Vec::new();
+    for (folder, file) in preset_views(&dir, "zero123", size, views) {
+        let want: Vec<String> = (0..views)
+            .flat_map(|v| [format!("{v:03}.npy"), format!("{v:03}.png")])
+            .collect();
+        assert_eq!(files_in(&folder), want);
+        let points = normalised_vertices(&file);
+        for view in 0..views {
+            let rt = read_npy(&folder.join(format!("{view:03}.npy")));
+            let row = |k: usize| glam::DVec3::new(rt[k][0], rt[k][1], rt[k][2]);
+            // A rotation, and a camera centre C = −Rᵀt on the shell, looking at the origin.
+            let t = glam::DVec3::new(rt[0][3], rt[1][3], rt[2][3]);
+            let c = -(row(0) * t.x + row(1) * t.y + row(2) * t.z);
+            assert!((1.5 - 1e-5..=2.2 + 1e-5).contains(&c.length()), "{c}");
+            assert!(
+                (row(2) - c.normalize()).length() < 1e-5,
+                "view {view}: {rt:?}"
+            );
+            assert!(row(0).cross(row(1)).dot(row(2)) > 0.9999);
+            let image = image::open(folder.join(format!("{view:03}.png")))
+                .unwrap()
+                .to_rgba8();
+            let fraction = on_mask(&points, &rt, fx, &image);
+            eprintln!(
+                "{} view {view}: {fraction} of the vertices on the mask",
+                folder.display()
+            );
+            assert!(
+                fraction >= 0.99,
+                "{} view {view}: {fraction}",
+                folder.display()
+            );
+            centres.push(c);
+        }
+    }
+    for (i, a) in centres.iter().enumerate() {
+        for b in &centres[..i] {
+            assert!((*a - *b).length() > 1e-3, "two views at {a}");
+        }
+    }
+    // The same poses again.
+    let again = TempDir::new("batch-zero123-again");
+    let folders = preset_views(&again, "zero123", size, views);
+    assert_eq!(
+        std::fs::read(folders[0].0.join("003.npy")).unwrap(),
+        std::fs::read(dir.path().join("views/crowd/003.npy")).unwrap()
     );
 }
 

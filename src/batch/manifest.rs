@@ -3,7 +3,7 @@
 //! error names the manifest and the field (`jobs[1].output`) or line.
 
 use super::BatchError;
-use super::preset::Preset;
+use super::preset::{Layout, Preset};
 use crate::request::RenderRequest;
 use crate::scene::studio::Up;
 use serde::Deserialize;
@@ -28,6 +28,8 @@ struct JobFile {
     elevation: Option<f32>,
     azimuth: Option<f32>,
     distance: Option<f32>,
+    /// A shell layout's radii, [min, max].
+    radius: Option<[f32; 2]>,
     fov: Option<f32>,
     up: Option<String>,
     output: Option<String>,
@@ -170,6 +172,46 @@ impl Manifest {
                     if let Some(v) = j.views {
                         p.views = v;
                     }
+                    match (&mut p.layout, j.radius) {
+                        (Layout::Ring, Some(_)) => {
+                            return Err(invalid(
+                                field("radius"),
+                                format!(
+                                    "`{name}` puts its cameras on a ring: give distance and elevation"
+                                ),
+                            ));
+                        }
+                        (Layout::Shell { .. }, _)
+                            if j.elevation.is_some() || j.distance.is_some() =>
+                        {
+                            return Err(invalid(
+                                field(if j.elevation.is_some() {
+                                    "elevation"
+                                } else {
+                                    "distance"
+                                }),
+                                format!(
+                                    "`{name}` draws its cameras on a shell: give radius = [min, max]"
+                                ),
+                            ));
+                        }
+                        (
+                            Layout::Shell {
+                                radius_min,
+                                radius_max,
+                            },
+                            Some([lo, hi]),
+                        ) => {
+                            if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo <= hi) {
+                                return Err(invalid(
+                                    field("radius"),
+                                    format!("[{lo}, {hi}]: must be 0 < min <= max"),
+                                ));
+                            }
+                            (*radius_min, *radius_max) = (lo, hi);
+                        }
+                        _ => {}
+                    }
                     if let Some(e) = j.elevation {
                         p.elevation = e;
                     }
@@ -200,7 +242,11 @@ impl Manifest {
                 }
             };
             if preset.is_none() {
-                for (key, given) in [("distance", j.distance.is_some()), ("fov", j.fov.is_some())] {
+                for (key, given) in [
+                    ("distance", j.distance.is_some()),
+                    ("fov", j.fov.is_some()),
+                    ("radius", j.radius.is_some()),
+                ] {
                     if given {
                         return Err(invalid(
                             field(key),

@@ -17,7 +17,28 @@ use crate::scene::{Scene, SceneError, Sky};
 use glam::{DVec3, Vec3};
 
 /// The presets there are, by their manifest names.
-pub const NAMES: [&str; 2] = ["objaverse", "syncdreamer"];
+pub const NAMES: [&str; 3] = ["objaverse", "syncdreamer", "zero123"];
+
+/// Where a script puts its cameras.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Layout {
+    /// Evenly spaced in azimuth on a ring at the preset's elevation and distance.
+    Ring,
+    /// Zero123's and Objaverse-XL's `sample_spherical`, drawn anew for each view: the
+    /// direction of a point uniform in the cube [−1, 1]³ (not uniform on the sphere: it
+    /// favours the cube's diagonals), at a distance uniform in [`radius_min`, `radius_max`].
+    Shell { radius_min: f32, radius_max: f32 },
+}
+
+/// The pose file a script writes beside each image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Poses {
+    None,
+    /// `{view:03}.npy`: the 3 × 4 world→camera matrix [R | t] in float32 (NumPy's array of
+    /// Blender's single-precision `Matrix`, as the script saves it), in Blender's camera
+    /// convention (looking down −Z, +Y up) and the normalised frame.
+    Npy,
+}
 
 /// How a script lights the object.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -28,6 +49,10 @@ pub enum Lighting {
     /// Blender's factory point light (1,000 W at (4.0762, 1.0055, 5.9039), moved with the
     /// object by the normalisation) in a uniform world of this grey.
     FactoryPoint { world: f32 },
+    /// Zero123's: the factory point light, the factory world's grey (0.0509) and an area
+    /// light drawn once per object: 300–600 W, 100 / scale wide (the normalisation scales
+    /// it as a root object), at (U(−1, 1), U(−1, 1), U(0.5, 1.5)), facing down.
+    Zero123,
 }
 
 /// A dataset script's way of rendering, with the parameters a manifest may override.
@@ -37,9 +62,10 @@ pub struct Preset {
     pub name: &'static str,
     /// Views per object.
     pub views: u32,
-    /// The cameras' elevation above the object's horizontal plane, in degrees.
+    pub layout: Layout,
+    /// A ring's elevation above the object's horizontal plane, in degrees.
     pub elevation: f32,
-    /// The cameras' distance from the object's centre, in normalised units.
+    /// A ring's distance from the object's centre, in normalised units.
     pub distance: f32,
     /// The field of view of the square image, in degrees.
     pub fov: f32,
@@ -48,6 +74,7 @@ pub struct Preset {
     /// Samples per pixel.
     pub spp: u32,
     pub lighting: Lighting,
+    pub poses: Poses,
 }
 
 impl Preset {
@@ -59,6 +86,7 @@ impl Preset {
             // sensor, 512², RGBA PNG.
             "objaverse" => Ok(Self {
                 name: "objaverse",
+                layout: Layout::Ring,
                 views: 12,
                 elevation: 30.0,
                 distance: 1.5,
@@ -66,6 +94,7 @@ impl Preset {
                 size: 512,
                 spp: 64,
                 lighting: Lighting::AreaAbove,
+                poses: Poses::None,
             }),
             // liuyuan-pal/SyncDreamer blender_script.py, --camera_type fixed (its target
             // views): 16 views on a ring at 30° elevation, distance 1.5, the same lens,
@@ -73,6 +102,7 @@ impl Preset {
             // grey 0.5.
             "syncdreamer" => Ok(Self {
                 name: "syncdreamer",
+                layout: Layout::Ring,
                 views: 16,
                 elevation: 30.0,
                 distance: 1.5,
@@ -80,6 +110,26 @@ impl Preset {
                 size: 256,
                 spp: 128,
                 lighting: Lighting::FactoryPoint { world: 0.5 },
+                poses: Poses::None,
+            }),
+            // cvlab-columbia/zero123 objaverse-rendering/scripts/blender_script.py: views
+            // at random on a shell of radius 1.5–2.2, the same lens, 512², 128 samples,
+            // a `.npy` pose per view. 12 views, as the released data and its loader have
+            // (the script's own default is 8).
+            "zero123" => Ok(Self {
+                name: "zero123",
+                layout: Layout::Shell {
+                    radius_min: 1.5,
+                    radius_max: 2.2,
+                },
+                views: 12,
+                elevation: 0.0,
+                distance: 0.0,
+                fov: fov_of_lens(35.0, 32.0),
+                size: 512,
+                spp: 128,
+                lighting: Lighting::Zero123,
+                poses: Poses::Npy,
             }),
             _ => Err(format!(
                 "`{name}` is not a preset; there are {}",
@@ -103,27 +153,70 @@ impl Preset {
         }
     }
 
-    /// The output pattern of the script's files: one folder per object (its file name up
-    /// to the first dot), the views numbered with three digits.
+    /// The output pattern of the script's images: one folder per object (its file name up
+    /// to the first dot), the views numbered with three digits. Pose files go beside them.
     pub fn output(&self) -> &'static str {
         "views/{uid}/{view:03}.png"
     }
 
-    /// The camera position of view `view` in the script's normalised frame (Blender's, Z
-    /// up): on a ring at the preset's elevation and distance, view 0 on +X, turning
-    /// counter-clockwise seen from +Z.
-    pub fn blender_position(&self, view: u32) -> DVec3 {
-        let theta = std::f64::consts::TAU * view as f64 / self.views as f64;
-        let phi = (90.0 - self.elevation as f64).to_radians();
-        self.distance as f64
-            * DVec3::new(phi.sin() * theta.cos(), phi.sin() * theta.sin(), phi.cos())
+    /// The camera position of view `view` of object `uid` in the script's normalised frame
+    /// (Blender's, Z up). On a ring: at the preset's elevation and distance, view 0 on +X,
+    /// turning counter-clockwise seen from +Z. On a shell: drawn as the layout says, from
+    /// [`uniform`] numbers of the object and view.
+    pub fn blender_position(&self, uid: &str, view: u32) -> DVec3 {
+        match self.layout {
+            Layout::Ring => {
+                let theta = std::f64::consts::TAU * view as f64 / self.views as f64;
+                let phi = (90.0 - self.elevation as f64).to_radians();
+                self.distance as f64
+                    * DVec3::new(phi.sin() * theta.cos(), phi.sin() * theta.sin(), phi.cos())
+            }
+            Layout::Shell {
+                radius_min,
+                radius_max,
+            } => {
+                // np.random.uniform(-1, 1, 3), normalised; np.random.uniform(rmin, rmax).
+                // A draw at the cube's centre (probability 0) would have no direction: the
+                // next numbers are taken.
+                let mut k = 0;
+                let dir = loop {
+                    let v = DVec3::new(
+                        2.0 * uniform(uid, view, k) - 1.0,
+                        2.0 * uniform(uid, view, k + 1) - 1.0,
+                        2.0 * uniform(uid, view, k + 2) - 1.0,
+                    );
+                    if let Some(d) = v.try_normalize() {
+                        break d;
+                    }
+                    k += 3;
+                };
+                let (lo, hi) = (radius_min as f64, radius_max as f64);
+                dir * (lo + (hi - lo) * uniform(uid, view, SHELL_RADIUS))
+            }
+        }
     }
 
-    /// The camera of view `view` of a mesh that `norm` normalises, in the mesh's own frame:
-    /// at the script's position, looking at the origin with Blender's +Z up, both taken
-    /// back through the normalisation.
-    pub fn camera(&self, view: u32, norm: &Normalisation) -> Option<Camera> {
-        let position = norm.to_scene(to_meshtrace(self.blender_position(view)));
+    /// The world→camera pose [R | t] of view `view` of object `uid` as the script saves it:
+    /// Blender's camera convention (looking down −Z, +Y up), in the normalised frame, from
+    /// the camera's TRACK_TO constraint (−Z at the origin, +Y towards world +Z): rows
+    /// right r = normalize(+Z × b), up u = b × r, back b = C / |C|; t = −R C.
+    pub fn pose(&self, uid: &str, view: u32) -> [[f64; 4]; 3] {
+        let c = self.blender_position(uid, view);
+        let b = c.normalize();
+        let r = DVec3::Z.cross(b).try_normalize().unwrap_or(DVec3::X);
+        let u = b.cross(r);
+        let mut out = [[0.0; 4]; 3];
+        for (row, axis) in out.iter_mut().zip([r, u, b]) {
+            *row = [axis.x, axis.y, axis.z, -axis.dot(c)];
+        }
+        out
+    }
+
+    /// The camera of view `view` of object `uid`, a mesh that `norm` normalises, in the
+    /// mesh's own frame: at the script's position, looking at the origin with Blender's +Z
+    /// up, both taken back through the normalisation.
+    pub fn camera(&self, uid: &str, view: u32, norm: &Normalisation) -> Option<Camera> {
+        let position = norm.to_scene(to_meshtrace(self.blender_position(uid, view)));
         Camera::new(
             position,
             norm.to_scene(Vec3::ZERO),
@@ -134,7 +227,7 @@ impl Preset {
         )
     }
 
-    /// Lights `scene`, normalised by `norm`, as the script does ([`Lighting`]).
+    /// Lights `scene`, object `uid` normalised by `norm`, as the script does ([`Lighting`]).
     ///
     /// objaverse-rendering's area light emits 30,000 / (π · 100²) as Cycles emits a watt
     /// of an area light (P / (π A)). Seen from the object, below it, it fills the sky down
@@ -148,7 +241,18 @@ impl Preset {
     /// watts, is divided by the scale squared, so that the object receives what it does in
     /// the script. (Blender's light is a sphere of radius 0.1 m, meshtrace's a point: the
     /// shadows are harder.)
-    pub fn light(&self, scene: &mut Scene, norm: &Normalisation) -> Result<(), SceneError> {
+    ///
+    /// Zero123's area light is scaled with the object (it is a root object when the script
+    /// normalises): 100 s wide in the normalised frame, which is 100 wide in the mesh's
+    /// own, and its radiance, P / (π (100 s)²), depends on the object's original size. Like
+    /// every Blender light in Cycles it is seen by no camera and shadows nothing: a
+    /// meshtrace `rect` light.
+    pub fn light(
+        &self,
+        scene: &mut Scene,
+        norm: &Normalisation,
+        uid: &str,
+    ) -> Result<(), SceneError> {
         match self.lighting {
             Lighting::AreaAbove => {
                 let side = 100.0f32;
@@ -161,17 +265,84 @@ impl Preset {
                 };
             }
             Lighting::FactoryPoint { world } => {
-                let position = to_meshtrace(DVec3::new(4.0762, 1.0055, 5.9039)) / norm.scale;
-                let intensity = 1000.0 / (4.0 * std::f32::consts::PI) / (norm.scale * norm.scale);
-                scene.lights.push(PunctualLight::Point {
-                    position,
-                    intensity: Vec3::splat(intensity),
-                });
+                scene.lights.push(factory_point(norm));
                 scene.sky = Sky::Constant(Vec3::splat(world));
+            }
+            Lighting::Zero123 => {
+                scene.lights.push(factory_point(norm));
+                scene.sky = Sky::Constant(Vec3::splat(0.0509));
+                let u = |dim| uniform(uid, OBJECT, dim);
+                let energy = 300.0 + 300.0 * u(0);
+                let at = DVec3::new(2.0 * u(1) - 1.0, 2.0 * u(2) - 1.0, 0.5 + u(3));
+                let side = 100.0 * norm.scale as f64;
+                let radiance = energy / (std::f64::consts::PI * side * side);
+                // Facing Blender's −Z, meshtrace's −Y: X × Z = −Y.
+                scene.lights.push(PunctualLight::Rect {
+                    center: norm.to_scene(to_meshtrace(at)),
+                    edge_u: Vec3::X * 100.0,
+                    edge_v: Vec3::Z * 100.0,
+                    radiance: Vec3::splat(radiance as f32),
+                });
             }
         }
         Ok(())
     }
+}
+
+/// The "view" of the numbers an object draws once (its lights), apart from its views'.
+const OBJECT: u32 = u32::MAX;
+/// The dimension of a shell view's radius, past the direction's (and its redraws').
+const SHELL_RADIUS: u32 = 1 << 16;
+
+/// A number uniform in [0, 1) for object `uid`, view `view` and dimension `dim`: a pure
+/// function of the three (FNV-1a of the uid, mixed with the view and dimension by
+/// SplitMix64's finaliser). The scripts draw from unseeded generators; a preset draws from
+/// the same distributions, reproducibly and independently per object and view.
+pub fn uniform(uid: &str, view: u32, dim: u32) -> f64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    for b in uid.bytes() {
+        h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    let mut x = h ^ ((view as u64) << 32 | dim as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    x ^= x >> 31;
+    (x >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// Blender's factory point light (1,000 W at (4.0762, 1.0055, 5.9039)) in the frame of a
+/// mesh that `norm` normalises. It is a root object when the scripts normalise, so it moves
+/// with the object: in the mesh's own frame it stays at its Blender position divided by
+/// the scale, and its intensity, P / (4π) W/sr as Cycles emits a point light's watts, is
+/// divided by the scale squared, so that the object receives what it does in the script.
+/// (Blender's light is a sphere of radius 0.1 m, meshtrace's a point: the shadows are
+/// harder.) This assumes the object's root node at the origin, as in most files.
+fn factory_point(norm: &Normalisation) -> PunctualLight {
+    let position = to_meshtrace(DVec3::new(4.0762, 1.0055, 5.9039)) / norm.scale;
+    let intensity = 1000.0 / (4.0 * std::f32::consts::PI) / (norm.scale * norm.scale);
+    PunctualLight::Point {
+        position,
+        intensity: Vec3::splat(intensity),
+    }
+}
+
+/// Writes `rows`, a 3 × 4 matrix, as NumPy's `.npy` (format 1.0, little-endian float32,
+/// C order): what the scripts' `np.save` of a Blender `Matrix` writes, and `np.load` reads.
+pub fn write_npy(path: &std::path::Path, rows: &[[f64; 4]; 3]) -> std::io::Result<()> {
+    let mut header = "{'descr': '<f4', 'fortran_order': False, 'shape': (3, 4), }".to_string();
+    // Magic (6), version (2) and length (2), then the header padded with spaces and ended
+    // by a newline to a multiple of 64 bytes, as NumPy aligns it.
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    bytes.extend_from_slice(header.as_bytes());
+    for x in rows.iter().flatten() {
+        bytes.extend_from_slice(&(*x as f32).to_le_bytes());
+    }
+    std::fs::write(path, bytes)
 }
 
 /// An environment of radiance `above` over the horizon and `below` under it: an

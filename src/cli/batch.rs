@@ -4,7 +4,7 @@
 
 use super::{DeviceArgs, Interrupted, backend, pipeline_error, set_threads, warn};
 use anyhow::{Context, Result, bail};
-use meshtrace::batch::preset::{Normalisation, Preset};
+use meshtrace::batch::preset::{Normalisation, Poses, Preset, write_npy};
 use meshtrace::batch::transforms::{self, Frame, Intrinsics};
 use meshtrace::batch::{self, Manifest, Task};
 use meshtrace::film::{Film, Format};
@@ -415,7 +415,7 @@ fn run_input(
                 .and_then(Normalisation::of)
                 .context("the mesh has no extent to normalise")?;
             preset
-                .light(&mut scene, &norm)
+                .light(&mut scene, &norm, &batch::uid(&group[0].input))
                 .map_err(|e| pipeline_error(e.into()))?;
             (
                 Prepared::from_scene(scene, &request).map_err(request_error)?,
@@ -433,11 +433,12 @@ fn run_input(
         );
     }
     let framed = prepared.framed;
+    let uid = batch::uid(&group[0].input);
     let mut views = prepared.views(backend).map_err(pipeline_error)?;
     views.job_mut().cancel = Some(watchdog.stop.clone());
     for (task, done) in group.iter().zip(done) {
         let camera = match (&job.preset, &norm) {
-            (Some(preset), Some(norm)) => preset.camera(task.view, norm),
+            (Some(preset), Some(norm)) => preset.camera(&uid, task.view, norm),
             _ => batch::view_camera(job, task.view, &own, framed.as_ref()),
         }
         .with_context(|| format!("view {} cannot be framed", task.view))?;
@@ -462,6 +463,12 @@ fn run_input(
         if let Some(dir) = task.output.parent() {
             std::fs::create_dir_all(dir)
                 .with_context(|| format!("cannot create {}", dir.display()))?;
+        }
+        // The pose first: the image marks the view complete.
+        if let Some(preset) = job.preset.as_ref().filter(|p| p.poses == Poses::Npy) {
+            let path = task.output.with_extension("npy");
+            write_npy(&path, &preset.pose(&uid, task.view))
+                .with_context(|| format!("cannot write {}", path.display()))?;
         }
         film.save_as(&task.output, request.bit_depth())?;
         tally.rendered += 1;
