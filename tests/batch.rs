@@ -674,7 +674,7 @@ fn read_npy(path: &Path) -> [[f64; 4]; 3] {
         header.contains("'descr': '<f4'")
             && header.contains("'fortran_order': False")
             && header.contains("'shape': (3, 4)")
-            && (10 + len) % 64 == 0
+            && (10 + len).is_multiple_of(64)
             && header.ends_with('\n'),
         "{header}"
     );

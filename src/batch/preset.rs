@@ -332,7 +332,7 @@ pub fn write_npy(path: &std::path::Path, rows: &[[f64; 4]; 3]) -> std::io::Resul
     let mut header = "{'descr': '<f4', 'fortran_order': False, 'shape': (3, 4), }".to_string();
     // Magic (6), version (2) and length (2), then the header padded with spaces and ended
     // by a newline to a multiple of 64 bytes, as NumPy aligns it.
-    while (10 + header.len() + 1) % 64 != 0 {
+    while !(10 + header.len() + 1).is_multiple_of(64) {
         header.push(' ');
     }
     header.push('\n');
