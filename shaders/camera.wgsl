@@ -41,3 +41,9 @@ fn orthographic_ray(x: f32, y: f32) -> Ray {
     let sy = (1.0 - 2.0 * y / f32(params.height)) * params.ortho_half_height;
     return Ray(params.cam_position + sx * params.cam_right + sy * params.cam_up, params.cam_forward);
 }
+
+// mirror: src/render/camera.rs `CameraRays::outside_window`
+fn outside_window(x: u32, y: u32) -> bool {
+    let w = params.window;
+    return x < w.x || x >= w.z || y < w.y || y >= w.w;
+}

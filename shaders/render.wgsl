@@ -139,6 +139,19 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     let y = start.y;
     let pixel = start.pixel;
     let base = start.base;
+    if skips_pixel(x, y) {
+        // What its samples would add: one ray each, no radiance, and the ids of a miss.
+        var miss_sums = film_aov_sums(base);
+        var miss_rays = start.rays;
+        for (var m = start.s; m < params.sample_end; m++) {
+            if m == 0u && params.aovs != 0u {
+                set_aov_ids(&miss_sums, FirstHit(false, vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), NO_ID, NO_ID, 0u));
+            }
+            miss_rays = texel_add(miss_rays, vec4<f32>(1.0, 0.0, 0.0, 0.0));
+        }
+        finish_pixel(base, params.sample_end, start.radiance, miss_rays, miss_sums);
+        return;
+    }
     var radiance = start.radiance;
     var rays = start.rays;
     var s = start.s;
@@ -239,6 +252,12 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
     finish_pixel(base, s, radiance, rays, sums);
+}
+
+// mirror: src/render/cpu.rs `skips_pixel`
+fn skips_pixel(x: u32, y: u32) -> bool {
+    return params.transparent != 0u && params.num_caustic_targets == 0u
+        && (params.aovs & AOV_BVH_COST) == 0u && outside_window(x, y);
 }
 
 // Where an invocation's pixel stands: its coordinates, its first film texel, its

@@ -90,7 +90,7 @@ struct CausticTarget {
     radius: f32,
 }
 
-// mirror: src/render/gpu/params.rs `Params` (208 bytes): one dispatch's camera, sky and range.
+// mirror: src/render/gpu/params.rs `Params` (224 bytes): one dispatch's camera, sky and range.
 struct Params {
     cam_position: vec3<f32>,
     width: u32,
@@ -143,6 +143,8 @@ struct Params {
     ortho_half_height: f32,
     _pad0: u32,
     _pad1: u32,
+    // The pixels [x0, x1) × [y0, y1) whose camera rays may meet the scene.
+    window: vec4<u32>,
 }
 
 

@@ -545,3 +545,74 @@ color = [1.0, 1.0, 1.0]
     }
     assert!(hits > 100, "{hits} pixels hit");
 }
+
+/// A transparent render skips the pixels whose camera rays cannot meet the scene
+/// (`CameraRays::window`) and gives them what tracing would: the same bits in every
+/// channel as a render that traces them all (the BVH cost AOV makes it trace every ray),
+/// on both renderers, with a mix of materials and a pixel window well inside the image.
+#[test]
+fn a_transparent_render_skips_pixels_outside_the_scene_with_the_same_bits() {
+    let dir = TempDir::new("aov-window");
+    let scene = load(
+        &dir,
+        r#"
+[camera]
+position = [0.3, 0.4, 4.0]
+look_at = [0.0, 0.0, 0.0]
+vfov = 50.0
+[render]
+width = 48
+height = 36
+spp = 8
+max_depth = 4
+[sky]
+color = [0.5, 0.6, 0.7]
+[materials.white]
+type = "diffuse"
+albedo = [0.8, 0.8, 0.8]
+[materials.gold]
+type = "rough_conductor"
+albedo = [0.95, 0.75, 0.35]
+roughness = 0.3
+[[objects]]
+sphere = { center = [-0.6, 0.2, 0.0], radius = 0.35 }
+material = "white"
+[[objects]]
+sphere = { center = [0.4, -0.3, 0.2], radius = 0.3 }
+material = "gold"
+[[lights]]
+type = "point"
+position = [2.0, 3.0, 2.0]
+intensity = [20.0, 20.0, 20.0]
+"#,
+    );
+    let rs = meshtrace::render::RenderScene::new(&scene, &meshtrace::bvh::BuildParams::default())
+        .unwrap();
+    let cam = CameraRays::new(&scene.camera, 48, 36).with_window(&rs.bounds());
+    let [x0, y0, x1, y1] = cam.window;
+    assert!(
+        x0 > 0 && y0 > 0 && x1 < 48 && y1 < 36 && (x1 - x0) * (y1 - y0) < 48 * 36 / 2,
+        "{:?}",
+        cam.window
+    );
+    let ids = [Aov::ObjectId, Aov::Depth, Aov::Normal];
+    let skipping = render_both("window", &scene, &ids, true);
+    let tracing = render_both(
+        "window",
+        &scene,
+        &[ids.as_slice(), &[Aov::BvhCost]].concat(),
+        true,
+    );
+    for ((device, a), (_, b)) in skipping.iter().zip(&tracing) {
+        assert!(a.sum == b.sum, "{device}: radiance differs");
+        for channel in &a.channels {
+            let other = b.channels.iter().find(|c| c.name == channel.name).unwrap();
+            assert!(
+                other.data == channel.data,
+                "{device}: {} differs",
+                channel.name
+            );
+        }
+        assert!(a.aov_values(Aov::Alpha).is_some());
+    }
+}

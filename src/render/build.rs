@@ -23,6 +23,11 @@ use crate::scene::{
 use glam::Vec3;
 
 impl RenderScene {
+    /// The box around every triangle (the BVH's root); empty for a scene without any.
+    pub fn bounds(&self) -> Aabb {
+        self.bvh.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds())
+    }
+
     /// Builds the BVH over the scene's triangles and lays out the tables in its leaf order.
     pub fn new(scene: &Scene, params: &BuildParams) -> Result<Self, BvhError> {
         let mesh = &scene.mesh;

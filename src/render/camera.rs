@@ -3,7 +3,7 @@
 
 use super::rng::{self, Rng};
 use super::sampling::sample_concentric_disk;
-use crate::math::Ray;
+use crate::math::{Aabb, Ray};
 use crate::scene::Camera;
 use glam::{Vec2, Vec3};
 
@@ -26,6 +26,9 @@ pub struct CameraRays {
     pub ortho_half_height: f32,
     pub width: u32,
     pub height: u32,
+    /// The pixels [x0, x1) × [y0, y1) whose camera rays may meet the scene
+    /// ([`CameraRays::with_window`]); all of them until it is set.
+    pub window: [u32; 4],
 }
 
 impl CameraRays {
@@ -42,7 +45,82 @@ impl CameraRays {
             ortho_half_height: 0.5 * camera.ortho_height,
             width,
             height,
+            window: [0, 0, width, height],
         }
+    }
+
+    /// These rays with [`CameraRays::window`] set to the pixels whose rays may meet a box
+    /// `bounds` (the scene's): those whose square overlaps the rectangle around the box's
+    /// eight corners projected onto the image, one pixel wider on each side for rounding.
+    /// A ray meets the box only through its corners' convex hull, which the rectangle holds,
+    /// so every ray of a pixel outside misses. All pixels where that cannot be told: a
+    /// thin lens, whose rays do not share an origin, or a corner at or behind the pinhole.
+    pub fn with_window(mut self, bounds: &Aabb) -> Self {
+        self.window = [0, 0, self.width, self.height];
+        if bounds.is_empty() || self.aperture > 0.0 {
+            return self;
+        }
+        let (w, h) = (self.width as f32, self.height as f32);
+        let (mut lo, mut hi) = (Vec2::INFINITY, Vec2::NEG_INFINITY);
+        for k in 0..8 {
+            let corner = Vec3::new(
+                if k & 1 == 0 {
+                    bounds.min.x
+                } else {
+                    bounds.max.x
+                },
+                if k & 2 == 0 {
+                    bounds.min.y
+                } else {
+                    bounds.max.y
+                },
+                if k & 4 == 0 {
+                    bounds.min.z
+                } else {
+                    bounds.max.z
+                },
+            );
+            let v = corner - self.position;
+            // The corner's image-plane coordinates, in [-1, 1] across the image.
+            let (x, y) = if self.ortho_half_height > 0.0 {
+                let half = self.ortho_half_height;
+                (
+                    v.dot(self.right) / (half * self.aspect),
+                    v.dot(self.up) / half,
+                )
+            } else {
+                let z = v.dot(self.forward);
+                if z.is_nan() || z <= 0.0 {
+                    return self;
+                }
+                let half = z * self.tan_half_vfov;
+                (
+                    v.dot(self.right) / (half * self.aspect),
+                    v.dot(self.up) / half,
+                )
+            };
+            let p = Vec2::new((x + 1.0) * 0.5 * w, (1.0 - y) * 0.5 * h);
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        if !(lo.is_finite() && hi.is_finite()) {
+            return self;
+        }
+        let clamp = |v: f32, max: u32| v.clamp(0.0, max as f32) as u32;
+        self.window = [
+            clamp(lo.x.floor() - 1.0, self.width),
+            clamp(lo.y.floor() - 1.0, self.height),
+            clamp(hi.x.ceil() + 1.0, self.width),
+            clamp(hi.y.ceil() + 1.0, self.height),
+        ];
+        self
+    }
+
+    /// Whether pixel (`x`, `y`) lies outside [`CameraRays::window`]: its camera rays all
+    /// miss the scene. mirror: shaders/camera.wgsl `outside_window`
+    pub fn outside_window(&self, x: u32, y: u32) -> bool {
+        let [x0, y0, x1, y1] = self.window;
+        x < x0 || x >= x1 || y < y0 || y >= y1
     }
 }
 

@@ -47,7 +47,7 @@ pub fn render(scene: &RenderScene, job: &RenderJob, progress: &(dyn Fn(u64) + Sy
         .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
         .collect();
     let step = (PATHS_PER_PASS / (w as u64 * h as u64)).max(1) as u32;
-    let cam = CameraRays::new(&scene.camera, w, h);
+    let cam = CameraRays::new(&scene.camera, w, h).with_window(&scene.bounds());
     let mut film = job.film();
     let mut pixels = vec![PixelSums::default(); film.sum.len()];
     let aov_pixels = if film.aovs().is_empty() {
@@ -279,6 +279,19 @@ pub fn set_aov_ids(sums: &mut AovSums, fh: &FirstHit) {
     sums.0[Aov::MaterialId as usize] = split(fh.material);
 }
 
+/// Whether pixel (`x`, `y`) of a transparent render need not be traced: its camera rays all
+/// miss the scene ([`CameraRays::outside_window`]), and a missed sample adds only its ray
+/// to the film (a transparent film takes no sky radiance, and without caustic targets no
+/// light subpath starts). Where the BVH cost AOV is asked for, every ray is traced for its
+/// count. Dataset renders of one object on a transparent film spend most of their samples
+/// on such pixels. mirror: shaders/render.wgsl `skips_pixel`
+pub fn skips_pixel(scene: &RenderScene, cam: &CameraRays, job: &RenderJob, x: u32, y: u32) -> bool {
+    job.transparent
+        && scene.caustic_targets.is_empty()
+        && job.aovs & Aov::BvhCost.bit() == 0
+        && cam.outside_window(x, y)
+}
+
 /// `acc` plus one pixel's samples over `samples`, each rounded to fixed point and added
 /// exactly, as the GPU adds them; non-finite radiance samples are dropped (their rays
 /// still count). With AOVs,
@@ -309,6 +322,18 @@ pub fn render_pixel(
     };
     if job.geometry {
         return geometry_pixel(scene, cam, x, y, &mut rng, samples, acc, aov);
+    }
+    if skips_pixel(scene, cam, job, x, y) {
+        // What its samples would add: one ray each, no radiance, and the ids of a miss.
+        for sample in samples {
+            if sample == 0
+                && let Some(aov) = aov.as_deref_mut()
+            {
+                set_aov_ids(aov, &FirstHit::MISS);
+            }
+            acc.rays = fixed_add(acc.rays, to_fixed(1.0));
+        }
+        return acc;
     }
     for sample in samples {
         rng.set_sample(sample);

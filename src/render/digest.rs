@@ -20,7 +20,8 @@ pub fn render_digest(scene: &RenderScene, job: &RenderJob) -> String {
         h.update((bytes.len() as u64).to_le_bytes());
         h.update(bytes);
     }
-    let params = Params::for_scene(scene).with_settings(&scene.camera, &job.settings);
+    let params =
+        Params::for_scene(scene).with_settings(&scene.camera, &job.settings, &scene.bounds());
     h.update(bytemuck::bytes_of(&params));
     let s = &job.settings;
     for v in [

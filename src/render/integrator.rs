@@ -601,6 +601,19 @@ pub struct FirstHit {
     pub cost: u32,
 }
 
+impl FirstHit {
+    /// A ray that met nothing, at no cost.
+    pub const MISS: FirstHit = FirstHit {
+        hit: false,
+        p: Vec3::ZERO,
+        normal: Vec3::ZERO,
+        albedo: Vec3::ZERO,
+        material: NO_ID,
+        object: NO_ID,
+        cost: 0,
+    };
+}
+
 /// The first hit of camera ray `ray`, for the AOVs: a counting traversal, then the surface
 /// and its material as [`path_step`] finds them. Draws no random numbers.
 /// mirror: shaders/integrator.wgsl `first_hit`
@@ -611,13 +624,8 @@ pub fn first_hit(scene: &RenderScene, ray: &Ray) -> FirstHit {
         });
     let Some(hit) = hit else {
         return FirstHit {
-            hit: false,
-            p: Vec3::ZERO,
-            normal: Vec3::ZERO,
-            albedo: Vec3::ZERO,
-            material: NO_ID,
-            object: NO_ID,
             cost,
+            ..FirstHit::MISS
         };
     };
     let si = surface_at(scene, ray, &hit);

@@ -3,6 +3,7 @@
 //! all against naga's layout.
 
 use super::layout::{StructLayout, struct_layout};
+use crate::math::Aabb;
 use crate::render::camera::CameraRays;
 use crate::render::integrator::branch_weight;
 use crate::render::tables::RenderScene;
@@ -16,7 +17,7 @@ pub const SKY_CONSTANT: u32 = 0;
 pub const SKY_GRADIENT: u32 = 1;
 pub const SKY_ENVIRONMENT: u32 = 2;
 
-/// One dispatch's parameters (208 bytes). mirror: shaders/types.wgsl `Params`
+/// One dispatch's parameters (224 bytes). mirror: shaders/types.wgsl `Params`
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Params {
@@ -68,6 +69,8 @@ pub struct Params {
     /// Half an orthographic camera's view height; 0 for a perspective camera.
     pub ortho_half_height: f32,
     pub _pad: [u32; 2],
+    /// [`CameraRays::window`]: the pixels whose camera rays may meet the scene.
+    pub window: [u32; 4],
 }
 
 impl Params {
@@ -109,13 +112,14 @@ impl Params {
             branch_weight,
             ortho_half_height,
             _pad,
+            window,
         })
     }
 
     /// The parameters of a render of `scene` with `settings`, covering every row and no
     /// samples yet (`sample_*`, `row_*` and `film_texels` are set per dispatch).
     pub fn new(scene: &RenderScene, settings: &RenderSettings) -> Self {
-        Self::for_scene(scene).with_settings(&scene.camera, settings)
+        Self::for_scene(scene).with_settings(&scene.camera, settings, &scene.bounds())
     }
 
     /// The scene's own part: its sky and lights.
@@ -143,10 +147,10 @@ impl Params {
         }
     }
 
-    /// These parameters with the camera and image of a render of `settings`, covering
-    /// every row and no samples yet.
-    pub fn with_settings(self, camera: &Camera, settings: &RenderSettings) -> Self {
-        let c = CameraRays::new(camera, settings.width, settings.height);
+    /// These parameters with the camera and image of a render of `settings` of a scene
+    /// within `bounds`, covering every row and no samples yet.
+    pub fn with_settings(self, camera: &Camera, settings: &RenderSettings, bounds: &Aabb) -> Self {
+        let c = CameraRays::new(camera, settings.width, settings.height).with_window(bounds);
         let branches = settings.branches(self.num_caustic_targets != 0);
         Self {
             cam_position: c.position.into(),
@@ -164,6 +168,7 @@ impl Params {
             aperture: c.aperture,
             focus_distance: c.focus_distance,
             ortho_half_height: c.ortho_half_height,
+            window: c.window,
             sample_start: 0,
             sample_end: 0,
             row_start: 0,

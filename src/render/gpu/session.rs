@@ -95,6 +95,8 @@ pub struct GpuRenderer {
     /// The most samples per pixel one dispatch traces: unbounded on hardware, halved each
     /// time the kernel reports a cut (see [`SOFTWARE_SAMPLES_PER_DISPATCH`]).
     max_step: u32,
+    /// The scene's bounds, which say which pixels' rays may meet it.
+    bounds: crate::math::Aabb,
 }
 
 impl GpuRenderer {
@@ -116,6 +118,7 @@ impl GpuRenderer {
             film: None,
             scene_params,
             camera: scene.camera.clone(),
+            bounds: scene.bounds(),
             max_step: if ctx.adapter.software {
                 SOFTWARE_SAMPLES_PER_DISPATCH
             } else {
@@ -156,7 +159,8 @@ impl GpuRenderer {
     /// The parameters of a render of `settings` on this scene, covering every row and no
     /// samples yet.
     pub(super) fn params_for(&self, settings: &RenderSettings) -> Params {
-        self.scene_params.with_settings(&self.camera, settings)
+        self.scene_params
+            .with_settings(&self.camera, settings, &self.bounds)
     }
 
     /// Starts an empty film for `settings`, whose first sample will be `first_sample`.
