@@ -170,6 +170,19 @@ struct Tally {
     /// so a run killed in between leaves complete images without frames, which a resumed
     /// run records without rendering them again.
     frames: Vec<(PathBuf, Frame)>,
+    /// The time spent in each [`Stage`], over every input and image.
+    stages: [Duration; 4],
+}
+
+/// Where a batch spends its time: loading inputs (reading, decoding, a preset's lights),
+/// building their tables and BVH and putting them on the device, rendering views, and
+/// writing the files (images and poses).
+#[derive(Clone, Copy)]
+enum Stage {
+    Load,
+    Build,
+    Render,
+    Encode,
 }
 
 pub fn batch(args: &BatchArgs) -> Result<()> {
@@ -275,8 +288,20 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
     } else {
         String::new()
     };
+    let per_image = if tally.rendered > 0 {
+        let each = |s: Stage| tally.stages[s as usize].as_secs_f64() / tally.rendered as f64;
+        format!(
+            "; per image: load {:.3} s, build {:.3} s, render {:.3} s, encode {:.3} s",
+            each(Stage::Load),
+            each(Stage::Build),
+            each(Stage::Render),
+            each(Stage::Encode)
+        )
+    } else {
+        String::new()
+    };
     eprintln!(
-        "shard {k}/{n}: images: {} rendered, {} already complete, {} failed{logged} in {seconds:.1} s: {per_hour:.0} images/hour{memory}",
+        "shard {k}/{n}: images: {} rendered, {} already complete, {} failed{logged} in {seconds:.1} s: {per_hour:.0} images/hour{per_image}{memory}",
         tally.rendered, tally.skipped, tally.failed_images
     );
     if cancel.load(Ordering::SeqCst) {
@@ -397,17 +422,14 @@ fn run_input(
         }
         e => pipeline_error(e),
     };
-    let (prepared, norm) = match &job.preset {
-        None => (
-            Prepared::new(&group[0].input, &request, &warn).map_err(request_error)?,
-            None,
-        ),
+    let t = Instant::now();
+    let mut scene = meshtrace::pipeline::load(&group[0].input, &request).map_err(request_error)?;
+    for w in &scene.warnings {
+        warn(w);
+    }
+    let norm = match &job.preset {
+        None => None,
         Some(preset) => {
-            let mut scene =
-                meshtrace::pipeline::load(&group[0].input, &request).map_err(request_error)?;
-            for w in &scene.warnings {
-                warn(w);
-            }
             // The bare mesh's bounds, as the studio frames them (the preset has no ground).
             let norm = scene
                 .framed
@@ -417,13 +439,13 @@ fn run_input(
             preset
                 .light(&mut scene, &norm, &batch::uid(&group[0].input))
                 .map_err(|e| pipeline_error(e.into()))?;
-            (
-                Prepared::from_scene(scene, &request).map_err(request_error)?,
-                Some(norm),
-            )
+            Some(norm)
         }
     };
+    tally.stages[Stage::Load as usize] += t.elapsed();
     watchdog.check("to load")?;
+    let t = Instant::now();
+    let prepared = Prepared::from_scene(scene, &request).map_err(request_error)?;
     let settings = prepared.job.settings;
     let own = prepared.scene.camera.clone();
     if own.is_orthographic() && job.preset.is_none() {
@@ -436,6 +458,7 @@ fn run_input(
     let uid = batch::uid(&group[0].input);
     let mut views = prepared.views(backend).map_err(pipeline_error)?;
     views.job_mut().cancel = Some(watchdog.stop.clone());
+    tally.stages[Stage::Build as usize] += t.elapsed();
     for (task, done) in group.iter().zip(done) {
         let camera = match (&job.preset, &norm) {
             (Some(preset), Some(norm)) => preset.camera(&uid, task.view, norm),
@@ -452,6 +475,8 @@ fn run_input(
         }
         let t0 = Instant::now();
         let film = views.render(&camera, &|_| {}).map_err(pipeline_error)?;
+        let t = Instant::now();
+        tally.stages[Stage::Render as usize] += t - t0;
         if film.samples < settings.spp {
             // An image cut short is not written (nor its frame): a resumed run renders it.
             if job.preset.is_none() {
@@ -471,6 +496,7 @@ fn run_input(
                 .with_context(|| format!("cannot write {}", path.display()))?;
         }
         film.save_as(&task.output, request.bit_depth())?;
+        tally.stages[Stage::Encode as usize] += t.elapsed();
         tally.rendered += 1;
         if tally.first_peak.is_none() && tally.rendered >= tally.warm_up {
             tally.first_peak = peak_kib();
