@@ -19,6 +19,8 @@ adaptive sampling off, its denoiser as the script has it). Seeds make the script
 cameras and lights the same in a run and its reference (`--seed`); meshtrace's are seeded
 per object already. Only the first `--reference-views` views get references.
 
+`--reuse-blender` keeps the Blender images and times of an earlier run into the same `--out`
+(Blender's part takes the longest), to try meshtrace's settings against them.
 `--denoise` renders meshtrace's views with Open Image Denoise (a `--features denoise`
 build, given with `--meshtrace`), as the scripts denoise theirs; `--spp` sets meshtrace's
 samples (default: the preset's, as the scripts').
@@ -157,6 +159,10 @@ def main():
     p.add_argument("--reference-views", type=int, default=2)
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--out", type=Path)
+    p.add_argument(
+        "--reuse-blender", action="store_true",
+        help="take Blender's images and time from an earlier run into the same --out",
+    )
     p.add_argument("--json", action="store_true")
     args = p.parse_args()
     assets = sorted(args.assets.glob("*.glb"))
@@ -169,15 +175,22 @@ def main():
             continue
         views, extra = SCRIPTS[preset]
         base = out / preset
-        shutil.rmtree(base, ignore_errors=True)
-        # The script, one process per object, then its references.
-        blender_time = 0.0
-        for asset in assets:
-            blender_time += blender(args, script, extra, asset, base / "blender", views, args.seed)
-            blender(
-                args, script, extra, asset, base / "blender_ref",
-                args.reference_views, args.seed, args.reference_spp,
-            )
+        timing = base / "blender_seconds.json"
+        if args.reuse_blender and timing.exists():
+            blender_time = json.loads(timing.read_text())
+        else:
+            shutil.rmtree(base, ignore_errors=True)
+            # The script, one process per object, then its references.
+            blender_time = 0.0
+            for asset in assets:
+                blender_time += blender(args, script, extra, asset, base / "blender", views, args.seed)
+                blender(
+                    args, script, extra, asset, base / "blender_ref",
+                    args.reference_views, args.seed, args.reference_spp,
+                )
+            timing.write_text(json.dumps(blender_time))
+        for folder in ["meshtrace", "meshtrace_ref"]:
+            shutil.rmtree(base / folder, ignore_errors=True)
         ours_time, summary = meshtrace(args, preset, args.assets, base / "meshtrace", views, args.spp)
         meshtrace(args, preset, args.assets, base / "meshtrace_ref", args.reference_views,
                   args.reference_spp)

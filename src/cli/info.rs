@@ -78,7 +78,7 @@ pub fn info(args: &InfoArgs) -> Result<()> {
         .count();
     let tris = rs.emitters.len() - punctual - sky as usize;
     out!(
-        "emitters     {tris} triangles, {} point, spot or directional lights{}",
+        "emitters     {tris} triangles, {} point, spot, directional or rect lights{}",
         punctual,
         if sky { " and the sky" } else { "" }
     );
