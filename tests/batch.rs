@@ -260,17 +260,17 @@ fn bad_manifests_fail_cleanly() {
             &["jobs[0].output", "same.png would be written by"],
         ),
         (
-            "[[jobs]]\nmeshes = \"models/*.obj\"\npreset = \"trellis\"\n",
+            "[[jobs]]\nmeshes = \"models/*.obj\"\npreset = \"wonder3d\"\n",
             &[
                 "jobs[0].preset",
-                "`trellis` is not a preset; there are \"objaverse\", \"syncdreamer\", \"zero123\"",
+                "`wonder3d` is not a preset; there are \"objaverse\", \"objaverse-xl\", \"syncdreamer\", \"trellis\", \"zero123\"",
             ],
         ),
         (
             "[[jobs]]\nmeshes = \"models/*.obj\"\npreset = \"zero123\"\ndistance = 2.0\n",
             &[
                 "jobs[0].distance",
-                "`zero123` draws its cameras on a shell: give radius = [min, max]",
+                "is not a camera parameter of `zero123`, whose are radius = [min, max]",
             ],
         ),
         (
@@ -279,7 +279,10 @@ fn bad_manifests_fail_cleanly() {
         ),
         (
             "[[jobs]]\nmeshes = \"models/*.obj\"\npreset = \"objaverse\"\nradius = [1.0, 2.0]\n",
-            &["jobs[0].radius", "`objaverse` puts its cameras on a ring"],
+            &[
+                "jobs[0].radius",
+                "is not a camera parameter of `objaverse`, whose are elevation and distance",
+            ],
         ),
         (
             "[[jobs]]\nmeshes = \"models/*.obj\"\ndistance = 2.0\noutput = \"{stem}.png\"\n",
@@ -615,6 +618,12 @@ fn inputs_over_the_time_limit_fail_and_the_batch_goes_on() {
 /// Blender's importers read glTF and OBJ, turned into Blender's Z-up frame, scaled to a
 /// largest extent of 1 and centred on the origin.
 fn normalised_vertices(file: &Path) -> Vec<glam::DVec3> {
+    normalised(file).0
+}
+
+/// [`normalised_vertices`], with the normalisation's scale and the original box's centre
+/// (Blender's frame).
+fn normalised(file: &Path) -> (Vec<glam::DVec3>, f64, glam::DVec3) {
     let scene = meshtrace::scene::load::load_scene_with(
         file,
         &meshtrace::scene::source::Fs,
@@ -635,33 +644,45 @@ fn normalised_vertices(file: &Path) -> Vec<glam::DVec3> {
         |(lo, hi), &p| (lo.min(p), hi.max(p)),
     );
     let (scale, centre) = (1.0 / (hi - lo).max_element(), (lo + hi) / 2.0);
-    points.iter().map(|p| (*p - centre) * scale).collect()
+    let out = points.iter().map(|p| (*p - centre) * scale).collect();
+    (out, scale, centre)
 }
 
 /// The fraction of `points` that the world→camera pose `rt` (Blender's camera convention:
 /// rows right, up, back) and a focal length of `fx` pixels put on the alpha of `image`
-/// (square, `size` wide), dilated by one pixel.
-fn on_mask(points: &[glam::DVec3], rt: &[[f64; 4]; 3], fx: f64, image: &image::RgbaImage) -> f64 {
+/// (square, `size` wide), dilated by one pixel, among those it puts inside the image, and
+/// the fraction it puts inside.
+fn on_mask(
+    points: &[glam::DVec3],
+    rt: &[[f64; 4]; 3],
+    fx: f64,
+    image: &image::RgbaImage,
+) -> (f64, f64) {
     let size = image.width() as i64;
     let row = |r: &[f64; 4]| glam::DVec3::new(r[0], r[1], r[2]);
-    let inside = points
-        .iter()
-        .filter(|p| {
-            let [x, y, z] = [0, 1, 2].map(|k| row(&rt[k]).dot(**p) + rt[k][3]);
-            let u = size as f64 / 2.0 + fx * x / -z;
-            let v = size as f64 / 2.0 - fx * y / -z;
-            let (i, j) = (u.floor() as i64, v.floor() as i64);
-            (-1..=1).any(|di| {
-                (-1..=1).any(|dj| {
-                    let (a, b) = (i + di, j + dj);
-                    (0..size).contains(&a)
-                        && (0..size).contains(&b)
-                        && image.get_pixel(a as u32, b as u32)[3] > 0
-                })
+    let (mut seen, mut on) = (0, 0);
+    for p in points {
+        let [x, y, z] = [0, 1, 2].map(|k| row(&rt[k]).dot(*p) + rt[k][3]);
+        let u = size as f64 / 2.0 + fx * x / -z;
+        let v = size as f64 / 2.0 - fx * y / -z;
+        if !(z < 0.0 && (0.0..size as f64).contains(&u) && (0.0..size as f64).contains(&v)) {
+            continue;
+        }
+        seen += 1;
+        let (i, j) = (u.floor() as i64, v.floor() as i64);
+        on += usize::from((-1..=1).any(|di| {
+            (-1..=1).any(|dj| {
+                let (a, b) = (i + di, j + dj);
+                (0..size).contains(&a)
+                    && (0..size).contains(&b)
+                    && image.get_pixel(a as u32, b as u32)[3] > 0
             })
-        })
-        .count();
-    inside as f64 / points.len() as f64
+        }));
+    }
+    (
+        on as f64 / seen.max(1) as f64,
+        seen as f64 / points.len() as f64,
+    )
 }
 
 /// A `.npy` file of a 3 × 4 float32 matrix, as `np.load` reads it: the header checked.
@@ -747,7 +768,8 @@ fn the_objaverse_preset_projects_the_normalised_mesh_onto_its_masks() {
             let right = glam::DVec3::Z.cross(back).normalize();
             let up = back.cross(right);
             let rt = [right, up, back].map(|a| [a.x, a.y, a.z, -a.dot(eye)]);
-            let fraction = on_mask(&points, &rt, fx, &image);
+            let (fraction, framed) = on_mask(&points, &rt, fx, &image);
+            assert_eq!(framed, 1.0, "view {view}: the object leaves the image");
             eprintln!(
                 "{} view {view}: {fraction} of the vertices on the mask",
                 folder.display()
@@ -777,43 +799,104 @@ fn the_objaverse_preset_projects_the_normalised_mesh_onto_its_masks() {
 /// view) and are the same in a second run (seeded by the object and view).
 #[test]
 fn the_zero123_preset_writes_poses_that_project_the_normalised_mesh_onto_its_masks() {
-    let dir = TempDir::new("batch-zero123");
+    shell_preset_check("zero123", false);
+}
+
+/// The objaverse-xl preset, as zero123's, but looking at the file's origin as the script's
+/// tracking target does (the off-centre box comes out off-centre, in its image and its
+/// pose alike), with `metadata.json` beside the views.
+#[test]
+fn the_objaverse_xl_preset_writes_poses_metadata_and_masks_that_agree() {
+    shell_preset_check("objaverse-xl", true);
+}
+
+fn shell_preset_check(preset: &str, xl: bool) {
+    let dir = TempDir::new(&format!("batch-{preset}"));
     let size = 96;
     let fx = size as f64 / 2.0 / (16.0f64 / 35.0);
     let views = 6;
     let mut centres = Vec::new();
-    for (folder, file) in preset_views(&dir, "zero123", size, views) {
-        let want: Vec<String> = (0..views)
+    for (folder, file) in preset_views(&dir, preset, size, views) {
+        let mut want: Vec<String> = (0..views)
             .flat_map(|v| [format!("{v:03}.npy"), format!("{v:03}.png")])
             .collect();
+        if xl {
+            want.push("metadata.json".into());
+        }
+        want.sort();
         assert_eq!(files_in(&folder), want);
-        let points = normalised_vertices(&file);
+        let (points, scale, centre) = normalised(&file);
+        // Where the cameras look: the origin, or the file's origin carried by the
+        // normalisation.
+        let target = if xl {
+            -scale * centre
+        } else {
+            glam::DVec3::ZERO
+        };
+        let mut seen = 0.0;
         for view in 0..views {
             let rt = read_npy(&folder.join(format!("{view:03}.npy")));
             let row = |k: usize| glam::DVec3::new(rt[k][0], rt[k][1], rt[k][2]);
-            // A rotation, and a camera centre C = −Rᵀt on the shell, looking at the origin.
+            // A rotation, and a camera centre C = −Rᵀt on the shell, looking at the target.
             let t = glam::DVec3::new(rt[0][3], rt[1][3], rt[2][3]);
             let c = -(row(0) * t.x + row(1) * t.y + row(2) * t.z);
             assert!((1.5 - 1e-5..=2.2 + 1e-5).contains(&c.length()), "{c}");
             assert!(
-                (row(2) - c.normalize()).length() < 1e-5,
+                (row(2) - (c - target).normalize()).length() < 1e-5,
                 "view {view}: {rt:?}"
             );
             assert!(row(0).cross(row(1)).dot(row(2)) > 0.9999);
             let image = image::open(folder.join(format!("{view:03}.png")))
                 .unwrap()
                 .to_rgba8();
-            let fraction = on_mask(&points, &rt, fx, &image);
+            let (fraction, framed) = on_mask(&points, &rt, fx, &image);
+            // Looking at the file's origin, objaverse-xl leaves the off-centre box partly
+            // or wholly out of the image, as the script does.
+            if !xl {
+                assert_eq!(framed, 1.0, "view {view}: the object leaves the image");
+            }
             eprintln!(
-                "{} view {view}: {fraction} of the vertices on the mask",
+                "{} view {view}: {fraction} of the {framed} in the image on the mask",
                 folder.display()
             );
             assert!(
-                fraction >= 0.99,
+                framed == 0.0 || fraction >= 0.99,
                 "{} view {view}: {fraction}",
                 folder.display()
             );
+            seen += framed;
             centres.push(c);
+        }
+        assert!(seen > 0.5, "{}: hardly ever in the image", folder.display());
+        if xl {
+            let meta: serde_json::Value =
+                serde_json::from_slice(&std::fs::read(folder.join("metadata.json")).unwrap())
+                    .unwrap();
+            let scene = meshtrace::scene::load::load_scene_with(
+                &file,
+                &meshtrace::scene::source::Fs,
+                &meshtrace::scene::studio::BareOptions {
+                    up: Some(meshtrace::scene::studio::Up::Y),
+                    unlit: true,
+                },
+            )
+            .unwrap();
+            assert_eq!(meta["poly_count"], scene.mesh.triangles.len());
+            assert_eq!(meta["file_size"], std::fs::metadata(&file).unwrap().len());
+            let (lo, hi) = (centre - 0.5 / scale, centre + 0.5 / scale);
+            let bmin: Vec<f64> =
+                serde_json::from_value(meta["scene_size"]["bbox_min"].clone()).unwrap();
+            let bmax: Vec<f64> =
+                serde_json::from_value(meta["scene_size"]["bbox_max"].clone()).unwrap();
+            // The largest extent is 1 / scale; the box's centre is the file's.
+            let mid = (glam::DVec3::from_slice(&bmin) + glam::DVec3::from_slice(&bmax)) / 2.0;
+            assert!(
+                (mid - centre).length() < 1e-5 * (hi - lo).length(),
+                "{meta}"
+            );
+            let extent =
+                (glam::DVec3::from_slice(&bmax) - glam::DVec3::from_slice(&bmin)).max_element();
+            assert!((extent * scale - 1.0).abs() < 1e-5, "{meta}");
         }
     }
     for (i, a) in centres.iter().enumerate() {
@@ -822,12 +905,89 @@ fn the_zero123_preset_writes_poses_that_project_the_normalised_mesh_onto_its_mas
         }
     }
     // The same poses again.
-    let again = TempDir::new("batch-zero123-again");
-    let folders = preset_views(&again, "zero123", size, views);
+    let again = TempDir::new(&format!("batch-{preset}-again"));
+    let folders = preset_views(&again, preset, size, views);
     assert_eq!(
         std::fs::read(folders[0].0.join("003.npy")).unwrap(),
         std::fs::read(dir.path().join("views/crowd/003.npy")).unwrap()
     );
+}
+
+/// The trellis preset, checked through the `transforms.json` it writes per object: the unit
+/// box, the normalisation's scale and offset, and per view the image, the field of view and
+/// a camera→world matrix (Blender's camera convention) of a camera at distance 2 looking at
+/// the origin, which projects the normalised vertices onto the view's mask; a quarter of
+/// the views (here 2 of 8) below the horizon, as TRELLIS's Hammersley sequence has them.
+#[test]
+fn the_trellis_preset_writes_transforms_that_project_the_normalised_mesh_onto_its_masks() {
+    let dir = TempDir::new("batch-trellis");
+    let size = 96;
+    let views = 8;
+    let models = dir.path().join("models");
+    std::fs::create_dir_all(&models).unwrap();
+    std::fs::copy(data("gltf/corpus/crowd.glb"), models.join("crowd.glb")).unwrap();
+    std::fs::copy(data("box.obj"), models.join("box.v1.obj")).unwrap();
+    std::fs::write(
+        dir.path().join("m.toml"),
+        format!(
+            "[render]\nspp = 2\nwidth = {size}\nheight = {size}\n\n[[jobs]]\nmeshes = \"models/*\"\npreset = \"trellis\"\nviews = {views}\n"
+        ),
+    )
+    .unwrap();
+    let (code, stderr) = run(&dir, &["batch", "m.toml", "--device", "cpu"]);
+    assert_eq!(code, 0, "{stderr}");
+    for (file, uid) in [("crowd.glb", "crowd"), ("box.v1.obj", "box")] {
+        let folder = dir.path().join("renders").join(uid);
+        let mut want: Vec<String> = (0..views).map(|v| format!("{v:03}.png")).collect();
+        want.push("transforms.json".into());
+        assert_eq!(files_in(&folder), want);
+        let (points, scale, centre) = normalised(&models.join(file));
+        let t: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(folder.join("transforms.json")).unwrap())
+                .unwrap();
+        assert_eq!(
+            t["aabb"],
+            serde_json::json!([[-0.5, -0.5, -0.5], [0.5, 0.5, 0.5]])
+        );
+        assert!(
+            (t["scale"].as_f64().unwrap() - scale).abs() < 1e-6 * scale,
+            "{}",
+            t["scale"]
+        );
+        let offset: Vec<f64> = serde_json::from_value(t["offset"].clone()).unwrap();
+        assert!(
+            (glam::DVec3::from_slice(&offset) + scale * centre).length() < 1e-5,
+            "{offset:?}"
+        );
+        let frames = t["frames"].as_array().unwrap();
+        assert_eq!(frames.len(), views);
+        let mut below = 0;
+        for (view, f) in frames.iter().enumerate() {
+            assert_eq!(f["file_path"], format!("{view:03}.png"));
+            let fov = f["camera_angle_x"].as_f64().unwrap();
+            assert!((fov - 40f64.to_radians()).abs() < 1e-12);
+            let m: Vec<Vec<f64>> = serde_json::from_value(f["transform_matrix"].clone()).unwrap();
+            assert_eq!(m[3], [0.0, 0.0, 0.0, 1.0]);
+            let col = |k: usize| glam::DVec3::new(m[0][k], m[1][k], m[2][k]);
+            let c = col(3);
+            assert!((c.length() - 2.0).abs() < 1e-9, "{c}");
+            assert!(
+                (col(2) - c.normalize()).length() < 1e-9,
+                "view {view}: looks at the origin"
+            );
+            below += usize::from(c.z < 0.0);
+            let rt = [col(0), col(1), col(2)].map(|a| [a.x, a.y, a.z, -a.dot(c)]);
+            let image = image::open(folder.join(format!("{view:03}.png")))
+                .unwrap()
+                .to_rgba8();
+            let fx = size as f64 / 2.0 / (fov / 2.0).tan();
+            let (fraction, framed) = on_mask(&points, &rt, fx, &image);
+            assert_eq!(framed, 1.0, "view {view}: the object leaves the image");
+            eprintln!("{uid} view {view}: {fraction} of the vertices on the mask");
+            assert!(fraction >= 0.99, "{uid} view {view}: {fraction}");
+        }
+        assert_eq!(below, views / 4, "{uid}: views below the horizon");
+    }
 }
 
 /// Preset `preset` on `materials_joined.glb` (`spp` samples) against its script's own

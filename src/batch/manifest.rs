@@ -30,6 +30,8 @@ struct JobFile {
     distance: Option<f32>,
     /// A shell layout's radii, [min, max].
     radius: Option<[f32; 2]>,
+    /// A shell layout's cameras above the object's horizontal plane only.
+    only_northern_hemisphere: Option<bool>,
     fov: Option<f32>,
     up: Option<String>,
     output: Option<String>,
@@ -172,36 +174,32 @@ impl Manifest {
                     if let Some(v) = j.views {
                         p.views = v;
                     }
-                    match (&mut p.layout, j.radius) {
-                        (Layout::Ring, Some(_)) => {
-                            return Err(invalid(
-                                field("radius"),
-                                format!(
-                                    "`{name}` puts its cameras on a ring: give distance and elevation"
-                                ),
-                            ));
-                        }
-                        (Layout::Shell { .. }, _)
-                            if j.elevation.is_some() || j.distance.is_some() =>
-                        {
-                            return Err(invalid(
-                                field(if j.elevation.is_some() {
-                                    "elevation"
-                                } else {
-                                    "distance"
-                                }),
-                                format!(
-                                    "`{name}` draws its cameras on a shell: give radius = [min, max]"
-                                ),
-                            ));
-                        }
+                    for (key, given) in [
+                        ("elevation", j.elevation.is_some()),
+                        ("distance", j.distance.is_some()),
+                        ("radius", j.radius.is_some()),
                         (
-                            Layout::Shell {
-                                radius_min,
-                                radius_max,
-                            },
-                            Some([lo, hi]),
-                        ) => {
+                            "only_northern_hemisphere",
+                            j.only_northern_hemisphere.is_some(),
+                        ),
+                    ] {
+                        if given && !p.layout.takes(key) {
+                            return Err(invalid(
+                                field(key),
+                                format!(
+                                    "is not a camera parameter of `{name}`, whose are {}",
+                                    p.layout.keys()
+                                ),
+                            ));
+                        }
+                    }
+                    if let Layout::Shell {
+                        radius_min,
+                        radius_max,
+                        north_only,
+                    } = &mut p.layout
+                    {
+                        if let Some([lo, hi]) = j.radius {
                             if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo <= hi) {
                                 return Err(invalid(
                                     field("radius"),
@@ -210,7 +208,9 @@ impl Manifest {
                             }
                             (*radius_min, *radius_max) = (lo, hi);
                         }
-                        _ => {}
+                        if let Some(north) = j.only_northern_hemisphere {
+                            *north_only = north;
+                        }
                     }
                     if let Some(e) = j.elevation {
                         p.elevation = e;
@@ -246,6 +246,10 @@ impl Manifest {
                     ("distance", j.distance.is_some()),
                     ("fov", j.fov.is_some()),
                     ("radius", j.radius.is_some()),
+                    (
+                        "only_northern_hemisphere",
+                        j.only_northern_hemisphere.is_some(),
+                    ),
                 ] {
                     if given {
                         return Err(invalid(

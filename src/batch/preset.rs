@@ -17,7 +17,13 @@ use crate::scene::{Scene, SceneError, Sky};
 use glam::{DVec3, Vec3};
 
 /// The presets there are, by their manifest names.
-pub const NAMES: [&str; 3] = ["objaverse", "syncdreamer", "zero123"];
+pub const NAMES: [&str; 5] = [
+    "objaverse",
+    "objaverse-xl",
+    "syncdreamer",
+    "trellis",
+    "zero123",
+];
 
 /// Where a script puts its cameras.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -26,8 +32,51 @@ pub enum Layout {
     Ring,
     /// Zero123's and Objaverse-XL's `sample_spherical`, drawn anew for each view: the
     /// direction of a point uniform in the cube [−1, 1]³ (not uniform on the sphere: it
-    /// favours the cube's diagonals), at a distance uniform in [`radius_min`, `radius_max`].
-    Shell { radius_min: f32, radius_max: f32 },
+    /// favours the cube's diagonals), at a distance uniform in [`radius_min`, `radius_max`];
+    /// with `north_only`, the direction's z made positive (Objaverse-XL's
+    /// `--only_northern_hemisphere`).
+    Shell {
+        radius_min: f32,
+        radius_max: f32,
+        north_only: bool,
+    },
+    /// TRELLIS's `sphere_hammersley_sequence` at the preset's distance: view i of n at
+    /// u = i / n + o₀ / n, v = φ₂(i) + o₁ (φ₂ the base-2 radical inverse, o an offset drawn
+    /// once per object), u' = 2u below 1/4 and 2u / 3 + 1/3 above (a quarter of the views
+    /// below the horizon, three quarters above), pitch = acos(1 − 2u') − π/2, yaw = 2π v.
+    Hammersley,
+}
+
+impl Layout {
+    /// Whether a manifest may set `key` (a camera parameter) for this layout.
+    pub fn takes(&self, key: &str) -> bool {
+        match self {
+            Layout::Ring => matches!(key, "elevation" | "distance"),
+            Layout::Shell { .. } => matches!(key, "radius" | "only_northern_hemisphere"),
+            Layout::Hammersley => key == "distance",
+        }
+    }
+
+    /// The keys [`Layout::takes`], for messages.
+    pub fn keys(&self) -> &'static str {
+        match self {
+            Layout::Ring => "elevation and distance",
+            Layout::Shell { .. } => "radius = [min, max] and only_northern_hemisphere",
+            Layout::Hammersley => "distance",
+        }
+    }
+}
+
+/// Where a script's cameras look.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Aim {
+    /// At the normalised object's centre, the origin.
+    Centre,
+    /// At the origin of the file's own frame, carried by the normalisation to −s c (c the
+    /// original box's centre): Objaverse-XL's tracking target is created before it
+    /// normalises and moves with the object, so an object whose box is not centred on its
+    /// file's origin comes out off-centre, in the images and in their poses alike.
+    FileOrigin,
 }
 
 /// The pose file a script writes beside each image.
@@ -38,6 +87,8 @@ pub enum Poses {
     /// Blender's single-precision `Matrix`, as the script saves it), in Blender's camera
     /// convention (looking down −Z, +Y up) and the normalised frame.
     Npy,
+    /// TRELLIS's `transforms.json` per object ([`Preset::trellis_transforms`]).
+    Transforms,
 }
 
 /// How a script lights the object.
@@ -49,6 +100,15 @@ pub enum Lighting {
     /// Blender's factory point light (1,000 W at (4.0762, 1.0055, 5.9039), moved with the
     /// object by the normalisation) in a uniform world of this grey.
     FactoryPoint { world: f32 },
+    /// TRELLIS's, made after it normalises (so not scaled with the object): a point light of
+    /// 1,000 W at (4, 1, 6), an area light 25 m wide of 10,000 W at (0, 0, 10) facing down
+    /// (its bottom light faces away and lights nothing), the factory world's grey.
+    Trellis,
+    /// Objaverse-XL's: four suns without shadows, their strengths (W/m²) drawn once per
+    /// object from Key {3, 4, 5}, Fill {2, 3, 4}, Rim {3, 4, 5}, Bottom {1, 2, 3}, travelling
+    /// along (0.5, 0.5, −0.7071), (−0.5, −0.5, −0.7071), (0.5, 0.5, −0.7071) and (0, 0, 1);
+    /// the factory world's grey.
+    Suns,
     /// Zero123's: the factory point light, the factory world's grey (0.0509) and an area
     /// light drawn once per object: 300–600 W, 100 / scale wide (the normalisation scales
     /// it as a root object), at (U(−1, 1), U(−1, 1), U(0.5, 1.5)), facing down.
@@ -60,6 +120,9 @@ pub enum Lighting {
 pub struct Preset {
     /// Its manifest name.
     pub name: &'static str,
+    pub aim: Aim,
+    /// Whether it writes `metadata.json` beside each object's images.
+    pub metadata: bool,
     /// Views per object.
     pub views: u32,
     pub layout: Layout,
@@ -86,6 +149,8 @@ impl Preset {
             // sensor, 512², RGBA PNG.
             "objaverse" => Ok(Self {
                 name: "objaverse",
+                aim: Aim::Centre,
+                metadata: false,
                 layout: Layout::Ring,
                 views: 12,
                 elevation: 30.0,
@@ -102,6 +167,8 @@ impl Preset {
             // grey 0.5.
             "syncdreamer" => Ok(Self {
                 name: "syncdreamer",
+                aim: Aim::Centre,
+                metadata: false,
                 layout: Layout::Ring,
                 views: 16,
                 elevation: 30.0,
@@ -118,9 +185,12 @@ impl Preset {
             // (the script's own default is 8).
             "zero123" => Ok(Self {
                 name: "zero123",
+                aim: Aim::Centre,
+                metadata: false,
                 layout: Layout::Shell {
                     radius_min: 1.5,
                     radius_max: 2.2,
+                    north_only: false,
                 },
                 views: 12,
                 elevation: 0.0,
@@ -129,6 +199,44 @@ impl Preset {
                 size: 512,
                 spp: 128,
                 lighting: Lighting::Zero123,
+                poses: Poses::Npy,
+            }),
+            // microsoft/TRELLIS dataset_toolkits/render.py and blender_script/render.py: 150
+            // views on a Hammersley sphere of radius 2, a 40° field of view, 512², 128
+            // samples, transforms.json.
+            "trellis" => Ok(Self {
+                name: "trellis",
+                aim: Aim::Centre,
+                metadata: false,
+                layout: Layout::Hammersley,
+                views: 150,
+                elevation: 0.0,
+                distance: 2.0,
+                fov: 40.0,
+                size: 512,
+                spp: 128,
+                lighting: Lighting::Trellis,
+                poses: Poses::Transforms,
+            }),
+            // allenai/objaverse-xl scripts/rendering/blender_script.py: Zero123's shell of
+            // cameras (looking at the file's origin), four shadowless suns, 512², a `.npy`
+            // pose per view and `metadata.json`. The script renders with EEVEE.
+            "objaverse-xl" => Ok(Self {
+                name: "objaverse-xl",
+                aim: Aim::FileOrigin,
+                metadata: true,
+                layout: Layout::Shell {
+                    radius_min: 1.5,
+                    radius_max: 2.2,
+                    north_only: false,
+                },
+                views: 12,
+                elevation: 0.0,
+                distance: 0.0,
+                fov: fov_of_lens(35.0, 32.0),
+                size: 512,
+                spp: 64,
+                lighting: Lighting::Suns,
                 poses: Poses::Npy,
             }),
             _ => Err(format!(
@@ -156,7 +264,11 @@ impl Preset {
     /// The output pattern of the script's images: one folder per object (its file name up
     /// to the first dot), the views numbered with three digits. Pose files go beside them.
     pub fn output(&self) -> &'static str {
-        "views/{uid}/{view:03}.png"
+        if self.poses == Poses::Transforms {
+            "renders/{uid}/{view:03}.png"
+        } else {
+            "views/{uid}/{view:03}.png"
+        }
     }
 
     /// The camera position of view `view` of object `uid` in the script's normalised frame
@@ -174,6 +286,7 @@ impl Preset {
             Layout::Shell {
                 radius_min,
                 radius_max,
+                north_only,
             } => {
                 // np.random.uniform(-1, 1, 3), normalised; np.random.uniform(rmin, rmax).
                 // A draw at the cube's centre (probability 0) would have no direction: the
@@ -186,23 +299,81 @@ impl Preset {
                         2.0 * uniform(uid, view, k + 2) - 1.0,
                     );
                     if let Some(d) = v.try_normalize() {
-                        break d;
+                        break if north_only { d.with_z(d.z.abs()) } else { d };
                     }
                     k += 3;
                 };
                 let (lo, hi) = (radius_min as f64, radius_max as f64);
                 dir * (lo + (hi - lo) * uniform(uid, view, SHELL_RADIUS))
             }
+            Layout::Hammersley => {
+                let n = self.views as f64;
+                let (o0, o1) = (uniform(uid, OBJECT, 10), uniform(uid, OBJECT, 11));
+                let u = view as f64 / n + o0 / n;
+                let v = radical_inverse_2(view) + o1;
+                let u = if u < 0.25 {
+                    2.0 * u
+                } else {
+                    2.0 / 3.0 * u + 1.0 / 3.0
+                };
+                let pitch = (1.0 - 2.0 * u).acos() - std::f64::consts::FRAC_PI_2;
+                let yaw = v * std::f64::consts::TAU;
+                self.distance as f64
+                    * DVec3::new(
+                        yaw.cos() * pitch.cos(),
+                        yaw.sin() * pitch.cos(),
+                        pitch.sin(),
+                    )
+            }
         }
     }
 
-    /// The world→camera pose [R | t] of view `view` of object `uid` as the script saves it:
-    /// Blender's camera convention (looking down −Z, +Y up), in the normalised frame, from
-    /// the camera's TRACK_TO constraint (−Z at the origin, +Y towards world +Z): rows
-    /// right r = normalize(+Z × b), up u = b × r, back b = C / |C|; t = −R C.
-    pub fn pose(&self, uid: &str, view: u32) -> [[f64; 4]; 3] {
+    /// TRELLIS's `transforms.json` of object `uid`, which `norm` normalises: the unit box,
+    /// the normalisation (`scale`, `offset` in Blender's frame), and per view its image, its
+    /// horizontal field of view in radians and its camera→world matrix in Blender's camera
+    /// convention (columns right, up, back and the position), as `get_transform_matrix`
+    /// writes them.
+    pub fn trellis_transforms(&self, uid: &str, norm: &Normalisation) -> serde_json::Value {
+        let frames: Vec<serde_json::Value> = (0..self.views)
+            .map(|view| {
+                let [r, u, b] = self.pose(uid, view, norm);
+                let c = self.blender_position(uid, view);
+                let m: Vec<[f64; 4]> = (0..3)
+                    .map(|k| [r[k], u[k], b[k], c[k]])
+                    .chain([[0.0, 0.0, 0.0, 1.0]])
+                    .collect();
+                serde_json::json!({
+                    "file_path": format!("{view:03}.png"),
+                    "camera_angle_x": (self.fov as f64).to_radians(),
+                    "transform_matrix": m,
+                })
+            })
+            .collect();
+        serde_json::json!({
+            "aabb": [[-0.5, -0.5, -0.5], [0.5, 0.5, 0.5]],
+            "scale": norm.scale,
+            "offset": (-(norm.scale as f64) * to_blender(norm.centre)).to_array(),
+            "frames": frames,
+        })
+    }
+
+    /// Where the cameras of an object that `norm` normalises look, in the script's
+    /// normalised frame ([`Aim`]).
+    pub fn blender_target(&self, norm: &Normalisation) -> DVec3 {
+        match self.aim {
+            Aim::Centre => DVec3::ZERO,
+            Aim::FileOrigin => -(norm.scale as f64) * to_blender(norm.centre),
+        }
+    }
+
+    /// The world→camera pose [R | t] of view `view` of object `uid`, which `norm`
+    /// normalises, as the script saves it: Blender's camera convention (looking down −Z, +Y
+    /// up), in the normalised frame, from the camera's TRACK_TO constraint (−Z at the target
+    /// T, +Y towards world +Z): rows right r = normalize(+Z × b), up u = b × r, back
+    /// b = (C − T) / |C − T|; t = −R C.
+    pub fn pose(&self, uid: &str, view: u32, norm: &Normalisation) -> [[f64; 4]; 3] {
         let c = self.blender_position(uid, view);
-        let b = c.normalize();
+        let b = (c - self.blender_target(norm)).normalize();
         let r = DVec3::Z.cross(b).try_normalize().unwrap_or(DVec3::X);
         let u = b.cross(r);
         let mut out = [[0.0; 4]; 3];
@@ -219,7 +390,7 @@ impl Preset {
         let position = norm.to_scene(to_meshtrace(self.blender_position(uid, view)));
         Camera::new(
             position,
-            norm.to_scene(Vec3::ZERO),
+            norm.to_scene(to_meshtrace(self.blender_target(norm))),
             Vec3::Y,
             self.fov,
             0.0,
@@ -268,6 +439,42 @@ impl Preset {
                 scene.lights.push(factory_point(norm));
                 scene.sky = Sky::Constant(Vec3::splat(world));
             }
+            Lighting::Trellis => {
+                scene.sky = Sky::Constant(Vec3::splat(0.0509));
+                // Made in the normalised frame: in the mesh's, a point light's intensity
+                // over the scale squared gives the object what it gets in the script.
+                let s = norm.scale;
+                scene.lights.push(PunctualLight::Point {
+                    position: norm.to_scene(to_meshtrace(DVec3::new(4.0, 1.0, 6.0))),
+                    intensity: Vec3::splat(1000.0 / (4.0 * std::f32::consts::PI) / (s * s)),
+                });
+                let side = 25.0f32;
+                scene.lights.push(PunctualLight::Rect {
+                    center: norm.to_scene(to_meshtrace(DVec3::new(0.0, 0.0, 10.0))),
+                    edge_u: Vec3::X * (side / s),
+                    edge_v: Vec3::Z * (side / s),
+                    radiance: Vec3::splat(10_000.0 / (std::f32::consts::PI * side * side)),
+                });
+            }
+            Lighting::Suns => {
+                scene.sky = Sky::Constant(Vec3::splat(0.0509));
+                let h = std::f64::consts::FRAC_1_SQRT_2;
+                let suns = [
+                    ([3.0, 4.0, 5.0], DVec3::new(0.5, 0.5, -h)),
+                    ([2.0, 3.0, 4.0], DVec3::new(-0.5, -0.5, -h)),
+                    ([3.0, 4.0, 5.0], DVec3::new(0.5, 0.5, -h)),
+                    ([1.0, 2.0, 3.0], DVec3::new(0.0, 0.0, 1.0)),
+                ];
+                for (k, (choices, travel)) in suns.into_iter().enumerate() {
+                    // random.choice of three.
+                    let pick = ((3.0 * uniform(uid, OBJECT, k as u32)) as usize).min(2);
+                    scene.lights.push(PunctualLight::Directional {
+                        direction: to_meshtrace(travel).normalize(),
+                        irradiance: Vec3::splat(choices[pick]),
+                        shadows: false,
+                    });
+                }
+            }
             Lighting::Zero123 => {
                 scene.lights.push(factory_point(norm));
                 scene.sky = Sky::Constant(Vec3::splat(0.0509));
@@ -287,6 +494,11 @@ impl Preset {
         }
         Ok(())
     }
+}
+
+/// The base-2 radical inverse of `i`: its bits mirrored about the binary point.
+fn radical_inverse_2(i: u32) -> f64 {
+    i.reverse_bits() as f64 / 4_294_967_296.0
 }
 
 /// The "view" of the numbers an object draws once (its lights), apart from its views'.
@@ -387,6 +599,43 @@ pub fn fov_of_lens(focal: f32, width: f32) -> f32 {
 /// A Blender-frame point (Z up) in meshtrace's frame (Y up).
 pub fn to_meshtrace(b: DVec3) -> Vec3 {
     Vec3::new(b.x as f32, b.z as f32, -b.y as f32)
+}
+
+/// A meshtrace-frame point (Y up) in Blender's frame (Z up): [`to_meshtrace`] undone.
+pub fn to_blender(m: Vec3) -> DVec3 {
+    DVec3::new(m.x as f64, -(m.z as f64), m.y as f64)
+}
+
+/// Objaverse-XL's `metadata.json` of `scene` (read from `file`, before a preset lights it),
+/// with what meshtrace knows of the keys the script writes: the file's size, the triangles
+/// (the script counts Blender's faces, triangles after its glTF import), vertices,
+/// materials and lights, and the box in Blender's frame in the file's units; and the
+/// normalisation `norm` that the script applies without saving it.
+pub fn metadata(file: &std::path::Path, scene: &Scene, norm: &Normalisation) -> serde_json::Value {
+    let size = std::fs::metadata(file).map(|m| m.len()).unwrap_or(0);
+    let (lo, hi) = scene
+        .framed
+        .map_or((Vec3::ZERO, Vec3::ZERO), |b| (b.min, b.max));
+    // Blender's Z-up box of a Y-up box: y and z swap, and z's sign turns.
+    let (blo, bhi) = (
+        to_blender(Vec3::new(lo.x, lo.y, hi.z)),
+        to_blender(Vec3::new(hi.x, hi.y, lo.z)),
+    );
+    serde_json::json!({
+        "file_size": size,
+        "poly_count": scene.mesh.triangles.len(),
+        "vert_count": scene.mesh.positions.len(),
+        "material_count": scene.materials.len(),
+        "lamp_count": scene.lights.len(),
+        "scene_size": {
+            "bbox_min": [blo.x, blo.y, blo.z],
+            "bbox_max": [bhi.x, bhi.y, bhi.z],
+        },
+        "normalisation": {
+            "scale": norm.scale,
+            "offset": (-(norm.scale as f64) * to_blender(norm.centre)).to_array(),
+        },
+    })
 }
 
 /// The scripts' normalisation: scaled by 1 / (the bounding box's largest extent) and

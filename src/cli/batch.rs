@@ -4,7 +4,7 @@
 
 use super::{DeviceArgs, Interrupted, backend, pipeline_error, set_threads, warn};
 use anyhow::{Context, Result, bail};
-use meshtrace::batch::preset::{Normalisation, Poses, Preset, write_npy};
+use meshtrace::batch::preset::{Normalisation, Poses, Preset, metadata, write_npy};
 use meshtrace::batch::transforms::{self, Frame, Intrinsics};
 use meshtrace::batch::{self, Manifest, Task};
 use meshtrace::film::{Film, Format};
@@ -436,6 +436,27 @@ fn run_input(
                 .as_ref()
                 .and_then(Normalisation::of)
                 .context("the mesh has no extent to normalise")?;
+            // Per object, beside its first view's image (before the preset's lights, which
+            // the metadata does not count).
+            let uid = batch::uid(&group[0].input);
+            let files = [
+                (preset.metadata, "metadata.json"),
+                (preset.poses == Poses::Transforms, "transforms.json"),
+            ];
+            for (name, wanted) in files.iter().filter(|f| f.0).map(|f| (f.1, f.0)) {
+                let Some(dir) = group[0].output.parent().filter(|_| wanted) else {
+                    continue;
+                };
+                let value = match name {
+                    "metadata.json" => metadata(&group[0].input, &scene, &norm),
+                    _ => preset.trellis_transforms(&uid, &norm),
+                };
+                let path = dir.join(name);
+                let text = serde_json::to_string_pretty(&value)? + "\n";
+                std::fs::create_dir_all(dir)
+                    .and_then(|()| std::fs::write(&path, text))
+                    .with_context(|| format!("cannot write {}", path.display()))?;
+            }
             preset
                 .light(&mut scene, &norm, &batch::uid(&group[0].input))
                 .map_err(|e| pipeline_error(e.into()))?;
@@ -492,8 +513,11 @@ fn run_input(
         // The pose first: the image marks the view complete.
         if let Some(preset) = job.preset.as_ref().filter(|p| p.poses == Poses::Npy) {
             let path = task.output.with_extension("npy");
-            write_npy(&path, &preset.pose(&uid, task.view))
-                .with_context(|| format!("cannot write {}", path.display()))?;
+            write_npy(
+                &path,
+                &preset.pose(&uid, task.view, norm.as_ref().context("normalised")?),
+            )
+            .with_context(|| format!("cannot write {}", path.display()))?;
         }
         film.save_as(&task.output, request.bit_depth())?;
         tally.stages[Stage::Encode as usize] += t.elapsed();
