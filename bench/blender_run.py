@@ -11,7 +11,9 @@ script's own). The script itself is not changed. Two options serve the benchmark
   cameras and lights from them unseeded; seeded, a second run draws the same ones.
 * `--samples N` makes every render take N Cycles samples without adaptive sampling (set in
   a `render_pre` handler, after the script has set its own): the reference of a run with
-  the same seed.
+  the same seed. With `--first K`, only the first K renders do; the others take one
+  sample. A script whose cameras depend on how many views it renders (a ring) keeps its
+  view count, and its reference costs K views.
 """
 
 import argparse
@@ -32,15 +34,20 @@ def main():
     parser.add_argument("script")
     parser.add_argument("--seed", type=int)
     parser.add_argument("--samples", type=int)
+    parser.add_argument("--first", type=int)
     args = parser.parse_args(ours)
     if args.seed is not None:
         random.seed(args.seed)
         np.random.seed(args.seed)
     if args.samples is not None:
 
+        renders = [0]
+
         def more_samples(scene, *_):
-            scene.cycles.samples = args.samples
+            first = args.first is None or renders[0] < args.first
+            scene.cycles.samples = args.samples if first else 1
             scene.cycles.use_adaptive_sampling = False
+            renders[0] += 1
 
         bpy.app.handlers.render_pre.append(more_samples)
     sys.argv = [args.script] + theirs

@@ -17,7 +17,8 @@ difference, over the 8-bit RGBA pixels that either image covers, between a view 
 same view rendered by the same renderer with `--reference-spp` samples (Blender's with
 adaptive sampling off, its denoiser as the script has it). Seeds make the script's random
 cameras and lights the same in a run and its reference (`--seed`); meshtrace's are seeded
-per object already. Only the first `--reference-views` views get references.
+per object already. Only the first `--reference-views` views get references; the reference
+runs keep the script's view count, since a ring's cameras depend on it.
 
 `--reuse-blender` keeps the Blender images and times of an earlier run into the same `--out`
 (Blender's part takes the longest), to try meshtrace's settings against them.
@@ -115,7 +116,7 @@ def noise(image, reference):
 def blender(args, script, extra, asset, out, views, seed, samples=None):
     cmd = [args.blender_python, str(HERE / "blender_run.py"), script, "--seed", str(seed)]
     if samples:
-        cmd += ["--samples", str(samples)]
+        cmd += ["--samples", str(samples), "--first", str(args.reference_views)]
     cmd += ["--", "--object_path", str(asset), "--output_dir", str(out)]
     cmd += ["--num_images", str(views)] + extra
     start = time.perf_counter()
@@ -186,14 +187,25 @@ def main():
                 blender_time += blender(args, script, extra, asset, base / "blender", views, args.seed)
                 blender(
                     args, script, extra, asset, base / "blender_ref",
-                    args.reference_views, args.seed, args.reference_spp,
+                    views, args.seed, args.reference_spp,
                 )
             timing.write_text(json.dumps(blender_time))
         for folder in ["meshtrace", "meshtrace_ref"]:
             shutil.rmtree(base / folder, ignore_errors=True)
         ours_time, summary = meshtrace(args, preset, args.assets, base / "meshtrace", views, args.spp)
-        meshtrace(args, preset, args.assets, base / "meshtrace_ref", args.reference_views,
-                  args.reference_spp)
+        # The reference keeps the view count (a ring's cameras depend on it); the views past
+        # the first few are left out by placing files where they go, which a batch skips as
+        # complete, and removing them after.
+        skipped = []
+        for asset in assets:
+            for v in range(args.reference_views, views):
+                path = base / "meshtrace_ref" / asset.name.split(".")[0] / f"{v:03d}.png"
+                path.parent.mkdir(parents=True, exist_ok=True)
+                path.write_bytes(b"")
+                skipped.append(path)
+        meshtrace(args, preset, args.assets, base / "meshtrace_ref", views, args.reference_spp)
+        for path in skipped:
+            path.unlink()
         noise_of = {}
         for who in ["blender", "meshtrace"]:
             values = []
