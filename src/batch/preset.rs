@@ -225,19 +225,9 @@ impl Preset {
                 name: "objaverse-xl",
                 aim: Aim::FileOrigin,
                 metadata: true,
-                layout: Layout::Shell {
-                    radius_min: 1.5,
-                    radius_max: 2.2,
-                    north_only: false,
-                },
-                views: 12,
-                elevation: 0.0,
-                distance: 0.0,
-                fov: fov_of_lens(35.0, 32.0),
-                size: 512,
                 spp: 64,
                 lighting: Lighting::Suns,
-                poses: Poses::Npy,
+                ..Self::named("zero123")?
             }),
             _ => Err(format!(
                 "`{name}` is not a preset; there are {}",
