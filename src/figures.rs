@@ -242,13 +242,7 @@ fn clip(a: (f32, f32), b: (f32, f32), w: f32, h: f32) -> Option<((f32, f32), (f3
 /// image, in pixels.
 pub fn box_edges(camera: &Camera, node: &BvhNode, width: u32, height: u32) -> Vec<[(f32, f32); 2]> {
     let b = node.bounds();
-    let corner = |k: usize| {
-        Vec3::new(
-            if k & 1 == 0 { b.min.x } else { b.max.x },
-            if k & 2 == 0 { b.min.y } else { b.max.y },
-            if k & 4 == 0 { b.min.z } else { b.max.z },
-        )
-    };
+    let corner = |k: usize| b.corner(k);
     let near = 1e-4 * (1.0 + b.extent().length());
     let mut out = Vec::new();
     for (i, j) in [

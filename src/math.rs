@@ -64,6 +64,15 @@ impl Aabb {
         0.5 * (self.min + self.max)
     }
 
+    /// Corner `k` of 8: bits 0, 1 and 2 of `k` pick `max` over `min` in x, y and z.
+    pub fn corner(&self, k: usize) -> Vec3 {
+        Vec3::select(
+            glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0),
+            self.max,
+            self.min,
+        )
+    }
+
     /// Surface area, the SAH's measure of how likely a random ray is to hit the box.
     pub fn area(&self) -> f32 {
         if self.is_empty() {

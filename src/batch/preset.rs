@@ -342,7 +342,7 @@ impl Preset {
         serde_json::json!({
             "aabb": [[-0.5, -0.5, -0.5], [0.5, 0.5, 0.5]],
             "scale": norm.scale,
-            "offset": (-(norm.scale as f64) * to_blender(norm.centre)).to_array(),
+            "offset": norm.blender_offset().to_array(),
             "frames": frames,
         })
     }
@@ -352,7 +352,7 @@ impl Preset {
     pub fn blender_target(&self, norm: &Normalisation) -> DVec3 {
         match self.aim {
             Aim::Centre => DVec3::ZERO,
-            Aim::FileOrigin => -(norm.scale as f64) * to_blender(norm.centre),
+            Aim::FileOrigin => norm.blender_offset(),
         }
     }
 
@@ -431,13 +431,10 @@ impl Preset {
             }
             Lighting::Trellis => {
                 scene.sky = Sky::Constant(Vec3::splat(0.0509));
-                // Made in the normalised frame: in the mesh's, a point light's intensity
-                // over the scale squared gives the object what it gets in the script.
+                // Made in the normalised frame, so placed through the normalisation.
                 let s = norm.scale;
-                scene.lights.push(PunctualLight::Point {
-                    position: norm.to_scene(to_meshtrace(DVec3::new(4.0, 1.0, 6.0))),
-                    intensity: Vec3::splat(1000.0 / (4.0 * std::f32::consts::PI) / (s * s)),
-                });
+                let at = norm.to_scene(to_meshtrace(DVec3::new(4.0, 1.0, 6.0)));
+                scene.lights.push(thousand_watts_at(at, norm));
                 let side = 25.0f32;
                 scene.lights.push(PunctualLight::Rect {
                     center: norm.to_scene(to_meshtrace(DVec3::new(0.0, 0.0, 10.0))),
@@ -520,11 +517,19 @@ pub fn uniform(uid: &str, view: u32, dim: u32) -> f64 {
 /// (Blender's light is a sphere of radius 0.1 m, meshtrace's a point: the shadows are
 /// harder.) This assumes the object's root node at the origin, as in most files.
 fn factory_point(norm: &Normalisation) -> PunctualLight {
-    let position = to_meshtrace(DVec3::new(4.0762, 1.0055, 5.9039)) / norm.scale;
-    let intensity = 1000.0 / (4.0 * std::f32::consts::PI) / (norm.scale * norm.scale);
+    thousand_watts_at(
+        to_meshtrace(DVec3::new(4.0762, 1.0055, 5.9039)) / norm.scale,
+        norm,
+    )
+}
+
+/// A point light of 1,000 W (P / (4π) W/sr, as Cycles emits a point light's watts) placed
+/// in the normalised frame of a mesh that `norm` normalises, at `position` in the mesh's
+/// own: its intensity over the scale squared gives the object what it gets in the script.
+fn thousand_watts_at(position: Vec3, norm: &Normalisation) -> PunctualLight {
     PunctualLight::Point {
         position,
-        intensity: Vec3::splat(intensity),
+        intensity: Vec3::splat(1000.0 / (4.0 * std::f32::consts::PI) / (norm.scale * norm.scale)),
     }
 }
 
@@ -623,7 +628,7 @@ pub fn metadata(file: &std::path::Path, scene: &Scene, norm: &Normalisation) -> 
         },
         "normalisation": {
             "scale": norm.scale,
-            "offset": (-(norm.scale as f64) * to_blender(norm.centre)).to_array(),
+            "offset": norm.blender_offset().to_array(),
         },
     })
 }
@@ -645,6 +650,12 @@ impl Normalisation {
             scale: 1.0 / extent,
             centre: (b.min + b.max) * 0.5,
         })
+    }
+
+    /// The normalisation's translation in Blender's frame, −s c: where it takes the
+    /// file's origin (p ↦ s p + offset).
+    pub fn blender_offset(&self) -> DVec3 {
+        -(self.scale as f64) * to_blender(self.centre)
     }
 
     /// A normalised point back in the mesh's frame.

@@ -422,6 +422,7 @@ fn run_input(
         }
         e => pipeline_error(e),
     };
+    let uid = batch::uid(&group[0].input);
     let t = Instant::now();
     let mut scene = meshtrace::pipeline::load(&group[0].input, &request).map_err(request_error)?;
     for w in &scene.warnings {
@@ -438,27 +439,24 @@ fn run_input(
                 .context("the mesh has no extent to normalise")?;
             // Per object, beside its first view's image (before the preset's lights, which
             // the metadata does not count).
-            let uid = batch::uid(&group[0].input);
-            let files = [
-                (preset.metadata, "metadata.json"),
-                (preset.poses == Poses::Transforms, "transforms.json"),
-            ];
-            for (name, wanted) in files.iter().filter(|f| f.0).map(|f| (f.1, f.0)) {
-                let Some(dir) = group[0].output.parent().filter(|_| wanted) else {
-                    continue;
-                };
-                let value = match name {
-                    "metadata.json" => metadata(&group[0].input, &scene, &norm),
-                    _ => preset.trellis_transforms(&uid, &norm),
-                };
-                let path = dir.join(name);
-                let text = serde_json::to_string_pretty(&value)? + "\n";
-                std::fs::create_dir_all(dir)
-                    .and_then(|()| std::fs::write(&path, text))
-                    .with_context(|| format!("cannot write {}", path.display()))?;
+            let mut files = Vec::new();
+            if preset.metadata {
+                files.push(("metadata.json", metadata(&group[0].input, &scene, &norm)));
+            }
+            if preset.poses == Poses::Transforms {
+                files.push(("transforms.json", preset.trellis_transforms(&uid, &norm)));
+            }
+            if let Some(dir) = group[0].output.parent() {
+                for (name, value) in files {
+                    let path = dir.join(name);
+                    let text = serde_json::to_string_pretty(&value)? + "\n";
+                    std::fs::create_dir_all(dir)
+                        .and_then(|()| std::fs::write(&path, text))
+                        .with_context(|| format!("cannot write {}", path.display()))?;
+                }
             }
             preset
-                .light(&mut scene, &norm, &batch::uid(&group[0].input))
+                .light(&mut scene, &norm, &uid)
                 .map_err(|e| pipeline_error(e.into()))?;
             Some(norm)
         }
@@ -476,7 +474,6 @@ fn run_input(
         );
     }
     let framed = prepared.framed;
-    let uid = batch::uid(&group[0].input);
     let mut views = prepared.views(backend).map_err(pipeline_error)?;
     views.job_mut().cancel = Some(watchdog.stop.clone());
     tally.stages[Stage::Build as usize] += t.elapsed();
@@ -511,13 +508,12 @@ fn run_input(
                 .with_context(|| format!("cannot create {}", dir.display()))?;
         }
         // The pose first: the image marks the view complete.
-        if let Some(preset) = job.preset.as_ref().filter(|p| p.poses == Poses::Npy) {
+        if let (Some(preset), Some(norm)) = (&job.preset, &norm)
+            && preset.poses == Poses::Npy
+        {
             let path = task.output.with_extension("npy");
-            write_npy(
-                &path,
-                &preset.pose(&uid, task.view, norm.as_ref().context("normalised")?),
-            )
-            .with_context(|| format!("cannot write {}", path.display()))?;
+            write_npy(&path, &preset.pose(&uid, task.view, norm))
+                .with_context(|| format!("cannot write {}", path.display()))?;
         }
         film.save_as(&task.output, request.bit_depth())?;
         tally.stages[Stage::Encode as usize] += t.elapsed();

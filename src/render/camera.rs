@@ -63,24 +63,7 @@ impl CameraRays {
         let (w, h) = (self.width as f32, self.height as f32);
         let (mut lo, mut hi) = (Vec2::INFINITY, Vec2::NEG_INFINITY);
         for k in 0..8 {
-            let corner = Vec3::new(
-                if k & 1 == 0 {
-                    bounds.min.x
-                } else {
-                    bounds.max.x
-                },
-                if k & 2 == 0 {
-                    bounds.min.y
-                } else {
-                    bounds.max.y
-                },
-                if k & 4 == 0 {
-                    bounds.min.z
-                } else {
-                    bounds.max.z
-                },
-            );
-            let v = corner - self.position;
+            let v = bounds.corner(k) - self.position;
             // The corner's image-plane coordinates, in [-1, 1] across the image.
             let (x, y) = if self.ortho_half_height > 0.0 {
                 let half = self.ortho_half_height;
