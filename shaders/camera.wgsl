@@ -5,8 +5,12 @@
 // mirror: src/render/camera.rs `generate_camera_ray`
 fn generate_camera_ray(px: u32, py: u32, rng: Rng) -> Ray {
     let j = rng_2d(rng, 0u, DIM_PIXEL_X);
-    let jx = j.x;
-    let jy = j.y;
+    var jx = j.x;
+    var jy = j.y;
+    if params.filter_width != 1.0 {
+        jx = 0.5 + params.filter_width * (jx - 0.5);
+        jy = 0.5 + params.filter_width * (jy - 0.5);
+    }
     if params.ortho_half_height > 0.0 {
         return orthographic_ray(f32(px) + jx, f32(py) + jy);
     }

@@ -138,24 +138,15 @@ fn path_vertex(st: ptr<function, PathState>, rng: Rng, branches: u32) -> PathVer
         bsdf_numbers(mat, (*st).depth, rng, &v);
     }
 
-    // Next event estimation.
-    if !bsdf_is_delta(mat) && params.num_emitters > 0u {
-        let ls = sample_light(si.p, ng, u_light);
-        let cos_i = dot(ls.wi, ng);
-        let usable = select(cos_i > 0.0, cos_i != 0.0, bsdf_transmits(mat));
-        if ls.valid && usable {
-            let wi = ls.wi * frame;
-            let f = bsdf_eval(mat, wo, wi);
-            if any(f != vec3<f32>(0.0)) {
-                (*st).rays += 1u;
-                if !traverse_any(Ray(ls.origin, ls.wi), ls.t_max) {
-                    var w = 1.0;
-                    if !ls.delta {
-                        w = power_heuristic(ls.pdf, bsdf_pdf(mat, wo, wi));
-                    }
-                    (*st).radiance += (*st).beta * f * ls.le * (w / ls.pdf);
-                }
+    // Next event estimation: the lights sampled in full, then the one picked.
+    if !bsdf_is_delta(mat) {
+        for (var k = 0u; k < params.lights_in_full; k++) {
+            if load_light(k).kind != LIGHT_RECT {
+                add_direct(st, mat, frame, ng, wo, sample_punctual(k, si.p, ng, 1.0, vec2<f32>(0.0)));
             }
+        }
+        if params.num_emitters > 0u {
+            add_direct(st, mat, frame, ng, wo, sample_light(si.p, ng, u_light));
         }
     }
 
@@ -167,6 +158,30 @@ fn path_vertex(st: ptr<function, PathState>, rng: Rng, branches: u32) -> PathVer
     v.area_pdf = area_pdf;
     v.valid = true;
     return v;
+}
+
+// Adds light sample ls (where valid), seen through mat at the vertex whose shading frame is
+// frame (geometric normal ng) towards wo (local), where its shadow ray is clear.
+// mirror: src/render/integrator.rs `add_direct`
+fn add_direct(st: ptr<function, PathState>, mat: Material, frame: mat3x3<f32>, ng: vec3<f32>, wo: vec3<f32>, ls: LightSample) {
+    let cos_i = dot(ls.wi, ng);
+    let usable = select(cos_i > 0.0, cos_i != 0.0, bsdf_transmits(mat));
+    if !ls.valid || !usable {
+        return;
+    }
+    let wi = ls.wi * frame;
+    let f = bsdf_eval(mat, wo, wi);
+    if all(f == vec3<f32>(0.0)) {
+        return;
+    }
+    (*st).rays += 1u;
+    if !traverse_any(Ray(ls.origin, ls.wi), ls.t_max) {
+        var w = 1.0;
+        if !ls.delta {
+            w = power_heuristic(ls.pdf, bsdf_pdf(mat, wo, wi));
+        }
+        (*st).radiance += (*st).beta * f * ls.le * (w / ls.pdf);
+    }
 }
 
 // Caustic connections: vertex v (where it is not delta) to each vertex of the light subpath

@@ -77,7 +77,11 @@ fn sample_light(p: vec3<f32>, ng: vec3<f32>, u_pair: vec2<f32>) -> LightSample {
         return LightSample(offset_ray_origin(p, ng, wi), wi, T_INF, sky_radiance(wi), params.sky_pmf * pdf, false, true);
     }
     if (light & LIGHT_EMITTER) != 0u {
-        return sample_punctual(light & ~LIGHT_EMITTER, p, ng, pick.pmf, u);
+        let index = light & ~LIGHT_EMITTER;
+        if index < params.lights_in_full && load_light(index).kind != LIGHT_RECT {
+            return none;
+        }
+        return sample_punctual(index, p, ng, pick.pmf, u);
     }
     let tri = load_tri(light);
     let bary = sample_uniform_triangle(u);

@@ -141,8 +141,11 @@ struct Params {
     branch_weight: f32,
     // Half an orthographic camera's view height; 0 for a perspective camera.
     ortho_half_height: f32,
-    _pad0: u32,
-    _pad1: u32,
+    // RenderScene::lights_in_full: the first lights that next event estimation samples at
+    // every vertex.
+    lights_in_full: u32,
+    // The width in pixels of the square over which a pixel's camera samples fall.
+    filter_width: f32,
     // The pixels [x0, x1) × [y0, y1) whose camera rays may meet the scene.
     window: vec4<u32>,
 }

@@ -352,6 +352,7 @@ pub fn bench_scene(
         seed: 0,
         caustics: scene.settings.caustics,
         branches: scene.settings.branches,
+        filter_width: scene.settings.filter_width,
     };
     let job = RenderJob::new(settings);
     let samples = opts.width as f64 * opts.height as f64 * opts.spp as f64;

@@ -30,6 +30,9 @@ pub struct RenderRequest {
     pub caustics: Option<bool>,
     /// Paths each camera sample branches into at its first hit.
     pub branches: Option<u32>,
+    /// The side in pixels of the square a pixel's camera samples fall in (1; 0 for its
+    /// centre alone).
+    pub filter_width: Option<f32>,
     /// `auto` (a hardware GPU, else the CPU), `cpu` or `gpu`.
     #[serde(default, deserialize_with = "device")]
     pub device: Option<DeviceChoice>,
@@ -113,6 +116,7 @@ impl RenderRequest {
             seed: r.seed.or(u.seed),
             caustics: r.caustics.or(u.caustics),
             branches: r.branches.or(u.branches),
+            filter_width: r.filter_width.or(u.filter_width),
             device: r.device.or(u.device),
             adapter: r.adapter.or(u.adapter),
             accel: r.accel.or(u.accel),
@@ -139,6 +143,7 @@ impl RenderRequest {
             seed: self.seed.unwrap_or(own.seed),
             caustics: self.caustics.unwrap_or(own.caustics),
             branches: self.branches.or(own.branches),
+            filter_width: self.filter_width.unwrap_or(own.filter_width),
         };
         s.validate()
             .map_err(|(field, message)| RequestError::new(field, message))?;

@@ -231,6 +231,63 @@ mesh = "half.obj"
     }
 }
 
+/// `filter_width` sets the square a pixel's samples fall in: 0, its centre alone (alpha 0
+/// or 1, as the dataset scripts' `filter_width` 0.01 gives); 3, three pixels across, so
+/// that the columns beside the edge are covered by 5/6 and 1/6.
+#[test]
+fn filter_width_sets_how_far_a_pixel_sees() {
+    let dir = TempDir::new("aov-filter");
+    dir.write("half.obj", quad_obj(-100.0, -100.0, 0.0, 100.0));
+    let mut scene = load(
+        &dir,
+        r#"
+[camera]
+position = [0.0, 0.0, 5.0]
+look_at = [0.0, 0.0, 0.0]
+[render]
+width = 33
+height = 21
+spp = 256
+filter_width = 0.0
+[[objects]]
+mesh = "half.obj"
+"#,
+    );
+    let w = 33usize;
+    let films = render_both("filter 0", &scene, &[Aov::Alpha], true);
+    for (device, film) in &films {
+        for (i, &a) in f32s(film, Aov::Alpha)[0].iter().enumerate() {
+            let want = match i % w {
+                0..16 => Some(1.0),
+                16 => None,
+                _ => Some(0.0),
+            };
+            assert!(a == 0.0 || a == 1.0, "{device}: pixel {i}: alpha {a}");
+            assert!(
+                want.is_none_or(|v| a == v),
+                "{device}: pixel {i}: alpha {a}"
+            );
+        }
+    }
+    scene.settings.filter_width = 3.0;
+    for (device, film) in render_both("filter 3", &scene, &[Aov::Alpha], true) {
+        let alpha = &f32s(&film, Aov::Alpha)[0];
+        for (x, want) in [
+            (14, 1.0),
+            (15, 5.0 / 6.0),
+            (16, 0.5),
+            (17, 1.0 / 6.0),
+            (18, 0.0),
+        ] {
+            let mean = (0..21).map(|y| alpha[y * w + x]).sum::<f32>() / 21.0;
+            assert!(
+                (mean - want).abs() < 0.03,
+                "{device}: column {x}: mean alpha {mean} against {want}"
+            );
+        }
+    }
+}
+
 #[test]
 fn ids_name_the_object_and_material_under_the_pixel_centre() {
     let dir = TempDir::new("aov-ids");

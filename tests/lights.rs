@@ -94,6 +94,35 @@ fn a_point_light_gives_intensity_over_distance_squared() {
     );
 }
 
+/// Up to eight point, spot and directional lights are each sampled at every vertex, so that
+/// one sample a pixel already gives their sum exactly (a pick of one of them a sample would
+/// leave pixels at 0 or several times the mean); nine fall back to a pick, and stay right on
+/// average.
+#[test]
+fn lights_without_area_are_sampled_in_full() {
+    assert_radiance_within(
+        "three lights at 1 spp",
+        "type = \"point\"\nposition = [0.0, 2.0, 0.0]\nintensity = [4.0, 4.0, 4.0]",
+        "[[lights]]\ntype = \"directional\"\ndirection = [0.0, -1.0, 0.0]\n\
+         irradiance = [2.0, 2.0, 2.0]\n[[lights]]\ntype = \"spot\"\nposition = [0.0, 2.0, 0.0]\n\
+         direction = [0.0, -1.0, 0.0]\nintensity = [4.0, 4.0, 4.0]\ncutoff_angle = 30.0",
+        1,
+        1e-3,
+        [4.0, 4.0, 4.0],
+    );
+    let nine: String = (1..=8)
+        .map(|k| format!("[[lights]]\ntype = \"point\"\nposition = [0.0, 2.0, 0.0]\nintensity = [{k}.0, {k}.0, {k}.0]\n"))
+        .collect();
+    assert_radiance_within(
+        "nine lights",
+        "type = \"point\"\nposition = [0.0, 2.0, 0.0]\nintensity = [9.0, 9.0, 9.0]",
+        &nine,
+        64,
+        0.03,
+        [11.25, 11.25, 11.25],
+    );
+}
+
 #[test]
 fn a_point_light_under_the_floor_lights_nothing() {
     assert_radiance(

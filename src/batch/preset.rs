@@ -136,6 +136,9 @@ pub struct Preset {
     pub size: u32,
     /// Samples per pixel.
     pub spp: u32,
+    /// The script's `cycles.filter_width`: 0.01 pixels (every sample through the pixel's
+    /// centre, no anti-aliasing) in all but TRELLIS's, which keeps 1.
+    pub filter_width: f32,
     pub lighting: Lighting,
     pub poses: Poses,
 }
@@ -158,6 +161,7 @@ impl Preset {
                 fov: fov_of_lens(35.0, 32.0),
                 size: 512,
                 spp: 64,
+                filter_width: 0.01,
                 lighting: Lighting::AreaAbove,
                 poses: Poses::None,
             }),
@@ -176,6 +180,7 @@ impl Preset {
                 fov: fov_of_lens(35.0, 32.0),
                 size: 256,
                 spp: 128,
+                filter_width: 0.01,
                 lighting: Lighting::FactoryPoint { world: 0.5 },
                 poses: Poses::None,
             }),
@@ -198,6 +203,7 @@ impl Preset {
                 fov: fov_of_lens(35.0, 32.0),
                 size: 512,
                 spp: 128,
+                filter_width: 0.01,
                 lighting: Lighting::Zero123,
                 poses: Poses::Npy,
             }),
@@ -215,6 +221,7 @@ impl Preset {
                 fov: 40.0,
                 size: 512,
                 spp: 128,
+                filter_width: 1.0,
                 lighting: Lighting::Trellis,
                 poses: Poses::Transforms,
             }),
@@ -236,8 +243,8 @@ impl Preset {
         }
     }
 
-    /// What the preset asks of every image, under the manifest's `[render]`: its size and
-    /// samples, RGBA PNGs (the scripts' transparent film), no studio, and the mesh read
+    /// What the preset asks of every image, under the manifest's `[render]`: its size,
+    /// samples and pixel filter, RGBA PNGs (the scripts' transparent film), no studio, and the mesh read
     /// with +Y up, as Blender's glTF and OBJ importers read it.
     pub fn request(&self) -> RenderRequest {
         RenderRequest {
@@ -245,6 +252,7 @@ impl Preset {
             width: Some(self.size),
             height: Some(self.size),
             spp: Some(self.spp),
+            filter_width: Some(self.filter_width),
             transparent: Some(true),
             without_studio: true,
             ..RenderRequest::default()

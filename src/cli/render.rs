@@ -54,6 +54,11 @@ pub struct RenderArgs {
     /// branches; else 4, or 1 in a render with caustic light subpaths].
     #[arg(long)]
     pub branches: Option<u32>,
+    /// The side in pixels of the square over which a pixel's camera samples fall (a box
+    /// filter), 0 to 10: 0 puts every sample through the pixel's centre [scene's [render]
+    /// filter_width; else 1].
+    #[arg(long, value_name = "PIXELS")]
+    pub filter_width: Option<f32>,
     #[command(flatten)]
     pub on: DeviceArgs,
     /// Print nothing but warnings and errors.
@@ -143,6 +148,7 @@ impl RenderArgs {
             seed: self.seed,
             caustics: self.caustics,
             branches: self.branches,
+            filter_width: self.filter_width,
             aov,
             transparent: Some(self.transparent),
             bit_depth: self.bit_depth,

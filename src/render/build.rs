@@ -8,8 +8,8 @@ use super::environment::cell_corners;
 use super::sheen::{SHEEN_TABLE_OFFSET, sheen_table};
 use super::tables::{
     CausticTarget, Environment, LIGHT_DIRECTIONAL, LIGHT_EMITTER, LIGHT_POINT, LIGHT_RECT,
-    LIGHT_SPOT, Light, RenderScene, SKY_EMITTER, TRI_COLOR, TRI_SMOOTH, TRI_TANGENT, TRI_UV,
-    TRI_UV1, TriColors, TriShading, TriTangents, TriUvs,
+    LIGHT_SPOT, LIGHTS_IN_FULL_MAX, Light, RenderScene, SKY_EMITTER, TRI_COLOR, TRI_SMOOTH,
+    TRI_TANGENT, TRI_UV, TRI_UV1, TriColors, TriShading, TriTangents, TriUvs,
 };
 use super::texture::texel;
 use crate::bvh::{BuildParams, Bvh, BvhError, WideBvh};
@@ -195,6 +195,7 @@ impl RenderScene {
             emitter_cdf: Vec::new(),
             emitter_areas: Vec::new(),
             sky_pmf: 0.0,
+            lights_in_full: 0,
             camera: scene.camera.clone(),
             sky: scene.sky,
             env: Environment::default(),
@@ -226,8 +227,21 @@ impl RenderScene {
     /// probability goes by power (a punctual light's radiant flux, a directional light's
     /// through the disc of the scene's bounding sphere) and half evenly to each punctual
     /// light and to the emissive triangles as a group (by power within it): power alone
-    /// starves a narrow, bright spot light, whose flux is small.
+    /// starves a narrow, bright spot light, whose flux is small. Lights that next event
+    /// estimation samples in full ([`RenderScene::lights_in_full`]) are left out where no
+    /// caustic light subpath may start on them.
     fn build_emitters(&mut self, lights: &[PunctualLight]) {
+        self.lights_in_full = if lights.len() <= LIGHTS_IN_FULL_MAX {
+            lights.len() as u32
+        } else {
+            0
+        };
+        // A light sampled in full needs no pick, where no light subpath starts on it either.
+        let unpicked = |l: &PunctualLight| {
+            self.lights_in_full != 0
+                && self.caustic_targets.is_empty()
+                && !matches!(l, PunctualLight::Rect { .. })
+        };
         let mut emitters = Vec::new();
         // Each entry's power, and whether it is a triangle.
         let mut powers: Vec<(f64, bool)> = Vec::new();
@@ -284,7 +298,7 @@ impl RenderScene {
                     std::f64::consts::PI * area.min(wide) * luminance(radiance) as f64
                 }
             };
-            if power > 0.0 {
+            if power > 0.0 && !unpicked(l) {
                 emitters.push(LIGHT_EMITTER | k as u32);
                 powers.push((power, false));
             }

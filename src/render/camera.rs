@@ -29,6 +29,9 @@ pub struct CameraRays {
     /// The pixels [x0, x1) × [y0, y1) whose camera rays may meet the scene
     /// ([`CameraRays::with_window`]); all of them until it is set.
     pub window: [u32; 4],
+    /// [`RenderSettings::filter_width`](crate::scene::RenderSettings::filter_width); 1
+    /// until [`CameraRays::with_filter`] sets it.
+    pub filter_width: f32,
 }
 
 impl CameraRays {
@@ -46,14 +49,23 @@ impl CameraRays {
             width,
             height,
             window: [0, 0, width, height],
+            filter_width: 1.0,
         }
+    }
+
+    /// These rays with camera samples over a square of `width` pixels about each pixel's
+    /// centre.
+    pub fn with_filter(mut self, width: f32) -> Self {
+        self.filter_width = width;
+        self
     }
 
     /// These rays with [`CameraRays::window`] set to the pixels whose rays may meet a box
     /// `bounds` (the scene's): those whose square overlaps the rectangle around the box's
-    /// eight corners projected onto the image, one pixel wider on each side for rounding.
-    /// A ray meets the box only through its corners' convex hull, which the rectangle holds,
-    /// so every ray of a pixel outside misses. All pixels where that cannot be told: a
+    /// eight corners projected onto the image, one pixel wider on each side for rounding
+    /// (and wider still by what a [`CameraRays::filter_width`] above 1 reaches past a pixel:
+    /// set it first). A ray meets the box only through its corners' convex hull, which the
+    /// rectangle holds, so every ray of a pixel outside misses. All pixels where that cannot be told: a
     /// thin lens, whose rays do not share an origin, or a corner at or behind the pinhole.
     pub fn with_window(mut self, bounds: &Aabb) -> Self {
         self.window = [0, 0, self.width, self.height];
@@ -90,11 +102,12 @@ impl CameraRays {
             return self;
         }
         let clamp = |v: f32, max: u32| v.clamp(0.0, max as f32) as u32;
+        let margin = 1.0 + (0.5 * (self.filter_width - 1.0)).max(0.0).ceil();
         self.window = [
-            clamp(lo.x.floor() - 1.0, self.width),
-            clamp(lo.y.floor() - 1.0, self.height),
-            clamp(hi.x.ceil() + 1.0, self.width),
-            clamp(hi.y.ceil() + 1.0, self.height),
+            clamp(lo.x.floor() - margin, self.width),
+            clamp(lo.y.floor() - margin, self.height),
+            clamp(hi.x.ceil() + margin, self.width),
+            clamp(hi.y.ceil() + margin, self.height),
         ];
         self
     }
@@ -108,10 +121,19 @@ impl CameraRays {
 }
 
 /// The primary ray of one sample of pixel (`px`, `py`): a box filter (uniform jitter over
-/// the pixel) and, for a thin lens, a uniform point on the aperture.
+/// the pixel, or over the square of [`CameraRays::filter_width`] about its centre) and, for
+/// a thin lens, a uniform point on the aperture.
 /// mirror: shaders/camera.wgsl `generate_camera_ray`
 pub fn generate_camera_ray(cam: &CameraRays, px: u32, py: u32, rng: &Rng) -> Ray {
-    let Vec2 { x: jx, y: jy } = rng.rng_2d(0, rng::DIM_PIXEL_X);
+    let Vec2 {
+        x: mut jx,
+        y: mut jy,
+    } = rng.rng_2d(0, rng::DIM_PIXEL_X);
+    // The unit square is left alone, so that the default rays stay as they were, bit for bit.
+    if cam.filter_width != 1.0 {
+        jx = 0.5 + cam.filter_width * (jx - 0.5);
+        jy = 0.5 + cam.filter_width * (jy - 0.5);
+    }
     if cam.ortho_half_height > 0.0 {
         return orthographic_ray(cam, px as f32 + jx, py as f32 + jy);
     }

@@ -47,7 +47,9 @@ pub fn render(scene: &RenderScene, job: &RenderJob, progress: &(dyn Fn(u64) + Sy
         .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
         .collect();
     let step = (PATHS_PER_PASS / (w as u64 * h as u64)).max(1) as u32;
-    let cam = CameraRays::new(&scene.camera, w, h).with_window(&scene.bounds());
+    let cam = CameraRays::new(&scene.camera, w, h)
+        .with_filter(s.filter_width)
+        .with_window(&scene.bounds());
     let mut film = job.film();
     let mut pixels = vec![PixelSums::default(); film.sum.len()];
     let aov_pixels = if film.aovs().is_empty() {

@@ -16,7 +16,7 @@ use super::caustics::{
     LightPath, MAX_CAUSTIC_HOPS, camera_link, camera_pdf, caustic_hit_weight, caustic_link,
     trace_light_subpath,
 };
-use super::lights::{light_pdf, sample_light, sky_pdf, sky_radiance};
+use super::lights::{LightSample, light_pdf, sample_light, sample_punctual, sky_pdf, sky_radiance};
 use super::rng::{self, Rng};
 use super::sampling::power_heuristic;
 /// Also reachable here, the path that callers outside the renderer (`crate::bench`) name.
@@ -24,7 +24,7 @@ use super::surface::{
     ShadingFrame, SurfaceHit, coated, geometry_agrees, needs_coat_normal, offset_ray_origin,
     shading_frame, surface_at, with_coat_normal,
 };
-use super::tables::RenderScene;
+use super::tables::{LIGHT_RECT, RenderScene};
 use super::texture::{alpha_test, material_at};
 use crate::bvh::traverse_closest_counted;
 use crate::film::NO_ID;
@@ -249,35 +249,19 @@ pub fn path_vertex<'a, const CAUSTICS: bool>(
         (0.0, Vec2::ZERO)
     };
 
-    // Next event estimation.
-    if !bsdf_is_delta(mat)
-        && !scene.emitters.is_empty()
-        && let Some(ls) = sample_light(scene, si.p, ng, u_light)
-    {
-        // A surface that light crosses sees lights on both sides; bsdf_eval says which
-        // of them it passes. Others only see those on the side of ng.
-        let cos_i = ls.wi.dot(ng);
-        let usable = if bsdf_transmits(mat) {
-            cos_i != 0.0
-        } else {
-            cos_i > 0.0
-        };
-        if usable {
-            let wi = frame.to_local(ls.wi);
-            let f = bsdf_eval(mat, wo, wi);
-            if f != Vec3::ZERO {
-                st.rays += 1;
-                if !wide.traverse_any(&Ray::new(ls.origin, ls.wi), ls.t_max, |t, u, v| {
-                    alpha_test(scene, t, u, v, false)
-                }) {
-                    let w = if ls.delta {
-                        1.0
-                    } else {
-                        power_heuristic(ls.pdf, bsdf_pdf(mat, wo, wi))
-                    };
-                    st.radiance += st.beta * f * ls.le * (w / ls.pdf);
-                }
+    // Next event estimation: the lights sampled in full, then the one picked.
+    if !bsdf_is_delta(mat) {
+        for k in 0..scene.lights_in_full {
+            if scene.lights[k as usize].kind != LIGHT_RECT
+                && let Some(ls) = sample_punctual(scene, k, si.p, ng, 1.0, Vec2::ZERO)
+            {
+                add_direct(scene, st, mat, &frame, wo, &ls);
             }
+        }
+        if !scene.emitters.is_empty()
+            && let Some(ls) = sample_light(scene, si.p, ng, u_light)
+        {
+            add_direct(scene, st, mat, &frame, wo, &ls);
         }
     }
 
@@ -291,6 +275,51 @@ pub fn path_vertex<'a, const CAUSTICS: bool>(
         u_lobe,
         u,
     })
+}
+
+/// Adds light sample `ls`, seen through `mat` at the vertex whose shading frame is `frame`
+/// towards `wo` (local), where its shadow ray is clear; weighted by the power heuristic
+/// against BSDF sampling where a BSDF ray could have found the light too.
+/// mirror: shaders/integrator.wgsl `add_direct`
+#[inline(always)]
+fn add_direct(
+    scene: &RenderScene,
+    st: &mut PathState,
+    mat: &Material,
+    frame: &ShadingFrame,
+    wo: Vec3,
+    ls: &LightSample,
+) {
+    // A surface that light crosses sees lights on both sides; bsdf_eval says which of them
+    // it passes. Others only see those on the side of ng.
+    let cos_i = ls.wi.dot(frame.ng);
+    let usable = if bsdf_transmits(mat) {
+        cos_i != 0.0
+    } else {
+        cos_i > 0.0
+    };
+    if !usable {
+        return;
+    }
+    let wi = frame.to_local(ls.wi);
+    let f = bsdf_eval(mat, wo, wi);
+    if f == Vec3::ZERO {
+        return;
+    }
+    st.rays += 1;
+    if !scene
+        .wide
+        .traverse_any(&Ray::new(ls.origin, ls.wi), ls.t_max, |t, u, v| {
+            alpha_test(scene, t, u, v, false)
+        })
+    {
+        let w = if ls.delta {
+            1.0
+        } else {
+            power_heuristic(ls.pdf, bsdf_pdf(mat, wo, wi))
+        };
+        st.radiance += st.beta * f * ls.le * (w / ls.pdf);
+    }
 }
 
 /// The numbers BSDF sampling at bounce `depth` reads from `rng` (lobe, direction), drawn

@@ -106,7 +106,9 @@ pub fn pick_light(scene: &RenderScene, u: Vec2) -> LightPick {
 
 /// Picks a light ([`pick_light`]) and a point (triangle) or direction (sky) on it for the
 /// light pair `u` (the vertex's `DIM_LIGHT_U` pair), as seen from surface point `p` with
-/// geometric normal `ng` facing the viewer. `None` when the point faces away.
+/// geometric normal `ng` facing the viewer. `None` when the point faces away, and for a
+/// light that next event estimation samples in full besides
+/// ([`RenderScene::lights_in_full`]).
 /// mirror: shaders/lights.wgsl `sample_light`
 pub fn sample_light(scene: &RenderScene, p: Vec3, ng: Vec3, u: Vec2) -> Option<LightSample> {
     let pick = pick_light(scene, u);
@@ -129,7 +131,11 @@ pub fn sample_light(scene: &RenderScene, p: Vec3, ng: Vec3, u: Vec2) -> Option<L
         });
     }
     if light & LIGHT_EMITTER != 0 {
-        return sample_punctual(scene, light & !LIGHT_EMITTER, p, ng, pick.pmf, u);
+        let index = light & !LIGHT_EMITTER;
+        if index < scene.lights_in_full && scene.lights[index as usize].kind != LIGHT_RECT {
+            return None;
+        }
+        return sample_punctual(scene, index, p, ng, pick.pmf, u);
     }
     let tri = &scene.tris[light as usize];
     let [a, b, c] = tri.corners();

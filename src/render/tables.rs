@@ -109,6 +109,10 @@ pub const LIGHT_SPOT: u32 = 1;
 pub const LIGHT_DIRECTIONAL: u32 = 2;
 pub const LIGHT_RECT: u32 = 3;
 
+/// The most punctual lights that next event estimation samples in full
+/// ([`RenderScene::lights_in_full`]): each costs a shadow ray at every vertex.
+pub const LIGHTS_IN_FULL_MAX: usize = 8;
+
 /// The bit of an entry of [`RenderScene::emitters`] that marks a punctual light: the other
 /// bits are its index in [`RenderScene::lights`].
 pub const LIGHT_EMITTER: u32 = 1 << 31;
@@ -164,6 +168,16 @@ pub struct RenderScene {
     /// Probability that next event estimation picks the sky (sampled uniformly over the
     /// sphere): 0 for a black sky, 1 with no emissive triangles, else 1/2.
     pub sky_pmf: f32,
+    /// How many of `lights`, from the first, next event estimation samples in full at
+    /// every vertex, each with a shadow ray of its own, besides the one emitter it picks:
+    /// all of them where there are at most [`LIGHTS_IN_FULL_MAX`], else none. A point, spot
+    /// or directional light has no area, so a sample of it is exact but for its shadow
+    /// ray, and picking among such lights is then the only noise they add (most of the
+    /// noise of a dataset's object under a point light and a grey world). Rect lights,
+    /// which have area, are left to the pick. The others are among the emitters only where
+    /// caustic light subpaths are traced, which start on them; a pick of one then adds
+    /// nothing.
+    pub lights_in_full: u32,
     pub camera: Camera,
     pub sky: Sky,
     /// The environment map's parameters (all zero for another sky).

@@ -173,6 +173,7 @@ impl Ctx<'_> {
             seed: r.seed.unwrap_or(d.seed),
             caustics: r.caustics.unwrap_or(d.caustics),
             branches: r.branches.or(d.branches),
+            filter_width: r.filter_width.unwrap_or(d.filter_width),
         };
         s.validate()
             .map_err(|(field, message)| self.invalid(format!("render.{field}"), message))?;

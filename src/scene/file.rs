@@ -96,6 +96,7 @@ pub struct RenderFile {
     pub seed: Option<u32>,
     pub caustics: Option<bool>,
     pub branches: Option<u32>,
+    pub filter_width: Option<f32>,
 }
 
 #[derive(Debug, Deserialize)]

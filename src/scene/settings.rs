@@ -2,7 +2,7 @@
 //! table of a scene file, over which a render request lays its own.
 
 /// How to render: the `[render]` table, after command-line overrides.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderSettings {
     pub width: u32,
     pub height: u32,
@@ -19,7 +19,15 @@ pub struct RenderSettings {
     /// costs about a path less its camera ray and first vertex. `None`: [`Self::branches`]
     /// decides.
     pub branches: Option<u32>,
+    /// The side, in pixels, of the square centred on a pixel over which its camera samples
+    /// fall uniformly (a box filter): 1 by default; below 1 sharper and aliased, down to 0,
+    /// every sample through the pixel's centre (the Zero123 script's `filter_width`
+    /// 0.01); above 1 softer.
+    pub filter_width: f32,
 }
+
+/// The widest [`RenderSettings::filter_width`], as Cycles' widest pixel filter.
+pub const MAX_FILTER_WIDTH: f32 = 10.0;
 
 /// Most pixels an image may have: 2^26 (8192 x 8192); the film alone then takes 768 MiB.
 pub const MAX_PIXELS: u64 = 1 << 26;
@@ -45,6 +53,7 @@ impl Default for RenderSettings {
             seed: 0,
             caustics: CAUSTICS_DEFAULT,
             branches: None,
+            filter_width: 1.0,
         }
     }
 }
@@ -77,6 +86,15 @@ impl RenderSettings {
         }
         if s.max_depth == 0 {
             return Err(("max_depth", "must be at least 1".into()));
+        }
+        if !(0.0..=MAX_FILTER_WIDTH).contains(&s.filter_width) {
+            return Err((
+                "filter_width",
+                format!(
+                    "must be from 0 to {MAX_FILTER_WIDTH} pixels, not {}",
+                    s.filter_width
+                ),
+            ));
         }
         if let Some(b) = s.branches
             && !(1..=MAX_BRANCHES).contains(&b)

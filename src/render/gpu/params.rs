@@ -68,7 +68,10 @@ pub struct Params {
     pub branch_weight: f32,
     /// Half an orthographic camera's view height; 0 for a perspective camera.
     pub ortho_half_height: f32,
-    pub _pad: [u32; 2],
+    /// [`RenderScene::lights_in_full`].
+    pub lights_in_full: u32,
+    /// [`CameraRays::filter_width`].
+    pub filter_width: f32,
     /// [`CameraRays::window`]: the pixels whose camera rays may meet the scene.
     pub window: [u32; 4],
 }
@@ -111,7 +114,8 @@ impl Params {
             scene_radius,
             branch_weight,
             ortho_half_height,
-            _pad,
+            lights_in_full,
+            filter_width,
             window,
         })
     }
@@ -143,6 +147,7 @@ impl Params {
             num_caustic_targets: scene.caustic_targets.len() as u32,
             scene_center: scene.scene_sphere.0.into(),
             scene_radius: scene.scene_sphere.1,
+            lights_in_full: scene.lights_in_full,
             ..Self::default()
         }
     }
@@ -150,7 +155,9 @@ impl Params {
     /// These parameters with the camera and image of a render of `settings` of a scene
     /// within `bounds`, covering every row and no samples yet.
     pub fn with_settings(self, camera: &Camera, settings: &RenderSettings, bounds: &Aabb) -> Self {
-        let c = CameraRays::new(camera, settings.width, settings.height).with_window(bounds);
+        let c = CameraRays::new(camera, settings.width, settings.height)
+            .with_filter(settings.filter_width)
+            .with_window(bounds);
         let branches = settings.branches(self.num_caustic_targets != 0);
         Self {
             cam_position: c.position.into(),
@@ -168,6 +175,7 @@ impl Params {
             aperture: c.aperture,
             focus_distance: c.focus_distance,
             ortho_half_height: c.ortho_half_height,
+            filter_width: c.filter_width,
             window: c.window,
             sample_start: 0,
             sample_end: 0,
