@@ -331,3 +331,50 @@ fn a_denoiser_keeps_to_its_threads() {
         .fold(0.0f32, f32::max);
     assert!(worst < 1e-3, "one thread differs by {worst}");
 }
+
+/// A transparent film is denoised within the rectangle its samples covered, 16 pixels wider
+/// on each side: outside it stays 0; inside it is the denoised crop.
+#[test]
+fn a_transparent_film_is_denoised_where_it_is_covered() {
+    use meshtrace::denoise::{CROP_MARGIN, covered_rectangle};
+    use meshtrace::film::Aov;
+    let dir = TempDir::new("denoise-crop");
+    dir.write(
+        "quad.obj",
+        "v -0.5 -0.5 0\nv 0.5 -0.5 0\nv 0.5 0.5 0\nv -0.5 0.5 0\nf 1 2 3 4\n",
+    );
+    let scene = meshtrace::scene::load_scene(&dir.write(
+        "scene.toml",
+        "[camera]\nposition = [0.0, 0.0, 10.0]\nlook_at = [0.0, 0.0, 0.0]\nvfov = 20.0\n\
+         [render]\nwidth = 96\nheight = 64\nspp = 4\n[sky]\ncolor = [1.0, 1.0, 1.0]\n\
+         [[objects]]\nmesh = \"quad.obj\"\n",
+    ))
+    .expect("scene");
+    let rs = RenderScene::new(&scene, &meshtrace::bvh::BuildParams::default()).expect("BVH");
+    let job = meshtrace::render::RenderJob::new(scene.settings)
+        .with_aovs(Aov::Albedo.bit() | Aov::Normal.bit(), true);
+    let mut film = common::cpu_render(&rs, &job);
+    let [x0, y0, x1, y1] = covered_rectangle(&film);
+    // The quad spans 1 / (2 · 10 · tan 10°) = 28.4 % of the height: 18 pixels about the
+    // centre (32, 48), so the rectangle is 18 + 2 · 16 pixels each way.
+    let (w, h) = (x1 - x0, y1 - y0);
+    assert!((50..=54).contains(&w) && (50..=54).contains(&h), "{x0} {y0} {x1} {y1}");
+    assert!(x0 >= CROP_MARGIN && x1 <= 96 - CROP_MARGIN);
+    let before = film.mean();
+    Denoiser::new()
+        .expect("an OIDN CPU device")
+        .denoise_film(&mut film)
+        .expect("denoise_film");
+    let after = film.mean();
+    let mut changed = 0;
+    for (i, (a, b)) in after.iter().zip(&before).enumerate() {
+        let (x, y) = (i as u32 % 96, i as u32 / 96);
+        if (x0..x1).contains(&x) && (y0..y1).contains(&y) {
+            changed += usize::from(a != b);
+        } else {
+            assert_eq!(*a, Vec3::ZERO, "pixel ({x}, {y}) outside the rectangle");
+            assert_eq!(*b, Vec3::ZERO);
+        }
+    }
+    assert!(changed > 18 * 18 / 2, "only {changed} pixels denoised");
+}
