@@ -356,9 +356,12 @@ fn a_transparent_film_is_denoised_where_it_is_covered() {
     let mut film = common::cpu_render(&rs, &job);
     let [x0, y0, x1, y1] = covered_rectangle(&film);
     // The quad spans 1 / (2 · 10 · tan 10°) = 28.4 % of the height: 18 pixels about the
-    // centre (32, 48), so the rectangle is 18 + 2 · 16 pixels each way.
+    // centre (48, 32), so the rectangle is 18 + 2 · 16 pixels each way.
     let (w, h) = (x1 - x0, y1 - y0);
-    assert!((50..=54).contains(&w) && (50..=54).contains(&h), "{x0} {y0} {x1} {y1}");
+    assert!(
+        (50..=54).contains(&w) && (50..=54).contains(&h),
+        "{x0} {y0} {x1} {y1}"
+    );
     assert!(x0 >= CROP_MARGIN && x1 <= 96 - CROP_MARGIN);
     let before = film.mean();
     Denoiser::new()
