@@ -50,6 +50,20 @@ fn quad_obj(x0: f32, y0: f32, x1: f32, y1: f32) -> String {
     format!("v {x0} {y0} 0\nv {x1} {y0} 0\nv {x1} {y1} 0\nv {x0} {y1} 0\nf 1 2 3 4\n")
 }
 
+/// A plane covering x < 0, seen from 5 units up the z axis, so that the middle column of
+/// pixel centres of an odd width lies on its edge: `render` is the `[render]` table's body,
+/// `rest` the object's further keys and the tables after it.
+fn half_plane(dir: &TempDir, render: &str, rest: &str) -> Scene {
+    dir.write("half.obj", quad_obj(-100.0, -100.0, 0.0, 100.0));
+    load(
+        dir,
+        &format!(
+            "[camera]\nposition = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\n[render]\n{render}\n\
+             [[objects]]\nmesh = \"half.obj\"\n{rest}\n"
+        ),
+    )
+}
+
 #[test]
 fn depth_of_a_plane_is_its_distance_along_the_view_axis() {
     let dir = TempDir::new("aov-depth");
@@ -182,23 +196,10 @@ sphere = { center = [0.0, 0.0, 0.0], radius = 2.0 }
 #[test]
 fn alpha_is_one_half_along_an_edge_through_pixel_centres() {
     let dir = TempDir::new("aov-alpha");
-    // The plane covers x < 0; the camera's middle column of pixel centres lies on x = 0.
-    dir.write("half.obj", quad_obj(-100.0, -100.0, 0.0, 100.0));
-    let scene = load(
+    let scene = half_plane(
         &dir,
-        r#"
-[camera]
-position = [0.0, 0.0, 5.0]
-look_at = [0.0, 0.0, 0.0]
-[render]
-width = 33
-height = 21
-spp = 256
-[sky]
-color = [1.0, 1.0, 1.0]
-[[objects]]
-mesh = "half.obj"
-"#,
+        "width = 33\nheight = 21\nspp = 256",
+        "[sky]\ncolor = [1.0, 1.0, 1.0]",
     );
     let (w, h) = (33usize, 21usize);
     let films = render_both("alpha", &scene, &[Aov::Alpha], false);
@@ -237,21 +238,10 @@ mesh = "half.obj"
 #[test]
 fn filter_width_sets_how_far_a_pixel_sees() {
     let dir = TempDir::new("aov-filter");
-    dir.write("half.obj", quad_obj(-100.0, -100.0, 0.0, 100.0));
-    let mut scene = load(
+    let mut scene = half_plane(
         &dir,
-        r#"
-[camera]
-position = [0.0, 0.0, 5.0]
-look_at = [0.0, 0.0, 0.0]
-[render]
-width = 33
-height = 21
-spp = 256
-filter_width = 0.0
-[[objects]]
-mesh = "half.obj"
-"#,
+        "width = 33\nheight = 21\nspp = 256\nfilter_width = 0.0",
+        "",
     );
     let w = 33usize;
     let films = render_both("filter 0", &scene, &[Aov::Alpha], true);
@@ -459,27 +449,11 @@ fn exr_holds_dotted_channels_with_unsigned_ids() {
 #[test]
 fn transparent_png_has_coverage_alpha_and_no_sky_in_its_colour() {
     let dir = TempDir::new("aov-transparent");
-    dir.write("half.obj", quad_obj(-100.0, -100.0, 0.0, 100.0));
-    let scene = load(
+    let scene = half_plane(
         &dir,
-        r#"
-[camera]
-position = [0.0, 0.0, 5.0]
-look_at = [0.0, 0.0, 0.0]
-[render]
-width = 9
-height = 5
-spp = 16
-max_depth = 2
-[sky]
-color = [0.5, 0.5, 0.5]
-[materials.white]
-type = "diffuse"
-albedo = [1.0, 1.0, 1.0]
-[[objects]]
-mesh = "half.obj"
-material = "white"
-"#,
+        "width = 9\nheight = 5\nspp = 16\nmax_depth = 2",
+        "material = \"white\"\n[sky]\ncolor = [0.5, 0.5, 0.5]\n\
+         [materials.white]\ntype = \"diffuse\"\nalbedo = [1.0, 1.0, 1.0]",
     );
     for (device, film) in render_both("transparent", &scene, &[], true) {
         assert!(film.aov_values(Aov::Alpha).is_some());
