@@ -178,7 +178,7 @@ impl Splats {
 /// views read it.
 pub fn first_hits(scene: &RenderScene, settings: &RenderSettings, samples: u32, aovs: u32) -> Film {
     let (w, h) = (settings.width, settings.height);
-    let cam = CameraRays::new(&scene.camera, w, h);
+    let cam = CameraRays::new(&scene.camera, w, h).with_filter(settings.filter_width);
     let sums: Vec<AovSums> = (0..w * h)
         .into_par_iter()
         .map(|i| {
