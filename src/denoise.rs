@@ -180,8 +180,9 @@ pub const CROP_MARGIN: u32 = 16;
 /// a third of the image or less is denoised.
 pub fn covered_rectangle(film: &Film) -> [u32; 4] {
     let whole = [0, 0, film.width, film.height];
-    let alpha = match film.aov_values(Aov::Alpha).as_deref() {
-        Some([AovValues::F32(a), ..]) if film.transparent => a.clone(),
+    let values = film.aov_values(Aov::Alpha);
+    let alpha = match values.as_deref() {
+        Some([AovValues::F32(a), ..]) if film.transparent => a,
         _ => return whole,
     };
     let (mut lo, mut hi) = ([u32::MAX; 2], [0u32; 2]);
