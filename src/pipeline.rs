@@ -44,7 +44,7 @@ pub enum PipelineError {
 /// in [`Scene::warnings`].
 pub fn load(input: &Path, request: &RenderRequest) -> Result<Scene, PipelineError> {
     let text = input.to_string_lossy();
-    let mut scene = match text.strip_prefix("builtin:") {
+    let scene = match text.strip_prefix("builtin:") {
         Some(_) if request.up.is_some() => {
             return Err(RequestError {
                 field: "up",
@@ -56,6 +56,14 @@ pub fn load(input: &Path, request: &RenderRequest) -> Result<Scene, PipelineErro
         Some(name) => builtin::load_builtin(name)?,
         None => load::load_scene_with(input, &Fs, &request.bare_options())?,
     };
+    stage(scene, request)
+}
+
+/// Stages a loaded `scene` as `request` asks, as [`load`] does: the sky replaced by the
+/// requested environment, textures larger than the requested maximum scaled down (each
+/// with a warning in [`Scene::warnings`]). For scenes that come from elsewhere than a
+/// file (the Python API's dictionaries).
+pub fn stage(mut scene: Scene, request: &RenderRequest) -> Result<Scene, PipelineError> {
     if let Some(env) = &request.environment {
         let texture = crate::scene::texture::load_environment(env, &mut scene.textures, &Fs)
             .map_err(|message| RequestError {

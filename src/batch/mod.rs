@@ -156,8 +156,7 @@ pub fn shard(tasks: &[Task], index: u32, count: u32) -> Vec<Task> {
 
 /// The camera of view `view` of `job` for a scene whose own camera is `own` and, for a
 /// bare mesh, whose studio framing is of `framed`. One view keeps the scene's camera
-/// unless the job sets an angle; several go around evenly in azimuth: a bare mesh framed
-/// as `render` frames it, a scene about the point its camera looks at. `None` when the
+/// unless the job sets an angle; several go around as [`orbit`] puts them. `None` when the
 /// view cannot be framed (a degenerate direction).
 pub fn view_camera(
     job: &Job,
@@ -168,21 +167,35 @@ pub fn view_camera(
     if job.views == 1 && job.elevation.is_none() && job.azimuth.is_none() {
         return Some(own.clone());
     }
-    let step = 360.0 * view as f32 / job.views as f32;
+    orbit(job.views, view, job.azimuth, job.elevation, own, framed)
+}
+
+/// View `view` of `views` evenly spaced in azimuth (degrees, from `azimuth`) at
+/// `elevation` (degrees): about a bare mesh framed as `render` frames it (`framed`, its
+/// studio framing's bounds, with the studio's angles by default), or about the point the
+/// scene's camera `own` looks at, at the same distance, Y up (with that camera's angles by
+/// default). `None` when the view cannot be framed (a degenerate direction).
+pub fn orbit(
+    views: u32,
+    view: u32,
+    azimuth: Option<f32>,
+    elevation: Option<f32>,
+    own: &Camera,
+    framed: Option<&crate::math::Aabb>,
+) -> Option<Camera> {
+    let step = 360.0 * view as f32 / views.max(1) as f32;
     match framed {
         Some(bounds) => {
-            let azimuth = job.azimuth.unwrap_or(studio::AZIMUTH) + step;
-            let elevation = job.elevation.unwrap_or(studio::ELEVATION);
+            let azimuth = azimuth.unwrap_or(studio::AZIMUTH) + step;
+            let elevation = elevation.unwrap_or(studio::ELEVATION);
             studio::orbit_camera(bounds, azimuth, elevation)
         }
         None => {
             // About the point the scene's camera looks at, at the same distance; Y up.
             let target = own.position + own.forward * own.focus_distance;
             let back = -own.forward;
-            let azimuth = job.azimuth.unwrap_or(back.x.atan2(back.z).to_degrees()) + step;
-            let elevation = job
-                .elevation
-                .unwrap_or(back.y.clamp(-1.0, 1.0).asin().to_degrees());
+            let azimuth = azimuth.unwrap_or(back.x.atan2(back.z).to_degrees()) + step;
+            let elevation = elevation.unwrap_or(back.y.clamp(-1.0, 1.0).asin().to_degrees());
             let (a, e) = (azimuth.to_radians(), elevation.to_radians());
             let towards = glam::Vec3::new(a.sin() * e.cos(), e.sin(), a.cos() * e.cos());
             Camera::new(

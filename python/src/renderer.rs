@@ -1,0 +1,252 @@
+//! `meshtrace.Renderer`: one device (a GPU with its compiled kernels, or the CPU with its
+//! threads) kept across renders and scenes. A render releases the GIL and runs on a worker
+//! thread while the calling thread watches for Ctrl-C, which stops it at the next pass.
+
+use crate::camera::Camera;
+use crate::errors;
+use crate::output::Output;
+use crate::scene;
+use meshtrace::film::Aov;
+use meshtrace::pipeline::Prepared;
+use meshtrace::render::backend::{Backend, DeviceChoice};
+use meshtrace::render::gpu::Accel;
+use meshtrace::request::RenderRequest;
+use pyo3::prelude::*;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{RecvTimeoutError, channel};
+use std::time::Duration;
+
+/// How often a running render's caller looks for Ctrl-C.
+const SIGNAL_CHECK: Duration = Duration::from_millis(50);
+
+/// A device to render on, opened once: `device` is `auto` (a hardware GPU, else the CPU),
+/// `cpu` or `gpu` (any Vulkan adapter, lavapipe included); `adapter` an index or a name
+/// substring from `meshtrace adapters`; `accel` `auto`, `software` or `hardware` (ray
+/// queries); `threads` the CPU renderer's worker threads (all cores by default).
+#[pyclass(module = "meshtrace", frozen)]
+pub struct Renderer {
+    backend: Backend,
+    /// Why the CPU renders when `auto` found no usable GPU.
+    notice: Option<String>,
+    pool: Option<rayon::ThreadPool>,
+}
+
+fn named<T: Copy>(field: &str, text: &str, names: &[(&str, T)]) -> PyResult<T> {
+    names
+        .iter()
+        .find(|(n, _)| *n == text)
+        .map(|&(_, v)| v)
+        .ok_or_else(|| {
+            let valid: Vec<&str> = names.iter().map(|(n, _)| *n).collect();
+            errors::message(format!(
+                "{field}: `{text}` is not one of {}",
+                valid.join(", ")
+            ))
+        })
+}
+
+impl Renderer {
+    /// Runs `work` on the renderer's threads.
+    fn install<T: Send>(&self, work: impl FnOnce() -> T + Send) -> T {
+        match &self.pool {
+            Some(pool) => pool.install(work),
+            None => work(),
+        }
+    }
+}
+
+/// Runs `work` on a worker thread without the GIL while this thread checks for signals;
+/// on Ctrl-C, sets `cancel` (the render stops at its next pass), waits for `work` and
+/// raises `KeyboardInterrupt`.
+fn interruptible<T: Send>(
+    py: Python<'_>,
+    cancel: &AtomicBool,
+    work: impl FnOnce() -> T + Send,
+) -> PyResult<T> {
+    py.detach(|| {
+        std::thread::scope(|s| {
+            let (done, finished) = channel();
+            s.spawn(move || {
+                // The receiver waits until this is sent: a send cannot fail.
+                let _ = done.send(work());
+            });
+            let mut interrupted = None;
+            loop {
+                match finished.recv_timeout(SIGNAL_CHECK) {
+                    Ok(value) => return interrupted.map_or(Ok(value), Err),
+                    Err(RecvTimeoutError::Timeout) if interrupted.is_none() => {
+                        if let Err(e) = Python::attach(|py| py.check_signals()) {
+                            cancel.store(true, Ordering::SeqCst);
+                            interrupted = Some(e);
+                        }
+                    }
+                    Err(RecvTimeoutError::Timeout) => {}
+                    Err(RecvTimeoutError::Disconnected) => {
+                        return Err(pyo3::exceptions::PyRuntimeError::new_err(
+                            "the render thread stopped without a result",
+                        ));
+                    }
+                }
+            }
+        })
+    })
+}
+
+#[pymethods]
+impl Renderer {
+    #[new]
+    #[pyo3(signature = (device="auto", *, adapter=None, accel=None, threads=None))]
+    fn new(
+        py: Python<'_>,
+        device: &str,
+        adapter: Option<String>,
+        accel: Option<&str>,
+        threads: Option<usize>,
+    ) -> PyResult<Self> {
+        let choice = named(
+            "device",
+            device,
+            &[
+                ("auto", DeviceChoice::Auto),
+                ("cpu", DeviceChoice::Cpu),
+                ("gpu", DeviceChoice::Gpu),
+            ],
+        )?;
+        let accel = accel
+            .map(|a| {
+                named(
+                    "accel",
+                    a,
+                    &[
+                        ("auto", Accel::Auto),
+                        ("software", Accel::Software),
+                        ("hardware", Accel::Hardware),
+                    ],
+                )
+            })
+            .transpose()?;
+        let request = RenderRequest {
+            device: Some(choice),
+            adapter,
+            accel,
+            ..Default::default()
+        };
+        request.validate().map_err(|e| errors::error(&e))?;
+        let pool = match threads {
+            None => None,
+            Some(0) => return Err(errors::message("threads: must be at least 1")),
+            Some(n) => Some(
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .build()
+                    .map_err(|e| errors::message(format!("threads: cannot start them: {e}")))?,
+            ),
+        };
+        let (backend, notice) = py
+            .detach(|| request.backend())
+            .map_err(|e| errors::error(&e))?;
+        Ok(Self {
+            backend,
+            notice,
+            pool,
+        })
+    }
+
+    /// `cpu` or `gpu`: the renderer chosen.
+    #[getter]
+    fn device(&self) -> &'static str {
+        match self.backend {
+            Backend::Cpu => "cpu",
+            Backend::Gpu(_) => "gpu",
+        }
+    }
+
+    /// The device's name: the adapter's with how it finds hits, or "the CPU".
+    #[getter]
+    fn name(&self) -> String {
+        self.backend.name()
+    }
+
+    /// Why the CPU renders where `device="auto"` found no usable GPU; else None.
+    #[getter]
+    fn notice(&self) -> Option<String> {
+        self.notice.clone()
+    }
+
+    /// Renders `scene` (a Scene, or a path to load) from its own camera or `camera`, with
+    /// the command line's settings under the same names; those left None keep the scene's
+    /// own (a scene file's `[render]`) or the defaults. `aovs` lists the images to add
+    /// beside `color`: depth, normal, albedo, alpha, object_id, material_id, bvh_cost.
+    /// Returns an Output, a mapping of NumPy arrays. Ctrl-C stops the render at its next
+    /// pass and raises KeyboardInterrupt.
+    #[pyo3(signature = (
+        scene, *, camera=None, width=None, height=None, spp=None, max_depth=None, seed=None,
+        caustics=None, branches=None, filter_width=None, aovs=None, transparent=None,
+        geometry_only=None, denoise=None, up=None, environment=None, max_texture_size=None
+    ))]
+    #[allow(clippy::too_many_arguments)]
+    fn render(
+        &self,
+        py: Python<'_>,
+        scene: &Bound<'_, PyAny>,
+        camera: Option<&Camera>,
+        width: Option<u32>,
+        height: Option<u32>,
+        spp: Option<u32>,
+        max_depth: Option<u32>,
+        seed: Option<u32>,
+        caustics: Option<bool>,
+        branches: Option<u32>,
+        filter_width: Option<f32>,
+        aovs: Option<Vec<String>>,
+        transparent: Option<bool>,
+        geometry_only: Option<bool>,
+        denoise: Option<bool>,
+        up: Option<&str>,
+        environment: Option<PathBuf>,
+        max_texture_size: Option<u32>,
+    ) -> PyResult<Output> {
+        let aov = aovs
+            .map(|names| Aov::parse_list(&names.join(",")))
+            .transpose()
+            .map_err(|e| errors::message(format!("aovs: {e}")))?;
+        let request = RenderRequest {
+            width,
+            height,
+            spp,
+            max_depth,
+            seed,
+            caustics,
+            branches,
+            filter_width,
+            aov,
+            transparent,
+            geometry_only,
+            denoise,
+            up: scene::up_axis(up)?,
+            environment,
+            max_texture_size,
+            ..Default::default()
+        };
+        request.validate().map_err(|e| errors::error(&e))?;
+        let scene = scene::scene_arg(py, scene)?;
+        let mut staged = scene.get().staged(py, &request)?;
+        if let Some(c) = camera {
+            staged.camera = c.inner.clone();
+        }
+        let cancel = Arc::new(AtomicBool::new(false));
+        let film = interruptible(py, &cancel, || {
+            let mut prepared = Prepared::from_scene(staged, &request)?;
+            prepared.job.cancel = Some(cancel.clone());
+            self.install(|| prepared.render(&self.backend, &|_| {}))
+        })?
+        .map_err(|e| errors::error(&e))?;
+        Output::new(py, film)
+    }
+
+    fn __repr__(&self) -> String {
+        format!("<meshtrace.Renderer on {}>", self.backend.name())
+    }
+}
