@@ -140,6 +140,7 @@ def load(
     up: Optional[Literal["x", "y", "z"]] = None,
     environment: Optional[_Path] = None,
     max_texture_size: Optional[int] = None,
+    studio: bool = True,
 ) -> Scene: ...
 def save(output: Output, path: _Path, *, bit_depth: Optional[Literal[8, 16]] = None) -> None: ...
 def orbit(

@@ -31,11 +31,12 @@ pub struct Scene {
 }
 
 /// The loading part of a request: the fields that decide how an input is staged.
-pub fn loading(request: &RenderRequest) -> RenderRequest {
+fn loading(request: &RenderRequest) -> RenderRequest {
     RenderRequest {
         up: request.up,
         environment: request.environment.clone(),
         max_texture_size: request.max_texture_size,
+        without_studio: request.without_studio,
         ..Default::default()
     }
 }
@@ -86,8 +87,9 @@ impl Scene {
         py: Python<'_>,
         request: &RenderRequest,
     ) -> PyResult<meshtrace::scene::Scene> {
-        let wanted = loading(request);
-        if wanted == RenderRequest::default() || wanted == self.options {
+        // What the render leaves unset, the scene's own loading keeps.
+        let wanted = loading(request).over(&self.options);
+        if wanted == self.options {
             return Ok(self.scene.clone());
         }
         let source = self.source.clone();
@@ -217,20 +219,24 @@ fn open(py: Python<'_>, source: Source, options: RenderRequest) -> PyResult<Scen
 /// built-in scene (`builtin:cornell`). `up` turns a bare mesh (`x`, `y` or `z`; detected
 /// when None), `environment` lights it with an equirectangular image instead of its sky,
 /// `max_texture_size` scales larger textures down: the command line's `--up`, `--env` and
-/// `--max-texture-size`.
+/// `--max-texture-size`. `studio=False` leaves a bare mesh's studio out (its ground and
+/// its light: a black sky), for a caller that lights it with `environment`, as the dataset
+/// presets leave it out.
 #[pyfunction]
-#[pyo3(signature = (path, *, up=None, environment=None, max_texture_size=None))]
+#[pyo3(signature = (path, *, up=None, environment=None, max_texture_size=None, studio=true))]
 pub fn load(
     py: Python<'_>,
     path: PathBuf,
     up: Option<&str>,
     environment: Option<PathBuf>,
     max_texture_size: Option<u32>,
+    studio: bool,
 ) -> PyResult<Scene> {
     let options = RenderRequest {
         up: up_axis(up)?,
         environment,
         max_texture_size,
+        without_studio: !studio,
         ..Default::default()
     };
     options.validate().map_err(|e| errors::error(&e))?;

@@ -109,3 +109,40 @@ def test_save_writes_what_the_command_line_writes(cpu, tmp_path):
     out.save(tmp_path / "b.png", bit_depth=16)
     with pytest.raises(mt.MeshtraceError, match="bit_depth"):
         out.save(tmp_path / "c.png", bit_depth=12)
+
+
+def test_without_the_studio_the_mask_holds_the_mesh_alone(cpu, glb, repo):
+    env = repo / "assets" / "env" / "studio.hdr"
+    staged = cpu.render(mt.load(glb), **SMALL, transparent=True)
+    bare = mt.load(glb, studio=False, environment=env)
+    alone = cpu.render(bare, **SMALL, transparent=True)
+    # The studio's ground covers the frame's bottom; without it the mesh leaves sky there.
+    assert staged["alpha"][-1].min() == 1.0 and alone["alpha"][-1].max() == 0.0
+    assert alone["color"].max() > 0.0, "lit by the environment"
+    # A render that asks for another environment keeps the scene's studio=False.
+    park = repo / "assets" / "env" / "rooitou_park_256x128.hdr"
+    other = cpu.render(bare, **SMALL, transparent=True, environment=park)
+    assert np.array_equal(other["alpha"], alone["alpha"])
+    assert not np.array_equal(other["color"], alone["color"])
+
+
+def test_the_dataset_example_writes_a_dataset(repo, tmp_path):
+    import subprocess
+    import sys
+
+    meshes = tmp_path / "meshes"
+    meshes.mkdir()
+    for name in ("materials_joined.glb", "vertex_colors.glb"):
+        (meshes / name).write_bytes((repo / "tests/data/gltf/corpus" / name).read_bytes())
+    (meshes / "broken.obj").write_text("v 0 0 0\n")
+    done = subprocess.run(
+        [sys.executable, str(repo / "examples" / "dataset.py"), meshes, tmp_path / "out",
+         "--views", "2", "--spp", "1", "--size", "16", "--device", "cpu"],
+        capture_output=True, text=True,
+    )
+    assert done.returncode == 1, "one mesh failed"
+    assert "broken.obj" in done.stderr and "2 of 3 meshes, 4 images" in done.stdout
+    for stem in ("materials_joined", "vertex_colors"):
+        folder = tmp_path / "out" / stem
+        assert sorted(p.name for p in folder.iterdir()) == [
+            "000.aovs.exr", "000.png", "001.aovs.exr", "001.png", "transforms.json"]
