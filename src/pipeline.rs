@@ -131,6 +131,45 @@ impl Finish {
     }
 }
 
+/// What a render of `settings` traces, as `request` asks: the sample range (a part's, or
+/// all), the AOVs it saves plus the denoiser's guides, transparency, geometry only; and
+/// what its film gets before it is written (the denoiser, made now).
+fn job(
+    settings: RenderSettings,
+    request: &RenderRequest,
+) -> Result<(RenderJob, Finish), PipelineError> {
+    #[cfg(feature = "denoise")]
+    let denoiser = if request.denoise() {
+        Some(std::sync::Mutex::new(Denoiser::with_threads(
+            rayon::current_num_threads(),
+        )?))
+    } else {
+        None
+    };
+    let saved_aovs = request.aov_mask();
+    // The denoiser is guided by the first surface's albedo and normal, which the film
+    // then holds whether or not they are written.
+    let guides = if request.denoise() {
+        Aov::Albedo.bit() | Aov::Normal.bit()
+    } else {
+        0
+    };
+    let samples = match request.part {
+        Some(p) => PartHeader::range(p.index, p.count, settings.spp),
+        None => 0..settings.spp,
+    };
+    let job = RenderJob::new(settings)
+        .with_aovs(saved_aovs | guides, request.transparent())
+        .with_geometry(request.geometry_only())
+        .with_samples(samples);
+    let finish = Finish {
+        saved_aovs,
+        #[cfg(feature = "denoise")]
+        denoiser,
+    };
+    Ok((job, finish))
+}
+
 impl Prepared {
     /// Loads `input` ([`load`]) and prepares it; the scene's warnings go to `warn`.
     pub fn new(
@@ -159,42 +198,14 @@ impl Prepared {
         let settings: RenderSettings = request.settings(scene.settings)?;
         // The tables follow the settings too: `caustics` decides the caustic targets.
         scene.settings = settings;
-        // The denoiser is made before the tables are built, so that a missing Open Image
-        // Denoise fails before that work.
-        #[cfg(feature = "denoise")]
-        let denoiser = if request.denoise() {
-            Some(std::sync::Mutex::new(Denoiser::with_threads(
-                rayon::current_num_threads(),
-            )?))
-        } else {
-            None
-        };
-        let saved_aovs = request.aov_mask();
-        // The denoiser is guided by the first surface's albedo and normal, which the film
-        // then holds whether or not they are written.
-        let guides = if request.denoise() {
-            Aov::Albedo.bit() | Aov::Normal.bit()
-        } else {
-            0
-        };
-        let samples = match request.part {
-            Some(p) => PartHeader::range(p.index, p.count, settings.spp),
-            None => 0..settings.spp,
-        };
-        let job = RenderJob::new(settings)
-            .with_aovs(saved_aovs | guides, request.transparent())
-            .with_geometry(request.geometry_only())
-            .with_samples(samples);
+        // The job first: a missing Open Image Denoise fails before the tables are built.
+        let (job, finish) = job(settings, request)?;
         Ok(Self {
             scene: RenderScene::new(&scene, &BuildParams::default())?,
             job,
             part: request.part,
             framed: scene.framed,
-            finish: Finish {
-                saved_aovs,
-                #[cfg(feature = "denoise")]
-                denoiser,
-            },
+            finish,
         })
     }
 
@@ -254,6 +265,23 @@ impl Views {
     /// The job every view renders (a caller may set its cancel flag).
     pub fn job_mut(&mut self) -> &mut RenderJob {
         &mut self.job
+    }
+
+    /// Renders from now on as `request` asks, its settings laid over `own` (the scene's
+    /// own `[render]`): for a caller that keeps a scene's tables on the device for renders
+    /// that differ in settings as well as in camera (the Python API). The tables stay: a
+    /// request that needs others, caustic targets where there were none or none where
+    /// there were ([`RenderScene::caustic_tables`]), must be prepared anew.
+    pub fn set_request(
+        &mut self,
+        own: RenderSettings,
+        request: &RenderRequest,
+    ) -> Result<(), PipelineError> {
+        request.validate()?;
+        let (job, finish) = job(request.settings(own)?, request)?;
+        self.job = job;
+        self.finish = finish;
+        Ok(())
     }
 
     /// Renders the view from `camera`.

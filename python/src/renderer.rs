@@ -5,18 +5,22 @@
 use crate::camera::Camera;
 use crate::errors;
 use crate::output::Output;
-use crate::scene;
-use meshtrace::film::Aov;
-use meshtrace::pipeline::Prepared;
+use crate::scene::{self, Kept, Scene};
+use meshtrace::film::{Aov, Film};
+use meshtrace::pipeline::{PipelineError, Prepared};
+use meshtrace::render::RenderScene;
 use meshtrace::render::backend::{Backend, DeviceChoice};
 use meshtrace::render::gpu::Accel;
 use meshtrace::request::RenderRequest;
 use pyo3::prelude::*;
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{RecvTimeoutError, channel};
 use std::time::Duration;
+
+/// The number of the next renderer opened.
+static NEXT_ID: AtomicU64 = AtomicU64::new(0);
 
 /// How often a running render's caller looks for Ctrl-C.
 const SIGNAL_CHECK: Duration = Duration::from_millis(50);
@@ -27,6 +31,8 @@ const SIGNAL_CHECK: Duration = Duration::from_millis(50);
 /// queries); `threads` the CPU renderer's worker threads (all cores by default).
 #[pyclass(module = "meshtrace", frozen)]
 pub struct Renderer {
+    /// This renderer's number in the process, which a scene's kept tables name.
+    pub id: u64,
     backend: Backend,
     /// Why the CPU renders when `auto` found no usable GPU.
     notice: Option<String>,
@@ -48,6 +54,36 @@ fn named<T: Copy>(field: &str, text: &str, names: &[(&str, T)]) -> PyResult<T> {
 }
 
 impl Renderer {
+    /// Renders `scene` as staged from `camera`, on the tables it keeps for this renderer
+    /// where they suit the request, else on tables built now (and then kept).
+    fn render_kept(
+        &self,
+        scene: &Scene,
+        camera: &meshtrace::scene::camera::Camera,
+        request: &RenderRequest,
+        cancel: &Arc<AtomicBool>,
+    ) -> Result<Film, PipelineError> {
+        let own = scene.scene.settings;
+        let caustic_tables = RenderScene::caustic_tables(&request.settings(own)?, camera);
+        let mut views = match scene.take_prepared(self.id, caustic_tables) {
+            Some(views) => views,
+            None => {
+                let mut staged = scene.scene.clone();
+                staged.camera = camera.clone();
+                Prepared::from_scene(staged, request)?.views(&self.backend)?
+            }
+        };
+        views.set_request(own, request)?;
+        views.job_mut().cancel = Some(cancel.clone());
+        let film = self.install(|| views.render(camera, &|_| {}))?;
+        scene.keep_prepared(Kept {
+            renderer: self.id,
+            caustic_tables,
+            views,
+        });
+        Ok(film)
+    }
+
     /// Runs `work` on the renderer's threads.
     fn install<T: Send>(&self, work: impl FnOnce() -> T + Send) -> T {
         match &self.pool {
@@ -148,6 +184,7 @@ impl Renderer {
             .detach(|| request.backend())
             .map_err(|e| errors::error(&e))?;
         Ok(Self {
+            id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
             backend,
             notice,
             pool,
@@ -232,16 +269,24 @@ impl Renderer {
         };
         request.validate().map_err(|e| errors::error(&e))?;
         let scene = scene::scene_arg(py, scene)?;
-        let mut staged = scene.get().staged(py, &request)?;
-        if let Some(c) = camera {
-            staged.camera = c.inner.clone();
-        }
+        let scene = scene.get();
         let cancel = Arc::new(AtomicBool::new(false));
-        let film = interruptible(py, &cancel, || {
-            let mut prepared = Prepared::from_scene(staged, &request)?;
-            prepared.job.cancel = Some(cancel.clone());
-            self.install(|| prepared.render(&self.backend, &|_| {}))
-        })?
+        let film = if scene.staged_for(&request) {
+            let camera = camera.map_or_else(|| scene.scene.camera.clone(), |c| c.inner.clone());
+            interruptible(py, &cancel, || {
+                self.render_kept(scene, &camera, &request, &cancel)
+            })?
+        } else {
+            let mut staged = scene.restaged(py, &request)?;
+            if let Some(c) = camera {
+                staged.camera = c.inner.clone();
+            }
+            interruptible(py, &cancel, || {
+                let mut prepared = Prepared::from_scene(staged, &request)?;
+                prepared.job.cancel = Some(cancel.clone());
+                self.install(|| prepared.render(&self.backend, &|_| {}))
+            })?
+        }
         .map_err(|e| errors::error(&e))?;
         Output::new(py, film)
     }

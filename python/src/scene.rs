@@ -4,13 +4,14 @@
 
 use crate::camera::Camera;
 use crate::{dict, errors};
-use meshtrace::pipeline::{self, PipelineError};
+use meshtrace::pipeline::{self, PipelineError, Views};
 use meshtrace::request::{RenderRequest, RequestError};
 use meshtrace::scene::SceneError;
 use meshtrace::scene::studio::Up;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
+use std::sync::{Mutex, PoisonError};
 
 /// Where a scene came from, to load it anew with other loading options.
 #[derive(Clone)]
@@ -25,9 +26,24 @@ enum Source {
 #[pyclass(module = "meshtrace", frozen)]
 pub struct Scene {
     source: Source,
-    /// The loading options it was staged with: `up`, `environment`, `max_texture_size`.
+    /// The loading options it was staged with: `up`, `environment`, `max_texture_size`,
+    /// the studio or not.
     options: RenderRequest,
     pub(crate) scene: meshtrace::scene::Scene,
+    /// Its tables as the last render built them (its BVH, on a GPU uploaded), for the
+    /// next render on the same renderer that needs the same tables: views of one scene
+    /// build them once.
+    prepared: Mutex<Option<Kept>>,
+}
+
+/// A scene's tables kept on a renderer's device.
+pub struct Kept {
+    /// The renderer's [`crate::renderer::Renderer::id`].
+    pub renderer: u64,
+    /// Whether they hold caustic targets
+    /// ([`meshtrace::render::RenderScene::caustic_tables`]).
+    pub caustic_tables: bool,
+    pub views: Views,
 }
 
 /// The loading part of a request: the fields that decide how an input is staged.
@@ -77,25 +93,47 @@ impl Scene {
             source,
             options,
             scene,
+            prepared: Mutex::new(None),
         })
     }
 
-    /// This scene as `request` stages it: itself when the request's loading fields are
-    /// unset or its own, else loaded anew with them (warnings to Python).
-    pub fn staged(
+    /// Whether a render of `request` renders this scene as staged (its loading fields
+    /// unset or the scene's own); otherwise [`Scene::restaged`] loads it for the render.
+    pub fn staged_for(&self, request: &RenderRequest) -> bool {
+        loading(request).over(&self.options) == self.options
+    }
+
+    /// This scene loaded anew as `request` stages it, the loading fields it leaves unset
+    /// kept (warnings to Python).
+    pub fn restaged(
         &self,
         py: Python<'_>,
         request: &RenderRequest,
     ) -> PyResult<meshtrace::scene::Scene> {
-        // What the render leaves unset, the scene's own loading keeps.
         let wanted = loading(request).over(&self.options);
-        if wanted == self.options {
-            return Ok(self.scene.clone());
-        }
-        let source = self.source.clone();
-        let fresh = Self::open(source, wanted).map_err(|e| errors::error(&e))?;
+        let fresh = Self::open(self.source.clone(), wanted).map_err(|e| errors::error(&e))?;
         errors::warn_all(py, &fresh.scene.warnings)?;
         Ok(fresh.scene)
+    }
+
+    /// The kept tables, taken for a render (a render beside it prepares its own); `None`
+    /// when there are none, or they are another renderer's or other caustic tables.
+    pub fn take_prepared(&self, renderer: u64, caustic_tables: bool) -> Option<Views> {
+        let mut kept = self.prepared.lock().unwrap_or_else(PoisonError::into_inner);
+        match kept.take() {
+            Some(k) if k.renderer == renderer && k.caustic_tables == caustic_tables => {
+                Some(k.views)
+            }
+            other => {
+                *kept = other;
+                None
+            }
+        }
+    }
+
+    /// Keeps `kept` for the next render.
+    pub fn keep_prepared(&self, kept: Kept) {
+        *self.prepared.lock().unwrap_or_else(PoisonError::into_inner) = Some(kept);
     }
 }
 

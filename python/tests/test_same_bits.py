@@ -42,3 +42,24 @@ def test_gpu_renders_the_command_lines_bits(gpu, cli, tmp_path, glb):
     check_same_bits(gpu, "gpu", cli, tmp_path, glb)
     # The renderer keeps its device: a second scene on it matches too.
     check_same_bits(gpu, "gpu", cli, tmp_path, "builtin:cornell")
+
+
+def test_kept_tables_render_the_bits_of_fresh_ones(cpu, gpu, glb):
+    """A scene keeps its tables on a renderer's device for the next render: renders that
+    differ in camera, settings and AOVs on them give the bits of renders on a fresh load."""
+    for renderer in (cpu, gpu):
+        scene = mt.load(glb)
+        cams = mt.cameras.orbit(scene, views=3, elevation=20)
+        asks = [
+            dict(camera=cams[0], spp=2, width=24, height=16),
+            dict(camera=cams[1], spp=3, width=20, height=20, aovs=["depth"], seed=4),
+            dict(camera=cams[2], spp=2, width=24, height=16, transparent=True, caustics=False),
+            dict(spp=1, width=16, height=16, geometry_only=True, aovs=["normal"]),
+            dict(camera=cams[0], spp=2, width=24, height=16),
+        ]
+        for ask in asks:
+            kept = renderer.render(scene, **ask)
+            fresh = renderer.render(mt.load(glb), **ask)
+            assert list(kept.keys()) == list(fresh.keys())
+            for name in kept.keys():
+                assert np.array_equal(kept[name], fresh[name]), (renderer.device, ask, name)

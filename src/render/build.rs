@@ -28,6 +28,18 @@ impl RenderScene {
         self.bvh.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds())
     }
 
+    /// Whether the tables of a scene rendered with `settings` from `camera` hold caustic
+    /// targets: caustics on, and a perspective camera. Light subpaths reach the film through
+    /// the camera's lens or pinhole; no light path meets an orthographic camera's parallel
+    /// rays, so with one the render is the path tracer's alone (the same image in
+    /// expectation). Tables kept for several renders serve only those that agree on it.
+    pub fn caustic_tables(
+        settings: &crate::scene::RenderSettings,
+        camera: &crate::scene::camera::Camera,
+    ) -> bool {
+        settings.caustics && !camera.is_orthographic()
+    }
+
     /// Builds the BVH over the scene's triangles and lays out the tables in its leaf order.
     pub fn new(scene: &Scene, params: &BuildParams) -> Result<Self, BvhError> {
         let mesh = &scene.mesh;
@@ -167,10 +179,7 @@ impl RenderScene {
             let c = scene_bounds.center();
             (c, (scene_bounds.max - c).length() * (1.0 + 1e-3))
         };
-        // Light subpaths reach the film through the camera's lens or pinhole; no light
-        // path meets an orthographic camera's parallel rays, so with one the render is
-        // the path tracer's alone (the same image in expectation).
-        let caustic_targets = if scene.settings.caustics && !scene.camera.is_orthographic() {
+        let caustic_targets = if Self::caustic_tables(&scene.settings, &scene.camera) {
             let tri_materials: Vec<u32> = shading.iter().map(|s| s.material).collect();
             caustic_targets(&tris, &tri_materials, &scene.materials)
         } else {
