@@ -134,7 +134,8 @@ impl Output {
     /// Writes the render to `path` as `meshtrace render -o path` does: the extension picks
     /// the format (.exr with the AOVs as channels; .png, .jpg, .bmp, .hdr with the AOVs in
     /// `<stem>.aovs.exr` beside it; a transparent render as an RGBA PNG), `bit_depth` 8 or
-    /// 16 for a PNG. Complete or not at all.
+    /// 16 for a PNG. Complete or not at all. It writes the render as rendered: changes made
+    /// to the arrays are not saved.
     #[pyo3(signature = (path, *, bit_depth=None))]
     fn save(&self, py: Python<'_>, path: PathBuf, bit_depth: Option<u32>) -> PyResult<()> {
         let depth = match bit_depth {
