@@ -1,6 +1,7 @@
 //! With the `denoise` feature and `OIDN_DIR` set (the folder holding Open Image Denoise's
 //! `lib/`, such as the pyoidn wheel's `pyoidn/oidn`), records that `lib/` as an rpath of
-//! the binaries and tests, so they find libOpenImageDenoise without `LD_LIBRARY_PATH`.
+//! the binaries and tests, and of the Python extension module (`python/` uses this script
+//! too), so they find libOpenImageDenoise without `LD_LIBRARY_PATH`.
 //! Otherwise it does nothing.
 
 use std::path::PathBuf;

@@ -245,10 +245,14 @@ impl Renderer {
         environment: Option<PathBuf>,
         max_texture_size: Option<u32>,
     ) -> PyResult<Output> {
-        let aov = aovs
-            .map(|names| Aov::parse_list(&names.join(",")))
-            .transpose()
-            .map_err(|e| errors::message(format!("aovs: {e}")))?;
+        // An empty list asks for none (the command line's list has at least one name).
+        let aov = match aovs {
+            Some(names) if names.is_empty() => Some(Vec::new()),
+            names => names
+                .map(|names| Aov::parse_list(&names.join(",")))
+                .transpose()
+                .map_err(|e| errors::message(format!("aovs: {e}")))?,
+        };
         let request = RenderRequest {
             width,
             height,

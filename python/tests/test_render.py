@@ -70,6 +70,10 @@ def test_arrays_come_without_a_copy(cpu):
     assert out["color"] is out["color"], "the same array each time"
 
 
+def test_an_empty_aov_list_asks_for_none(cpu):
+    assert list(cpu.render("builtin:cornell", **SMALL, aovs=[]).keys()) == ["color"]
+
+
 def test_output_is_a_mapping(cpu):
     out = cpu.render("builtin:cornell", **SMALL, aovs=["alpha"])
     assert isinstance(out, __import__("collections.abc").abc.Mapping)
