@@ -190,6 +190,8 @@ pub enum Format {
     Png,
     Jpeg,
     Bmp,
+    /// Lossless WebP, 8 bits a channel (RGB, or RGBA for a transparent film).
+    Webp,
 }
 
 impl Format {
@@ -206,6 +208,7 @@ impl Format {
             "png" => Self::Png,
             "jpg" | "jpeg" => Self::Jpeg,
             "bmp" => Self::Bmp,
+            "webp" => Self::Webp,
             _ => {
                 return Err(FilmError::UnknownFormat {
                     path: path.display().to_string(),
@@ -213,12 +216,17 @@ impl Format {
             }
         })
     }
+
+    /// Whether the format holds an 8-bit alpha channel: a transparent film's coverage.
+    pub fn has_alpha(self) -> bool {
+        matches!(self, Self::Png | Self::Webp)
+    }
 }
 
 /// Why an image could not be written or read.
 #[derive(Debug, thiserror::Error)]
 pub enum FilmError {
-    #[error("{path}: unknown image format; use .exr, .hdr, .png, .jpg or .bmp")]
+    #[error("{path}: unknown image format; use .exr, .hdr, .png, .jpg, .bmp or .webp")]
     UnknownFormat { path: String },
     #[error("{path}: {message}")]
     Io { path: String, message: String },
@@ -227,7 +235,7 @@ pub enum FilmError {
     #[error("{path}: not a part file of `meshtrace render --part`: {message}")]
     NotAPart { path: String, message: String },
     #[error(
-        "{path}: a transparent render is written as a PNG (its alpha channel is the coverage); give a .png output"
+        "{path}: a transparent render is written as a PNG or WebP (its alpha channel is the coverage); give a .png or .webp output"
     )]
     TransparentNotPng { path: String },
     #[error(
@@ -420,7 +428,7 @@ impl Film {
     /// A `transparent` render must name a PNG.
     pub fn check_writable(path: &Path, transparent: bool) -> Result<(), FilmError> {
         let format = Format::from_path(path)?;
-        if transparent && format != Format::Png {
+        if transparent && !format.has_alpha() {
             return Err(FilmError::TransparentNotPng {
                 path: path.display().to_string(),
             });
@@ -465,7 +473,7 @@ impl Film {
     /// [`Film::save`], with a PNG's channels of `depth` bits.
     pub fn save_as(&self, path: &Path, depth: BitDepth) -> Result<(), FilmError> {
         let format = Format::from_path(path)?;
-        if self.transparent && format != Format::Png {
+        if self.transparent && !format.has_alpha() {
             return Err(FilmError::TransparentNotPng {
                 path: path.display().to_string(),
             });
@@ -563,6 +571,7 @@ impl Film {
             Format::Png => image::ImageFormat::Png,
             Format::Jpeg => image::ImageFormat::Jpeg,
             Format::Bmp => image::ImageFormat::Bmp,
+            Format::Webp => image::ImageFormat::WebP,
         };
         let mean = self.mean();
         let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
@@ -579,7 +588,7 @@ impl Film {
                     image::ImageBuffer::from_raw(w, h, data).ok_or("film size mismatch")?;
                 image::DynamicImage::ImageRgba16(img).write_to(&mut out, image_format)
             }
-            Format::Png if self.transparent => {
+            Format::Png | Format::Webp if self.transparent => {
                 let img =
                     image::RgbaImage::from_raw(w, h, self.straight_rgba(&mean, linear_to_srgb8)?)
                         .ok_or("film size mismatch")?;
@@ -594,7 +603,7 @@ impl Film {
                     image::ImageBuffer::from_raw(w, h, data).ok_or("film size mismatch")?;
                 image::DynamicImage::ImageRgb16(img).write_to(&mut out, image_format)
             }
-            Format::Png | Format::Jpeg | Format::Bmp => {
+            Format::Png | Format::Jpeg | Format::Bmp | Format::Webp => {
                 let data: Vec<u8> = mean
                     .iter()
                     .flat_map(|c| c.to_array().map(linear_to_srgb8))

@@ -252,19 +252,41 @@ fn bad_manifests_fail_cleanly() {
             &["jobs[0].output", "no {view}"],
         ),
         (
-            "[[jobs]]\nmeshes = \"models/*.obj\"\noutput = \"{name}.png\"\n",
-            &["jobs[0].output", "unknown placeholder {name}"],
+            "[[jobs]]\nmeshes = \"models/*.obj\"\noutput = \"{nom}.png\"\n",
+            &["jobs[0].output", "unknown placeholder {nom}"],
         ),
         (
             "[[jobs]]\nmeshes = \"models/*.obj\"\noutput = \"same.png\"\n",
             &["jobs[0].output", "same.png would be written by"],
         ),
         (
-            "[[jobs]]\nmeshes = \"models/*.obj\"\npreset = \"wonder3d\"\n",
+            "[[jobs]]\nmeshes = \"models/*.obj\"\npreset = \"wonder3d-persp\"\n",
             &[
                 "jobs[0].preset",
-                "`wonder3d` is not a preset; there are \"objaverse\", \"objaverse-xl\", \"syncdreamer\", \"trellis\", \"zero123\"",
+                "`wonder3d-persp` is not a preset; there are \"objaverse\", \"objaverse-xl\", \"syncdreamer\", \"trellis\", \"wonder3d\", \"zero123\"",
             ],
+        ),
+        (
+            "[[jobs]]\nmeshes = \"models/*.obj\"\npreset = \"zero123\"\noutput = \"v/{uid}/{name}.png\"\n",
+            &[
+                "jobs[0].output",
+                "{name} is a named view of a preset that names them",
+            ],
+        ),
+        (
+            "[[jobs]]\nmeshes = \"models/*.obj\"\npreset = \"zero123\"\nrandom_pose = false\n",
+            &[
+                "jobs[0].random_pose",
+                "is not a camera parameter of `zero123`",
+            ],
+        ),
+        (
+            "[[jobs]]\nmeshes = \"models/*.obj\"\npreset = \"wonder3d\"\northo_scale = 0\n",
+            &["jobs[0].ortho_scale", "0: must be positive"],
+        ),
+        (
+            "[[jobs]]\nmeshes = \"models/*.obj\"\nrandom_pose = true\noutput = \"{view}.png\"\n",
+            &["jobs[0].random_pose", "applies to a preset's cameras"],
         ),
         (
             "[[jobs]]\nmeshes = \"models/*.obj\"\npreset = \"zero123\"\ndistance = 2.0\n",
@@ -624,6 +646,14 @@ fn normalised_vertices(file: &Path) -> Vec<glam::DVec3> {
 /// [`normalised_vertices`], with the normalisation's scale and the original box's centre
 /// (Blender's frame).
 fn normalised(file: &Path) -> (Vec<glam::DVec3>, f64, glam::DVec3) {
+    normalised_to(file, glam::DVec3::max_element)
+}
+
+/// [`normalised`], the box's `size` (its largest extent, or Wonder3D's diagonal) scaled to 1.
+fn normalised_to(
+    file: &Path,
+    size: fn(glam::DVec3) -> f64,
+) -> (Vec<glam::DVec3>, f64, glam::DVec3) {
     let scene = meshtrace::scene::load::load_scene_with(
         file,
         &meshtrace::scene::source::Fs,
@@ -643,19 +673,27 @@ fn normalised(file: &Path) -> (Vec<glam::DVec3>, f64, glam::DVec3) {
         (glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY),
         |(lo, hi), &p| (lo.min(p), hi.max(p)),
     );
-    let (scale, centre) = (1.0 / (hi - lo).max_element(), (lo + hi) / 2.0);
+    let (scale, centre) = (1.0 / size(hi - lo), (lo + hi) / 2.0);
     let out = points.iter().map(|p| (*p - centre) * scale).collect();
     (out, scale, centre)
 }
 
+/// How a camera projects: a pinhole with its focal length in pixels, or orthographic with
+/// the width it sees (Blender's `ortho_scale`).
+#[derive(Clone, Copy)]
+enum Lens {
+    Pinhole(f64),
+    Orthographic(f64),
+}
+
 /// The fraction of `points` that the world→camera pose `rt` (Blender's camera convention:
-/// rows right, up, back) and a focal length of `fx` pixels put on the alpha of `image`
-/// (square, `size` wide), dilated by one pixel, among those it puts inside the image, and
-/// the fraction it puts inside.
+/// rows right, up, back) and `lens` put on the alpha of `image` (square, `size` wide),
+/// dilated by one pixel, among those it puts inside the image, and the fraction it puts
+/// inside.
 fn on_mask(
     points: &[glam::DVec3],
     rt: &[[f64; 4]; 3],
-    fx: f64,
+    lens: Lens,
     image: &image::RgbaImage,
 ) -> (f64, f64) {
     let size = image.width() as i64;
@@ -663,8 +701,12 @@ fn on_mask(
     let (mut seen, mut on) = (0, 0);
     for p in points {
         let [x, y, z] = [0, 1, 2].map(|k| row(&rt[k]).dot(*p) + rt[k][3]);
-        let u = size as f64 / 2.0 + fx * x / -z;
-        let v = size as f64 / 2.0 - fx * y / -z;
+        let (x, y) = match lens {
+            Lens::Pinhole(fx) => (fx * x / -z, fx * y / -z),
+            Lens::Orthographic(width) => (size as f64 * x / width, size as f64 * y / width),
+        };
+        let u = size as f64 / 2.0 + x;
+        let v = size as f64 / 2.0 - y;
         if !(z < 0.0 && (0.0..size as f64).contains(&u) && (0.0..size as f64).contains(&v)) {
             continue;
         }
@@ -768,7 +810,7 @@ fn the_objaverse_preset_projects_the_normalised_mesh_onto_its_masks() {
             let right = glam::DVec3::Z.cross(back).normalize();
             let up = back.cross(right);
             let rt = [right, up, back].map(|a| [a.x, a.y, a.z, -a.dot(eye)]);
-            let (fraction, framed) = on_mask(&points, &rt, fx, &image);
+            let (fraction, framed) = on_mask(&points, &rt, Lens::Pinhole(fx), &image);
             assert_eq!(framed, 1.0, "view {view}: the object leaves the image");
             eprintln!(
                 "{} view {view}: {fraction} of the vertices on the mask",
@@ -849,7 +891,7 @@ fn shell_preset_check(preset: &str, xl: bool) {
             let image = image::open(folder.join(format!("{view:03}.png")))
                 .unwrap()
                 .to_rgba8();
-            let (fraction, framed) = on_mask(&points, &rt, fx, &image);
+            let (fraction, framed) = on_mask(&points, &rt, Lens::Pinhole(fx), &image);
             // Looking at the file's origin, objaverse-xl leaves the off-centre box partly
             // or wholly out of the image, as the script does.
             if !xl {
@@ -911,6 +953,204 @@ fn shell_preset_check(preset: &str, xl: bool) {
         std::fs::read(folders[0].0.join("003.npy")).unwrap(),
         std::fs::read(dir.path().join("views/crowd/003.npy")).unwrap()
     );
+}
+
+/// A 3 × 4 matrix as `np.savetxt` writes it and `np.loadtxt` reads it: every value in
+/// `%.18e`, four a line.
+fn read_savetxt(path: &Path) -> Vec<Vec<f64>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    text.lines()
+        .map(|line| {
+            line.split(' ')
+                .map(|v| {
+                    let (mantissa, exponent) = v.split_once('e').unwrap();
+                    assert_eq!(mantissa.split_once('.').unwrap().1.len(), 18, "{v}");
+                    assert!(
+                        exponent.len() >= 3 && exponent.starts_with(['+', '-']),
+                        "{v}"
+                    );
+                    v.parse().unwrap()
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The wonder3d preset, checked through the files it writes as Wonder3D's
+/// `blenderProc_ortho.py` names them (`views/{uid[:2]}/{uid}/`): per view
+/// `rgb_000_front.webp` (RGBA, alpha the binary mask), `normals_000_front.webp` and
+/// `000_front_RT.txt`, and per object `scale_offset_matrix.txt`.
+/// - The normalisation: the box's diagonal scaled to 1, centred, the orthographic scale
+///   1.35.
+/// - Each pose puts the camera 2 from the centre, looking at it, and projects the
+///   normalised vertices orthographically onto its mask.
+/// - The rig's cameras keep their relative poses when it turns: those of Wonder3D's own
+///   fixed poses (`tests/data/wonder3d`, written by the script in Blender) for the eight
+///   horizontal views, and the viewing direction for `top` (whose roll Blender's TRACK_TO
+///   takes from rounding when the rig is turned).
+/// - The box's normals, decoded as Wonder3D decodes them and turned back to the world by
+///   the pose, are its faces' (±X, ±Y, ±Z) and face the camera.
+/// - The second render of the rig (view 13) is turned otherwise than the first.
+#[test]
+fn the_wonder3d_preset_writes_its_scripts_files_and_poses_that_agree() {
+    let dir = TempDir::new("batch-wonder3d");
+    let size = 160u32;
+    let views = 14;
+    let models = dir.path().join("models");
+    std::fs::create_dir_all(&models).unwrap();
+    std::fs::copy(data("gltf/corpus/crowd.glb"), models.join("crowd.glb")).unwrap();
+    std::fs::copy(data("box.obj"), models.join("box.v1.obj")).unwrap();
+    std::fs::write(
+        dir.path().join("m.toml"),
+        format!(
+            "[render]\nspp = 2\nwidth = {size}\nheight = {size}\n\n[[jobs]]\nmeshes = \"models/*\"\npreset = \"wonder3d\"\nviews = {views}\n"
+        ),
+    )
+    .unwrap();
+    let (code, stderr) = run(&dir, &["batch", "m.toml", "--device", "cpu"]);
+    assert_eq!(code, 0, "{stderr}");
+    let names = [
+        "front",
+        "back",
+        "right",
+        "left",
+        "front_right",
+        "front_left",
+        "back_right",
+        "back_left",
+        "top",
+        "front_right_top",
+        "front_left_top",
+        "back_right_top",
+        "back_left_top",
+    ];
+    let view_name = |v: usize| format!("{:03}_{}", v / 13, names[v % 13]);
+    let row = |m: &[Vec<f64>], k: usize| glam::DVec3::new(m[k][0], m[k][1], m[k][2]);
+    for (file, uid) in [("crowd.glb", "crowd"), ("box.v1.obj", "box")] {
+        let folder = dir.path().join("views").join(&uid[..2]).join(uid);
+        let mut want: Vec<String> = (0..views)
+            .flat_map(|v| {
+                let n = view_name(v);
+                [
+                    format!("rgb_{n}.webp"),
+                    format!("normals_{n}.webp"),
+                    format!("{n}_RT.txt"),
+                ]
+            })
+            .collect();
+        want.push("scale_offset_matrix.txt".into());
+        want.sort();
+        assert_eq!(files_in(&folder), want);
+        let (points, scale, centre) = normalised_to(&models.join(file), glam::DVec3::length);
+        let so = read_savetxt(&folder.join("scale_offset_matrix.txt"));
+        assert_eq!(so.len(), 5);
+        assert!((so[0][0] - scale).abs() < 1e-6 * scale, "{so:?}");
+        let offset = glam::DVec3::new(so[1][0], so[2][0], so[3][0]);
+        assert!((offset + scale * centre).length() < 1e-5, "{so:?}");
+        assert_eq!(so[4][0], 1.35);
+        let poses: Vec<Vec<Vec<f64>>> = (0..views)
+            .map(|v| read_savetxt(&folder.join(format!("{}_RT.txt", view_name(v)))))
+            .collect();
+        for (view, rt) in poses.iter().enumerate() {
+            assert!(rt.len() == 3 && rt.iter().all(|r| r.len() == 4), "{rt:?}");
+            let t = glam::DVec3::new(rt[0][3], rt[1][3], rt[2][3]);
+            let c = -(row(rt, 0) * t.x + row(rt, 1) * t.y + row(rt, 2) * t.z);
+            assert!((c.length() - 2.0).abs() < 1e-5, "view {view}: {c}");
+            assert!((row(rt, 2) - c.normalize()).length() < 1e-5, "view {view}");
+            assert!(row(rt, 0).cross(row(rt, 1)).dot(row(rt, 2)) > 0.9999);
+            let rgb = image::open(folder.join(format!("rgb_{}.webp", view_name(view))))
+                .unwrap()
+                .to_rgba8();
+            assert_eq!(rgb.dimensions(), (size, size));
+            assert!(
+                rgb.pixels().all(|p| p[3] == 0 || p[3] == 255),
+                "a binary mask"
+            );
+            let rt3: [[f64; 4]; 3] = std::array::from_fn(|k| std::array::from_fn(|j| rt[k][j]));
+            let (fraction, framed) = on_mask(&points, &rt3, Lens::Orthographic(1.35), &rgb);
+            assert_eq!(
+                framed, 1.0,
+                "{uid} view {view}: the object leaves the image"
+            );
+            eprintln!("{uid} view {view}: {fraction} of the vertices on the mask");
+            assert!(fraction >= 0.99, "{uid} view {view}: {fraction}");
+            let normals = image::open(folder.join(format!("normals_{}.webp", view_name(view))))
+                .unwrap()
+                .to_rgba8();
+            let (mut faces, mut masked, mut stray) = (0, 0, 0);
+            for (x, y, p) in normals.enumerate_pixels() {
+                assert_eq!(
+                    p[3],
+                    rgb.get_pixel(x, y)[3],
+                    "the normals' mask is the colour's"
+                );
+                if p[3] == 0 {
+                    // Off the mask, no normal, but where some of the pixel's samples hit
+                    // and its centre missed (as in Cycles' normal pass): at the mask's edge
+                    // and, in the crowd, on features thinner than a pixel.
+                    let near = (-1..=1).any(|d: i64| {
+                        (-1..=1).any(|e: i64| {
+                            let (a, b) = (x as i64 + d, y as i64 + e);
+                            (0..size as i64).contains(&a)
+                                && (0..size as i64).contains(&b)
+                                && rgb.get_pixel(a as u32, b as u32)[3] > 0
+                        })
+                    });
+                    stray += usize::from(!near && p.0[..3] != [127, 127, 127]);
+                    continue;
+                }
+                masked += 1;
+                // Wonder3D reads n = 2 v / 255 − 1 in the camera's frame (+Z to the viewer).
+                let n = glam::DVec3::from_array([0, 1, 2].map(|k| 2.0 * p[k] as f64 / 255.0 - 1.0));
+                assert!(n.z > -0.01, "{uid} view {view} ({x}, {y}): faces away: {n}");
+                let world = row(rt, 0) * n.x + row(rt, 1) * n.y + row(rt, 2) * n.z;
+                let interior = (-1..=1).all(|d: i64| {
+                    (-1..=1).all(|e: i64| {
+                        let (a, b) = (x as i64 + d, y as i64 + e);
+                        (0..size as i64).contains(&a)
+                            && (0..size as i64).contains(&b)
+                            && normals.get_pixel(a as u32, b as u32).0 == p.0
+                    })
+                });
+                if uid == "box" && interior {
+                    faces += 1;
+                    assert!(
+                        world.abs().max_element() > 0.98,
+                        "{uid} view {view} ({x}, {y}): {world} is not a face's normal"
+                    );
+                }
+            }
+            assert!(
+                uid != "box" || stray == 0,
+                "{uid} view {view}: {stray} normals away from a mask of {masked}"
+            );
+            assert!(
+                uid != "box" || faces > 50,
+                "{uid} view {view}: {faces} face pixels"
+            );
+        }
+        // The rig's relative poses, against the script's own.
+        let fixed = |name: &str| read_savetxt(&data(&format!("wonder3d/000_{name}_RT.txt")));
+        let rotation =
+            |m: &[Vec<f64>]| glam::DMat3::from_cols(row(m, 0), row(m, 1), row(m, 2)).transpose();
+        let (ours_front, theirs_front) = (rotation(&poses[0]), rotation(&fixed("front")));
+        for (j, name) in names[..9].iter().enumerate() {
+            let ours = rotation(&poses[j]) * ours_front.transpose();
+            let theirs = rotation(&fixed(name)) * theirs_front.transpose();
+            let rows = if *name == "top" { 2..3 } else { 0..3 };
+            for k in rows {
+                let d = (ours.row(k) - theirs.row(k)).length();
+                assert!(
+                    d < 1e-5,
+                    "{name}: row {k} of the relative rotation is {d} off"
+                );
+            }
+        }
+        assert!(
+            (row(&poses[13], 2) - row(&poses[0], 2)).length() > 1e-3,
+            "{uid}: the second render's rig is turned as the first's"
+        );
+    }
 }
 
 /// The trellis preset, checked through the `transforms.json` it writes per object: the unit
@@ -981,7 +1221,7 @@ fn the_trellis_preset_writes_transforms_that_project_the_normalised_mesh_onto_it
                 .unwrap()
                 .to_rgba8();
             let fx = size as f64 / 2.0 / (fov / 2.0).tan();
-            let (fraction, framed) = on_mask(&points, &rt, fx, &image);
+            let (fraction, framed) = on_mask(&points, &rt, Lens::Pinhole(fx), &image);
             assert_eq!(framed, 1.0, "view {view}: the object leaves the image");
             eprintln!("{uid} view {view}: {fraction} of the vertices on the mask");
             assert!(fraction >= 0.99, "{uid} view {view}: {fraction}");

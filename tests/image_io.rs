@@ -77,7 +77,7 @@ fn hdr_is_within_rgbe_precision() {
 fn eight_bit_formats_are_srgb_quantised_and_clamped() {
     let dir = TempDir::new("8bit");
     let film = test_film();
-    for name in ["out.png", "out.bmp", "OUT.PNG"] {
+    for name in ["out.png", "out.bmp", "OUT.PNG", "out.webp"] {
         let pixels = save_and_read(&film, &dir, name);
         for (i, (got, want)) in pixels.iter().zip(film.mean()).enumerate() {
             let expected = want.to_array().map(|x| srgb8_to_linear(linear_to_srgb8(x)));
@@ -127,6 +127,7 @@ fn format_from_extension() {
     assert_eq!(f("a.jpg"), Some(Format::Jpeg));
     assert_eq!(f("a.JPEG"), Some(Format::Jpeg));
     assert_eq!(f("a.bmp"), Some(Format::Bmp));
+    assert_eq!(f("a.WebP"), Some(Format::Webp));
     assert_eq!(f("a.tga"), None);
     assert_eq!(f("png"), None);
     assert_eq!(f("a.png.txt"), None);
@@ -146,7 +147,7 @@ fn unknown_extension_is_an_error_naming_the_path() {
         assert_eq!(
             msg,
             format!(
-                "{}: unknown image format; use .exr, .hdr, .png, .jpg or .bmp",
+                "{}: unknown image format; use .exr, .hdr, .png, .jpg, .bmp or .webp",
                 path.display()
             )
         );
@@ -193,7 +194,7 @@ fn failed_encode_leaves_no_file() {
 fn no_temporary_file_remains_after_save() {
     let dir = TempDir::new("tmp-files");
     let film = test_film();
-    let names = ["a.exr", "a.hdr", "a.png", "a.jpg", "a.bmp"];
+    let names = ["a.exr", "a.hdr", "a.png", "a.jpg", "a.bmp", "a.webp"];
     for name in names {
         film.save(&dir.path().join(name)).unwrap();
     }
@@ -424,11 +425,40 @@ fn png_of_16_bits_rounds_the_srgb_curve_to_16_bits() {
     // Distinct 16-bit levels where 8 bits have one: 0.18 and 0.1805 share an 8-bit level.
     assert_eq!(linear_to_srgb8(0.18), linear_to_srgb8(0.1805));
     assert_ne!(linear_to_srgb16(0.18), linear_to_srgb16(0.1805));
-    for name in ["deep.exr", "deep.hdr", "deep.jpg", "deep.bmp"] {
+    for name in ["deep.exr", "deep.hdr", "deep.jpg", "deep.bmp", "deep.webp"] {
         let err = film
             .save_as(&dir.path().join(name), BitDepth::Sixteen)
             .unwrap_err();
         assert!(matches!(err, FilmError::DeepNotPng { .. }), "{name}: {err}");
         assert!(err.to_string().contains(name), "{err}");
     }
+}
+
+/// A transparent film writes the same RGBA to a lossless WebP as to a PNG (straight alpha,
+/// the coverage), and refuses a format without alpha.
+#[test]
+fn transparent_webp_is_the_pngs_rgba() {
+    let dir = TempDir::new("webp-rgba");
+    let mut film = Film::with_aovs(7, 5, 0, true);
+    let base = test_film();
+    film.sum = base.sum.clone();
+    film.samples = 1;
+    let alpha = film
+        .channels
+        .iter()
+        .position(|c| c.name == meshtrace::film::Aov::Alpha.name())
+        .unwrap();
+    for (i, t) in film.channels[alpha].data.iter_mut().enumerate() {
+        *t = texel_add(*t, [(i % 3) as f32 / 2.0, 0.0, 0.0, 0.0]);
+    }
+    let read = |name: &str| {
+        let path = dir.path().join(name);
+        film.save(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        image::open(&path).unwrap().into_rgba8()
+    };
+    let (png, webp) = (read("a.png"), read("a.webp"));
+    assert_eq!(webp.as_raw(), png.as_raw());
+    assert!(png.pixels().any(|p| p[3] == 0) && png.pixels().any(|p| p[3] == 255));
+    let err = film.save(&dir.path().join("a.jpg")).unwrap_err();
+    assert!(matches!(err, FilmError::TransparentNotPng { .. }), "{err}");
 }

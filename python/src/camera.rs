@@ -4,7 +4,7 @@
 use crate::errors;
 use crate::scene::Scene;
 use glam::Vec3;
-use meshtrace::batch::preset::{Normalisation, Preset};
+use meshtrace::batch::preset::Preset;
 use meshtrace::batch::transforms::{Intrinsics, camera_to_world};
 use numpy::{PyArray2, ToPyArray, ndarray::Array2};
 use pyo3::prelude::*;
@@ -345,7 +345,7 @@ pub fn preset(
     let norm = s
         .framed
         .as_ref()
-        .and_then(Normalisation::of)
+        .and_then(|b| preset.normalisation(b))
         .ok_or_else(|| {
             errors::message("preset: frames a bare mesh (.obj, .gltf, .glb) with an extent")
         })?;
@@ -367,7 +367,9 @@ pub fn preset(
 }
 
 /// The render settings of dataset preset `name`, as keyword arguments of
-/// `Renderer.render`: its image size, samples per pixel and pixel filter width.
+/// `Renderer.render`: its image size, samples per pixel, pixel filter width and whether its
+/// film is transparent (all but Wonder3D's, whose mask and normals are the `object_id` and
+/// `normal` AOVs).
 #[pyfunction]
 pub fn preset_settings<'py>(
     py: Python<'py>,
@@ -379,5 +381,6 @@ pub fn preset_settings<'py>(
     d.set_item("height", p.size)?;
     d.set_item("spp", p.spp)?;
     d.set_item("filter_width", p.filter_width)?;
+    d.set_item("transparent", p.request().transparent())?;
     Ok(d)
 }

@@ -91,8 +91,27 @@ def test_zero123_cameras_stand_on_its_shell(glb):
     assert [c.position for c in mt.cameras.preset(scene, "zero123")] == [c.position for c in cams]
     other = mt.cameras.preset(scene, "zero123", uid="another")
     assert other[0].position != cams[0].position
-    assert mt.cameras.preset_settings("zero123") == dict(width=512, height=512, spp=128, filter_width=pytest.approx(0.01))
+    assert mt.cameras.preset_settings("zero123") == dict(
+        width=512, height=512, spp=128, filter_width=pytest.approx(0.01), transparent=True
+    )
     with pytest.raises(mt.MeshtraceError, match="preset: "):
         mt.cameras.preset(scene, "blender")
     with pytest.raises(mt.MeshtraceError, match="bare mesh"):
         mt.cameras.preset(mt.load("builtin:cornell"), "zero123")
+
+
+def test_wonder3d_cameras_are_its_orthographic_rig(glb):
+    scene = mt.load(glb)
+    lo, hi = (np.array(b) for b in scene.framed)
+    # Wonder3D's orthographic script scales the box's diagonal, not its largest extent, to 1.
+    scale, centre = 1.0 / np.linalg.norm(hi - lo), (lo + hi) / 2
+    cams = mt.cameras.preset(scene, "wonder3d")
+    assert len(cams) == 13
+    for c in cams:
+        offset = np.array(c.position) - centre
+        assert np.linalg.norm(offset) * scale == pytest.approx(2.0, abs=1e-4)
+        assert c.ortho_height * scale == pytest.approx(1.35, abs=1e-5)
+    # The rig's front and back cameras face each other; its right one is square to both.
+    front, back, right = (np.array(cams[k].forward) for k in range(3))
+    assert np.allclose(front, -back, atol=1e-5) and abs(front @ right) < 1e-5
+    assert mt.cameras.preset_settings("wonder3d")["transparent"] is False

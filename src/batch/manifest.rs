@@ -32,6 +32,10 @@ struct JobFile {
     radius: Option<[f32; 2]>,
     /// A shell layout's cameras above the object's horizontal plane only.
     only_northern_hemisphere: Option<bool>,
+    /// Wonder3D's rig turned at random per render (its `--random_pose`).
+    random_pose: Option<bool>,
+    /// An orthographic preset's view width in normalised units (Blender's `ortho_scale`).
+    ortho_scale: Option<f32>,
     fov: Option<f32>,
     up: Option<String>,
     output: Option<String>,
@@ -63,8 +67,9 @@ pub struct Job {
     pub up: Option<Up>,
     /// The output path pattern, relative to the manifest: `{stem}` (the input's file
     /// name without extension), `{uid}` (its file name up to the first dot, as the
-    /// dataset scripts name their folders), `{view}` (0 to views − 1; `{view:03}` pads
-    /// it to three digits) and `{job}` (the job's index).
+    /// dataset scripts name their folders; `{uid:2}` its first two characters), `{view}`
+    /// (0 to views − 1; `{view:03}` pads it to three digits), `{name}` (a preset's name of
+    /// the view, where its script names them: `000_front`) and `{job}` (the job's index).
     pub output: String,
     /// A dataset script's way of rendering (`preset = "objaverse"`), its parameters
     /// overridden by the job's `views`, `elevation`, `distance` and `fov`.
@@ -88,7 +93,7 @@ pub struct Manifest {
 }
 
 /// The placeholders an output pattern may use (and `view:0N`, the view padded to N digits).
-const PLACEHOLDERS: [&str; 4] = ["stem", "uid", "view", "job"];
+const PLACEHOLDERS: [&str; 6] = ["stem", "uid", "uid:2", "view", "name", "job"];
 
 impl Manifest {
     /// Reads and checks the manifest at `path`.
@@ -182,6 +187,8 @@ impl Manifest {
                             "only_northern_hemisphere",
                             j.only_northern_hemisphere.is_some(),
                         ),
+                        ("random_pose", j.random_pose.is_some()),
+                        ("ortho_scale", j.ortho_scale.is_some()),
                     ] {
                         if given && !p.layout.takes(key) {
                             return Err(invalid(
@@ -212,12 +219,16 @@ impl Manifest {
                             *north_only = north;
                         }
                     }
+                    if let (Layout::Rig { random }, Some(given)) = (&mut p.layout, j.random_pose) {
+                        *random = given;
+                    }
                     if let Some(e) = j.elevation {
                         p.elevation = e;
                     }
                     for (key, value, slot) in [
                         ("distance", j.distance, &mut p.distance),
                         ("fov", j.fov, &mut p.fov),
+                        ("ortho_scale", j.ortho_scale, &mut p.ortho_scale),
                     ] {
                         if let Some(v) = value {
                             let fine = v.is_finite() && v > 0.0 && (key != "fov" || v < 180.0);
@@ -250,6 +261,8 @@ impl Manifest {
                         "only_northern_hemisphere",
                         j.only_northern_hemisphere.is_some(),
                     ),
+                    ("random_pose", j.random_pose.is_some()),
+                    ("ortho_scale", j.ortho_scale.is_some()),
                 ] {
                     if given {
                         return Err(invalid(
@@ -295,13 +308,14 @@ impl Manifest {
                             .into(),
                     )
                 })?;
-            check_pattern(&output, views).map_err(|m| invalid(field("output"), m))?;
+            let named = preset.as_ref().is_some_and(|p| p.view_name(0).is_some());
+            check_pattern(&output, views, named).map_err(|m| invalid(field("output"), m))?;
             let format = crate::film::Format::from_path(Path::new(&output))
                 .map_err(|e| invalid(field("output"), e.to_string()))?;
-            if (request.transparent() || preset.is_some()) && format != crate::film::Format::Png {
+            if (request.transparent() || preset.is_some()) && !format.has_alpha() {
                 return Err(invalid(
                     field("output"),
-                    "render.transparent writes RGBA PNGs (alpha is the coverage); give a .png pattern".into(),
+                    "a preset or render.transparent writes RGBA images (alpha is the coverage or the mask); give a .png or .webp pattern".into(),
                 ));
             }
             if request.bit_depth() == crate::film::BitDepth::Sixteen
@@ -332,9 +346,10 @@ impl Manifest {
     }
 }
 
-/// An output pattern's placeholders must be known, and a job of several views must
-/// use `{view}` (else every view would write the same file).
-fn check_pattern(pattern: &str, views: u32) -> Result<(), String> {
+/// An output pattern's placeholders must be known (`{name}` only where the views have
+/// names: `named`), and a job of several views must use `{view}` or `{name}` (else every
+/// view would write the same file).
+fn check_pattern(pattern: &str, views: u32, named: bool) -> Result<(), String> {
     let mut rest = pattern;
     while let Some(open) = rest.find('{') {
         let close = rest[open..]
@@ -343,12 +358,17 @@ fn check_pattern(pattern: &str, views: u32) -> Result<(), String> {
         let name = &rest[open + 1..open + close];
         if !PLACEHOLDERS.contains(&name) && padding(name).is_none() {
             return Err(format!(
-                "`{pattern}`: unknown placeholder {{{name}}}; there are {{stem}}, {{uid}}, {{view}} (or {{view:03}}, padded) and {{job}}"
+                "`{pattern}`: unknown placeholder {{{name}}}; there are {{stem}}, {{uid}} (or {{uid:2}}, its first two characters), {{view}} (or {{view:03}}, padded), {{name}} and {{job}}"
+            ));
+        }
+        if name == "name" && !named {
+            return Err(format!(
+                "`{pattern}`: {{name}} is a named view of a preset that names them (wonder3d); use {{view}}"
             ));
         }
         rest = &rest[open + close + 1..];
     }
-    if views > 1 && !pattern.contains("{view") {
+    if views > 1 && !pattern.contains("{view") && !pattern.contains("{name}") {
         return Err(format!(
             "`{pattern}` has no {{view}}, so its {views} views would overwrite each other"
         ));
@@ -363,12 +383,21 @@ fn padding(name: &str) -> Option<usize> {
     (1..=9).contains(&n).then_some(n)
 }
 
-/// The output path of view `view` of input `stem` (`uid`: its file name up to the first
-/// dot) in job `job`.
-pub fn output_path(pattern: &str, stem: &str, uid: &str, view: u32, job: usize) -> String {
+/// The output path of view `view` (named `name` where the preset names its views) of
+/// input `stem` (`uid`: its file name up to the first dot) in job `job`.
+pub fn output_path(
+    pattern: &str,
+    stem: &str,
+    uid: &str,
+    (view, name): (u32, Option<&str>),
+    job: usize,
+) -> String {
+    let prefix: String = uid.chars().take(2).collect();
     let mut out = pattern
         .replace("{stem}", stem)
         .replace("{uid}", uid)
+        .replace("{uid:2}", &prefix)
+        .replace("{name}", name.unwrap_or_default())
         .replace("{view}", &view.to_string())
         .replace("{job}", &job.to_string());
     for n in 1..=9 {

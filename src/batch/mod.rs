@@ -7,6 +7,7 @@ pub mod failures;
 pub mod manifest;
 pub mod preset;
 pub mod transforms;
+pub mod wonder3d;
 
 pub use manifest::{Job, Manifest, Source};
 
@@ -80,7 +81,9 @@ impl Manifest {
                 let stem = stem.strip_prefix("builtin:").unwrap_or(&stem).to_string();
                 let uid = uid(&input);
                 for view in 0..job.views {
-                    let output = manifest::output_path(&job.output, &stem, &uid, view, j);
+                    let name = job.preset.as_ref().and_then(|p| p.view_name(view));
+                    let output =
+                        manifest::output_path(&job.output, &stem, &uid, (view, name.as_deref()), j);
                     out.push(Task {
                         job: j,
                         input: input.clone(),

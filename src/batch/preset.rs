@@ -16,12 +16,15 @@ use crate::scene::texture::{ImageType, TextureError, TextureRef, TextureSource, 
 use crate::scene::{Scene, SceneError, Sky};
 use glam::{DVec3, Vec3};
 
+use super::wonder3d;
+
 /// The presets there are, by their manifest names.
-pub const NAMES: [&str; 5] = [
+pub const NAMES: [&str; 6] = [
     "objaverse",
     "objaverse-xl",
     "syncdreamer",
     "trellis",
+    "wonder3d",
     "zero123",
 ];
 
@@ -45,6 +48,10 @@ pub enum Layout {
     /// once per object), u' = 2u below 1/4 and 2u / 3 + 1/3 above (a quarter of the views
     /// below the horizon, three quarters above), pitch = acos(1 − 2u') − π/2, yaw = 2π v.
     Hammersley,
+    /// Wonder3D's rig ([`wonder3d`]): thirteen named cameras at the preset's distance, view
+    /// v being camera v mod 13 of rig render ⌊v / 13⌋, each render's rig turned at random
+    /// when `random` (the script's `--random_pose`).
+    Rig { random: bool },
 }
 
 impl Layout {
@@ -54,6 +61,7 @@ impl Layout {
             Layout::Ring => matches!(key, "elevation" | "distance"),
             Layout::Shell { .. } => matches!(key, "radius" | "only_northern_hemisphere"),
             Layout::Hammersley => key == "distance",
+            Layout::Rig { .. } => matches!(key, "random_pose" | "ortho_scale"),
         }
     }
 
@@ -63,8 +71,18 @@ impl Layout {
             Layout::Ring => "elevation and distance",
             Layout::Shell { .. } => "radius = [min, max] and only_northern_hemisphere",
             Layout::Hammersley => "distance",
+            Layout::Rig { .. } => "random_pose and ortho_scale",
         }
     }
+}
+
+/// How a script scales the object into its unit box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Fit {
+    /// The box's largest extent becomes 1 (all but Wonder3D's orthographic script).
+    Extent,
+    /// The box's diagonal becomes 1 (Wonder3D's `blenderProc_ortho.py`).
+    Diagonal,
 }
 
 /// Where a script's cameras look.
@@ -89,6 +107,11 @@ pub enum Poses {
     Npy,
     /// TRELLIS's `transforms.json` per object ([`Preset::trellis_transforms`]).
     Transforms,
+    /// Wonder3D's: per view `{name}_RT.txt`, the 3 × 4 world→camera [R | t] as `np.savetxt`
+    /// writes Blender's single-precision matrix, in Blender's camera convention; per object
+    /// `scale_offset_matrix.txt` (scale, offset and orthographic scale, a value a line);
+    /// and per view, beside the colour, `normals_{name}` ([`wonder3d::images`]).
+    RtTxt,
 }
 
 /// How a script lights the object.
@@ -113,6 +136,12 @@ pub enum Lighting {
     /// light drawn once per object: 300–600 W, 100 / scale wide (the normalisation scales
     /// it as a root object), at (U(−1, 1), U(−1, 1), U(0.5, 1.5)), facing down.
     Zero123,
+    /// Wonder3D's orthographic script's: four suns without shadows, made before it
+    /// normalises (directions only matter): 5 W/m² straight down, and three of 3 W/m²
+    /// turned about X by 180, 90 and −90 *radians* (the script adds radians to Blender's
+    /// Euler angles), travelling along (0, −0.8012, 0.5985), (0, 0.8940, 0.4481) and
+    /// (0, −0.8940, 0.4481); a world of 0.4 grey at strength 0.5, which the camera sees.
+    Wonder3d,
 }
 
 /// A dataset script's way of rendering, with the parameters a manifest may override.
@@ -121,6 +150,7 @@ pub struct Preset {
     /// Its manifest name.
     pub name: &'static str,
     pub aim: Aim,
+    pub fit: Fit,
     /// Whether it writes `metadata.json` beside each object's images.
     pub metadata: bool,
     /// Views per object.
@@ -132,6 +162,9 @@ pub struct Preset {
     pub distance: f32,
     /// The field of view of the square image, in degrees.
     pub fov: f32,
+    /// An orthographic camera's view width and height in normalised units (Blender's
+    /// `ortho_scale`); 0 for a perspective camera.
+    pub ortho_scale: f32,
     /// The image's side in pixels.
     pub size: u32,
     /// Samples per pixel.
@@ -153,12 +186,14 @@ impl Preset {
             "objaverse" => Ok(Self {
                 name: "objaverse",
                 aim: Aim::Centre,
+                fit: Fit::Extent,
                 metadata: false,
                 layout: Layout::Ring,
                 views: 12,
                 elevation: 30.0,
                 distance: 1.5,
                 fov: fov_of_lens(35.0, 32.0),
+                ortho_scale: 0.0,
                 size: 512,
                 spp: 64,
                 filter_width: 0.01,
@@ -172,12 +207,14 @@ impl Preset {
             "syncdreamer" => Ok(Self {
                 name: "syncdreamer",
                 aim: Aim::Centre,
+                fit: Fit::Extent,
                 metadata: false,
                 layout: Layout::Ring,
                 views: 16,
                 elevation: 30.0,
                 distance: 1.5,
                 fov: fov_of_lens(35.0, 32.0),
+                ortho_scale: 0.0,
                 size: 256,
                 spp: 128,
                 filter_width: 0.01,
@@ -191,6 +228,7 @@ impl Preset {
             "zero123" => Ok(Self {
                 name: "zero123",
                 aim: Aim::Centre,
+                fit: Fit::Extent,
                 metadata: false,
                 layout: Layout::Shell {
                     radius_min: 1.5,
@@ -201,6 +239,7 @@ impl Preset {
                 elevation: 0.0,
                 distance: 0.0,
                 fov: fov_of_lens(35.0, 32.0),
+                ortho_scale: 0.0,
                 size: 512,
                 spp: 128,
                 filter_width: 0.01,
@@ -213,12 +252,14 @@ impl Preset {
             "trellis" => Ok(Self {
                 name: "trellis",
                 aim: Aim::Centre,
+                fit: Fit::Extent,
                 metadata: false,
                 layout: Layout::Hammersley,
                 views: 150,
                 elevation: 0.0,
                 distance: 2.0,
                 fov: 40.0,
+                ortho_scale: 0.0,
                 size: 512,
                 spp: 128,
                 filter_width: 1.0,
@@ -236,6 +277,30 @@ impl Preset {
                 lighting: Lighting::Suns,
                 ..Self::named("zero123")?
             }),
+            // xxlong0/Wonder3D render_codes/blenderProc_ortho.py, as render_batch_ortho.sh
+            // runs it (--ortho_scale 1.35 --random_pose): the thirteen cameras of a rig of
+            // radius 2, orthographic, 1.35 wide, 512², the object's box diagonal scaled to
+            // 1, four shadowless suns and a visible grey world; per view the colour and the
+            // camera-space normals as WebP with the mask as alpha, and the pose as text.
+            // Cycles' 1,024 samples are the script's cap, which its adaptive sampling
+            // (threshold 0.01) stops short of in most pixels.
+            "wonder3d" => Ok(Self {
+                name: "wonder3d",
+                aim: Aim::Centre,
+                fit: Fit::Diagonal,
+                metadata: false,
+                layout: Layout::Rig { random: true },
+                views: wonder3d::CAMERAS.len() as u32,
+                elevation: 0.0,
+                distance: 2.0,
+                fov: fov_of_lens(35.0, 32.0),
+                ortho_scale: 1.35,
+                size: 512,
+                spp: 1024,
+                filter_width: 1.0,
+                lighting: Lighting::Wonder3d,
+                poses: Poses::RtTxt,
+            }),
             _ => Err(format!(
                 "`{name}` is not a preset; there are {}",
                 NAMES.map(|n| format!("\"{n}\"")).join(", ")
@@ -244,28 +309,54 @@ impl Preset {
     }
 
     /// What the preset asks of every image, under the manifest's `[render]`: its size,
-    /// samples and pixel filter, RGBA PNGs (the scripts' transparent film), no studio, and the mesh read
-    /// with +Y up, as Blender's glTF and OBJ importers read it.
+    /// samples and pixel filter, RGBA PNGs (the scripts' transparent film; Wonder3D's film
+    /// is opaque and takes its mask and normals from [`Preset::aovs`]), no studio, and the
+    /// mesh read with +Y up, as Blender's glTF and OBJ importers read it.
     pub fn request(&self) -> RenderRequest {
+        let rig = self.poses == Poses::RtTxt;
         RenderRequest {
             up: Some(Up::Y),
             width: Some(self.size),
             height: Some(self.size),
             spp: Some(self.spp),
             filter_width: Some(self.filter_width),
-            transparent: Some(true),
+            transparent: Some(!rig),
             without_studio: true,
             ..RenderRequest::default()
         }
     }
 
+    /// The AOVs the preset's files are made of, whatever else the manifest asks for.
+    pub fn aovs(&self) -> &'static [crate::film::Aov] {
+        match self.poses {
+            Poses::RtTxt => &[crate::film::Aov::Normal, crate::film::Aov::ObjectId],
+            _ => &[],
+        }
+    }
+
     /// The output pattern of the script's images: one folder per object (its file name up
-    /// to the first dot), the views numbered with three digits. Pose files go beside them.
+    /// to the first dot), the views numbered with three digits, or Wonder3D's named ones
+    /// in folders by the uid's first two characters. Pose files go beside them.
     pub fn output(&self) -> &'static str {
-        if self.poses == Poses::Transforms {
-            "renders/{uid}/{view:03}.png"
-        } else {
-            "views/{uid}/{view:03}.png"
+        match self.poses {
+            Poses::Transforms => "renders/{uid}/{view:03}.png",
+            Poses::RtTxt => "views/{uid:2}/{uid}/rgb_{name}.webp",
+            Poses::None | Poses::Npy => "views/{uid}/{view:03}.png",
+        }
+    }
+
+    /// The script's name of view `view` where its views have names (Wonder3D's
+    /// `000_front`; [`wonder3d::view_name`]).
+    pub fn view_name(&self, view: u32) -> Option<String> {
+        matches!(self.layout, Layout::Rig { .. }).then(|| wonder3d::view_name(view))
+    }
+
+    /// The script's normalisation of a mesh of bounds `b` ([`Fit`]); `None` for an empty
+    /// or flat-less box.
+    pub fn normalisation(&self, b: &Aabb) -> Option<Normalisation> {
+        match self.fit {
+            Fit::Extent => Normalisation::of(b),
+            Fit::Diagonal => Normalisation::of_diagonal(b),
         }
     }
 
@@ -323,6 +414,11 @@ impl Preset {
                         pitch.sin(),
                     )
             }
+            Layout::Rig { random } => {
+                let (rig, camera) = wonder3d::split(view);
+                let local = DVec3::from(wonder3d::CAMERAS[camera].1).normalize();
+                wonder3d::turn(uid, rig, random) * (self.distance as f64 * local)
+            }
         }
     }
 
@@ -369,11 +465,23 @@ impl Preset {
     /// up), in the normalised frame, from the camera's TRACK_TO constraint (−Z at the target
     /// T, +Y towards world +Z): rows right r = normalize(+Z × b), up u = b × r, back
     /// b = (C − T) / |C − T|; t = −R C.
+    ///
+    /// On Wonder3D's rig the constraint works in the rig's frame, so the axes are the
+    /// rig's ([`wonder3d::local_axes`]) turned with it.
     pub fn pose(&self, uid: &str, view: u32, norm: &Normalisation) -> [[f64; 4]; 3] {
         let c = self.blender_position(uid, view);
-        let b = (c - self.blender_target(norm)).normalize();
-        let r = DVec3::Z.cross(b).try_normalize().unwrap_or(DVec3::X);
-        let u = b.cross(r);
+        let [r, u, b] = match self.layout {
+            Layout::Rig { random } => {
+                let (rig, camera) = wonder3d::split(view);
+                let turn = wonder3d::turn(uid, rig, random);
+                wonder3d::local_axes(camera).map(|axis| turn * axis)
+            }
+            _ => {
+                let b = (c - self.blender_target(norm)).normalize();
+                let r = DVec3::Z.cross(b).try_normalize().unwrap_or(DVec3::X);
+                [r, b.cross(r), b]
+            }
+        };
         let mut out = [[0.0; 4]; 3];
         for (row, axis) in out.iter_mut().zip([r, u, b]) {
             *row = [axis.x, axis.y, axis.z, -axis.dot(c)];
@@ -383,17 +491,30 @@ impl Preset {
 
     /// The camera of view `view` of object `uid`, a mesh that `norm` normalises, in the
     /// mesh's own frame: at the script's position, looking at the origin with Blender's +Z
-    /// up, both taken back through the normalisation.
+    /// up (on Wonder3D's rig, the pose's up), both taken back through the normalisation;
+    /// orthographic, `ortho_scale` normalised units across, where the preset says so.
     pub fn camera(&self, uid: &str, view: u32, norm: &Normalisation) -> Option<Camera> {
         let position = norm.to_scene(to_meshtrace(self.blender_position(uid, view)));
-        Camera::new(
+        let up = match self.layout {
+            Layout::Rig { .. } => {
+                let [_, u, _] = self.pose(uid, view, norm);
+                to_meshtrace(DVec3::new(u[0], u[1], u[2]))
+            }
+            _ => Vec3::Y,
+        };
+        let camera = Camera::new(
             position,
             norm.to_scene(to_meshtrace(self.blender_target(norm))),
-            Vec3::Y,
+            up,
             self.fov,
             0.0,
             None,
-        )
+        )?;
+        Some(if self.ortho_scale > 0.0 {
+            camera.orthographic(self.ortho_scale / norm.scale)
+        } else {
+            camera
+        })
     }
 
     /// Lights `scene`, object `uid` normalised by `norm`, as the script does ([`Lighting`]).
@@ -466,6 +587,18 @@ impl Preset {
                     scene.lights.push(PunctualLight::Directional {
                         direction: to_meshtrace(travel).normalize(),
                         irradiance: Vec3::splat(choices[pick]),
+                        shadows: false,
+                    });
+                }
+            }
+            Lighting::Wonder3d => {
+                scene.sky = Sky::Constant(Vec3::splat(0.4 * 0.5));
+                for (irradiance, turn) in [(5.0, 0.0f64), (3.0, 180.0), (3.0, 90.0), (3.0, -90.0)] {
+                    // A sun turned about X by `turn` radians travels along Rx (0, 0, −1).
+                    let travel = DVec3::new(0.0, turn.sin(), -turn.cos());
+                    scene.lights.push(PunctualLight::Directional {
+                        direction: to_meshtrace(travel).normalize(),
+                        irradiance: Vec3::splat(irradiance),
                         shadows: false,
                     });
                 }
@@ -656,6 +789,16 @@ impl Normalisation {
         let extent = (b.max - b.min).max_element();
         (extent.is_finite() && extent > 0.0).then(|| Self {
             scale: 1.0 / extent,
+            centre: (b.min + b.max) * 0.5,
+        })
+    }
+
+    /// The normalisation of Wonder3D's orthographic script: scaled by 1 / (the bounding
+    /// box's diagonal) and centred the same way.
+    pub fn of_diagonal(b: &Aabb) -> Option<Self> {
+        let diagonal = (b.max - b.min).length();
+        (diagonal.is_finite() && diagonal > 0.0).then(|| Self {
+            scale: 1.0 / diagonal,
             centre: (b.min + b.max) * 0.5,
         })
     }

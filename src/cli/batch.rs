@@ -4,8 +4,9 @@
 
 use super::{DeviceArgs, Interrupted, backend, pipeline_error, set_threads, warn};
 use anyhow::{Context, Result, bail};
-use meshtrace::batch::preset::{Normalisation, Poses, Preset, metadata, write_npy};
+use meshtrace::batch::preset::{Poses, Preset, metadata, write_npy};
 use meshtrace::batch::transforms::{self, Frame, Intrinsics};
+use meshtrace::batch::wonder3d;
 use meshtrace::batch::{self, Manifest, Task};
 use meshtrace::film::{Film, Format};
 use meshtrace::pipeline::Prepared;
@@ -401,7 +402,9 @@ fn run_input(
     tally: &mut Tally,
 ) -> Result<()> {
     let job = &manifest.jobs[group[0].job];
-    let aovs = request.aov_mask() != 0;
+    // Wonder3D's preset writes its AOVs into its own images, not beside them.
+    let named = job.preset.as_ref().is_some_and(|p| p.poses == Poses::RtTxt);
+    let aovs = request.aov_mask() != 0 && !named;
     let done: Vec<bool> = group.iter().map(|t| complete(t, aovs)).collect();
     // A preset writes its script's files alone: no transforms.json.
     let recorded = job.preset.is_some() || all_recorded(group);
@@ -411,11 +414,24 @@ fn run_input(
     }
     // The job's up axis, where it gives one, over the request's, over the preset's.
     let preset_request = job.preset.as_ref().map(Preset::request).unwrap_or_default();
-    let request = RenderRequest {
+    let mut request = RenderRequest {
         up: job.up,
         ..Default::default()
     }
     .over(&request.over(&preset_request));
+    if let Some(preset) = &job.preset
+        && !preset.aovs().is_empty()
+    {
+        let mut aovs = request.aov.clone().unwrap_or_default();
+        aovs.extend(
+            preset
+                .aovs()
+                .iter()
+                .filter(|a| !aovs.contains(a))
+                .collect::<Vec<_>>(),
+        );
+        request.aov = Some(aovs);
+    }
     let request_error = |e| match e {
         meshtrace::pipeline::PipelineError::Request(e) => {
             anyhow::anyhow!("{}: render.{e}", manifest.path.display())
@@ -435,7 +451,7 @@ fn run_input(
             let norm = scene
                 .framed
                 .as_ref()
-                .and_then(Normalisation::of)
+                .and_then(|b| preset.normalisation(b))
                 .context("the mesh has no extent to normalise")?;
             // Per object, beside its first view's image (before the preset's lights, which
             // the metadata does not count).
@@ -453,6 +469,19 @@ fn run_input(
                     std::fs::create_dir_all(dir)
                         .and_then(|()| std::fs::write(&path, text))
                         .with_context(|| format!("cannot write {}", path.display()))?;
+                }
+                if preset.poses == Poses::RtTxt {
+                    // np.savetxt([scale] + list(offset) + [ortho_scale]): the offset is
+                    // Blender's single-precision vector.
+                    let offset = norm.blender_offset().to_array().map(|x| x as f32 as f64);
+                    let values = [norm.scale as f64]
+                        .into_iter()
+                        .chain(offset)
+                        .chain([decimal(preset.ortho_scale)]);
+                    let rows: Vec<Vec<f64>> = values.map(|v| vec![v]).collect();
+                    std::fs::create_dir_all(dir)
+                        .with_context(|| format!("cannot create {}", dir.display()))?;
+                    wonder3d::savetxt(&dir.join("scale_offset_matrix.txt"), &rows)?;
                 }
             }
             preset
@@ -508,14 +537,18 @@ fn run_input(
                 .with_context(|| format!("cannot create {}", dir.display()))?;
         }
         // The pose first: the image marks the view complete.
-        if let (Some(preset), Some(norm)) = (&job.preset, &norm)
-            && preset.poses == Poses::Npy
-        {
-            let path = task.output.with_extension("npy");
-            write_npy(&path, &preset.pose(&uid, task.view, norm))
-                .with_context(|| format!("cannot write {}", path.display()))?;
+        match (&job.preset, &norm) {
+            (Some(preset), Some(norm)) if preset.poses == Poses::Npy => {
+                let path = task.output.with_extension("npy");
+                write_npy(&path, &preset.pose(&uid, task.view, norm))
+                    .with_context(|| format!("cannot write {}", path.display()))?;
+                film.save_as(&task.output, request.bit_depth())?;
+            }
+            (Some(preset), Some(norm)) if preset.poses == Poses::RtTxt => {
+                write_wonder3d(preset, norm, &uid, task, &film, &camera)?;
+            }
+            _ => film.save_as(&task.output, request.bit_depth())?,
         }
-        film.save_as(&task.output, request.bit_depth())?;
         tally.stages[Stage::Encode as usize] += t.elapsed();
         tally.rendered += 1;
         if tally.first_peak.is_none() && tally.rendered >= tally.warm_up {
@@ -529,6 +562,49 @@ fn run_input(
             );
         }
     }
+    Ok(())
+}
+
+/// The f64 nearest the shortest decimal of `x` (1.35f32 → 1.35, not 1.35000002384…): the
+/// value as a manifest or a script's command line writes it.
+fn decimal(x: f32) -> f64 {
+    x.to_string().parse().unwrap_or(x as f64)
+}
+
+/// Wonder3D's files of `task` (rendered into `film` through `camera`), in the order that
+/// leaves the colour image, which marks the view complete, last: `{name}_RT.txt` (Blender's
+/// single-precision matrix, as `np.savetxt` writes it), the normals image (the output's
+/// name with `normals` for its leading `rgb`) and the colour image with the mask as alpha.
+fn write_wonder3d(
+    preset: &Preset,
+    norm: &meshtrace::batch::preset::Normalisation,
+    uid: &str,
+    task: &Task,
+    film: &Film,
+    camera: &meshtrace::scene::camera::Camera,
+) -> Result<()> {
+    let dir = task.output.parent().unwrap_or(Path::new(""));
+    let name = preset.view_name(task.view).unwrap_or_default();
+    let rows: Vec<Vec<f64>> = preset
+        .pose(uid, task.view, norm)
+        .iter()
+        .map(|row| row.iter().map(|&x| x as f32 as f64).collect())
+        .collect();
+    wonder3d::savetxt(&dir.join(format!("{name}_RT.txt")), &rows)?;
+    let (rgb, normals) = wonder3d::images(film, camera)
+        .map_err(|m| anyhow::anyhow!("{}: {m}", task.output.display()))?;
+    let file = task
+        .output
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let normals_file = match file.strip_prefix("rgb") {
+        Some(rest) => format!("normals{rest}"),
+        None => format!("normals_{file}"),
+    };
+    let (w, h) = (film.width, film.height);
+    wonder3d::write_rgba(&dir.join(normals_file), w, h, normals)?;
+    wonder3d::write_rgba(&task.output, w, h, rgb)?;
     Ok(())
 }
 
