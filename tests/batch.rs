@@ -751,9 +751,9 @@ fn read_npy(path: &Path) -> [[f64; 4]; 3] {
 }
 
 /// Renders `crowd.glb` and an off-centre box (named `box.v1.obj`: its uid stops at the
-/// first dot) with preset `preset` at `size`², `views` views, and returns the folder of
-/// each, with the file it came from.
-fn preset_views(dir: &TempDir, preset: &str, size: u32, views: u32) -> Vec<(PathBuf, PathBuf)> {
+/// first dot) with preset `preset` at `size`², `views` views, 2 samples, from `dir/models`,
+/// which it returns.
+fn render_preset(dir: &TempDir, preset: &str, size: u32, views: u32) -> PathBuf {
     let models = dir.path().join("models");
     std::fs::create_dir_all(&models).unwrap();
     std::fs::copy(data("gltf/corpus/crowd.glb"), models.join("crowd.glb")).unwrap();
@@ -764,6 +764,13 @@ fn preset_views(dir: &TempDir, preset: &str, size: u32, views: u32) -> Vec<(Path
     std::fs::write(dir.path().join("m.toml"), manifest).unwrap();
     let (code, stderr) = run(dir, &["batch", "m.toml", "--device", "cpu"]);
     assert_eq!(code, 0, "{stderr}");
+    models
+}
+
+/// [`render_preset`], returning the folder of each object's views (`views/{uid}`), with the
+/// file it came from.
+fn preset_views(dir: &TempDir, preset: &str, size: u32, views: u32) -> Vec<(PathBuf, PathBuf)> {
+    let models = render_preset(dir, preset, size, views);
     [("crowd.glb", "crowd"), ("box.v1.obj", "box")]
         .into_iter()
         .map(|(file, uid)| (dir.path().join("views").join(uid), models.join(file)))
@@ -996,19 +1003,7 @@ fn the_wonder3d_preset_writes_its_scripts_files_and_poses_that_agree() {
     let dir = TempDir::new("batch-wonder3d");
     let size = 160u32;
     let views = 14;
-    let models = dir.path().join("models");
-    std::fs::create_dir_all(&models).unwrap();
-    std::fs::copy(data("gltf/corpus/crowd.glb"), models.join("crowd.glb")).unwrap();
-    std::fs::copy(data("box.obj"), models.join("box.v1.obj")).unwrap();
-    std::fs::write(
-        dir.path().join("m.toml"),
-        format!(
-            "[render]\nspp = 2\nwidth = {size}\nheight = {size}\n\n[[jobs]]\nmeshes = \"models/*\"\npreset = \"wonder3d\"\nviews = {views}\n"
-        ),
-    )
-    .unwrap();
-    let (code, stderr) = run(&dir, &["batch", "m.toml", "--device", "cpu"]);
-    assert_eq!(code, 0, "{stderr}");
+    let models = render_preset(&dir, "wonder3d", size, views as u32);
     let names = [
         "front",
         "back",
@@ -1163,19 +1158,7 @@ fn the_trellis_preset_writes_transforms_that_project_the_normalised_mesh_onto_it
     let dir = TempDir::new("batch-trellis");
     let size = 96;
     let views = 8;
-    let models = dir.path().join("models");
-    std::fs::create_dir_all(&models).unwrap();
-    std::fs::copy(data("gltf/corpus/crowd.glb"), models.join("crowd.glb")).unwrap();
-    std::fs::copy(data("box.obj"), models.join("box.v1.obj")).unwrap();
-    std::fs::write(
-        dir.path().join("m.toml"),
-        format!(
-            "[render]\nspp = 2\nwidth = {size}\nheight = {size}\n\n[[jobs]]\nmeshes = \"models/*\"\npreset = \"trellis\"\nviews = {views}\n"
-        ),
-    )
-    .unwrap();
-    let (code, stderr) = run(&dir, &["batch", "m.toml", "--device", "cpu"]);
-    assert_eq!(code, 0, "{stderr}");
+    let models = render_preset(&dir, "trellis", size, views as u32);
     for (file, uid) in [("crowd.glb", "crowd"), ("box.v1.obj", "box")] {
         let folder = dir.path().join("renders").join(uid);
         let mut want: Vec<String> = (0..views).map(|v| format!("{v:03}.png")).collect();
