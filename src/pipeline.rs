@@ -16,7 +16,7 @@ use crate::render::{RenderJob, RenderScene};
 use crate::request::{Part, RenderRequest, RequestError};
 use crate::scene::camera::Camera;
 use crate::scene::source::Fs;
-use crate::scene::{RenderSettings, Scene, SceneError, Sky, builtin, load};
+use crate::scene::{RenderSettings, Scene, SceneError, builtin, load};
 use std::path::Path;
 
 /// Why an input could not be rendered as requested: one line naming the file, field or
@@ -65,16 +65,10 @@ pub fn load(input: &Path, request: &RenderRequest) -> Result<Scene, PipelineErro
 /// file (the Python API's dictionaries).
 pub fn stage(mut scene: Scene, request: &RenderRequest) -> Result<Scene, PipelineError> {
     if let Some(env) = &request.environment {
-        let texture = crate::scene::texture::load_environment(env, &mut scene.textures, &Fs)
-            .map_err(|message| RequestError {
-                field: "environment",
-                message,
-            })?;
-        scene.sky = Sky::Environment {
-            texture,
-            strength: 1.0,
-            rotation: 0.0,
-        };
+        load::replace_environment(&mut scene, env).map_err(|message| RequestError {
+            field: "environment",
+            message,
+        })?;
     }
     if let Some(max) = request.max_texture_size {
         for t in scene.textures.limit_size(max) {

@@ -268,41 +268,48 @@ impl RenderRequest {
 }
 
 /// One of `names`' values by its name, for a manifest's string fields.
+/// The value `text` names in `names`, or a message listing the names there are.
+pub fn parse_name<T: Copy>(text: &str, names: &[(&str, T)]) -> Result<T, String> {
+    names
+        .iter()
+        .find(|(n, _)| *n == text)
+        .map(|&(_, v)| v)
+        .ok_or_else(|| {
+            let valid: Vec<&str> = names.iter().map(|(n, _)| *n).collect();
+            format!("`{text}` is not one of {}", valid.join(", "))
+        })
+}
+
+/// The names of the [`RenderRequest::device`] choices.
+pub const DEVICES: [(&str, DeviceChoice); 3] = [
+    ("auto", DeviceChoice::Auto),
+    ("cpu", DeviceChoice::Cpu),
+    ("gpu", DeviceChoice::Gpu),
+];
+
+/// The names of the [`RenderRequest::accel`] choices.
+pub const ACCELS: [(&str, Accel); 3] = [
+    ("auto", Accel::Auto),
+    ("software", Accel::Software),
+    ("hardware", Accel::Hardware),
+];
+
 fn named<'de, D: Deserializer<'de>, T: Copy>(
     d: D,
     names: &[(&str, T)],
 ) -> Result<Option<T>, D::Error> {
     let text = String::deserialize(d)?;
-    names
-        .iter()
-        .find(|(n, _)| *n == text)
-        .map(|&(_, v)| Some(v))
-        .ok_or_else(|| {
-            let valid: Vec<&str> = names.iter().map(|(n, _)| *n).collect();
-            serde::de::Error::custom(format!("`{text}` is not one of {}", valid.join(", ")))
-        })
+    parse_name(&text, names)
+        .map(Some)
+        .map_err(serde::de::Error::custom)
 }
 
 fn device<'de, D: Deserializer<'de>>(d: D) -> Result<Option<DeviceChoice>, D::Error> {
-    named(
-        d,
-        &[
-            ("auto", DeviceChoice::Auto),
-            ("cpu", DeviceChoice::Cpu),
-            ("gpu", DeviceChoice::Gpu),
-        ],
-    )
+    named(d, &DEVICES)
 }
 
 fn accel<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Accel>, D::Error> {
-    named(
-        d,
-        &[
-            ("auto", Accel::Auto),
-            ("software", Accel::Software),
-            ("hardware", Accel::Hardware),
-        ],
-    )
+    named(d, &ACCELS)
 }
 
 fn up<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Up>, D::Error> {

@@ -9,8 +9,7 @@ use crate::scene::{self, Kept, Scene};
 use meshtrace::film::{Aov, Film};
 use meshtrace::pipeline::{PipelineError, Prepared};
 use meshtrace::render::RenderScene;
-use meshtrace::render::backend::{Backend, DeviceChoice};
-use meshtrace::render::gpu::Accel;
+use meshtrace::render::backend::Backend;
 use meshtrace::request::RenderRequest;
 use pyo3::prelude::*;
 use std::path::PathBuf;
@@ -39,18 +38,10 @@ pub struct Renderer {
     pool: Option<rayon::ThreadPool>,
 }
 
+/// The value `text` names in `names`, or an error naming the keyword argument `field`.
 fn named<T: Copy>(field: &str, text: &str, names: &[(&str, T)]) -> PyResult<T> {
-    names
-        .iter()
-        .find(|(n, _)| *n == text)
-        .map(|&(_, v)| v)
-        .ok_or_else(|| {
-            let valid: Vec<&str> = names.iter().map(|(n, _)| *n).collect();
-            errors::message(format!(
-                "{field}: `{text}` is not one of {}",
-                valid.join(", ")
-            ))
-        })
+    meshtrace::request::parse_name(text, names)
+        .map_err(|m| errors::message(format!("{field}: {m}")))
 }
 
 impl Renderer {
@@ -141,27 +132,9 @@ impl Renderer {
         accel: Option<&str>,
         threads: Option<usize>,
     ) -> PyResult<Self> {
-        let choice = named(
-            "device",
-            device,
-            &[
-                ("auto", DeviceChoice::Auto),
-                ("cpu", DeviceChoice::Cpu),
-                ("gpu", DeviceChoice::Gpu),
-            ],
-        )?;
+        let choice = named("device", device, &meshtrace::request::DEVICES)?;
         let accel = accel
-            .map(|a| {
-                named(
-                    "accel",
-                    a,
-                    &[
-                        ("auto", Accel::Auto),
-                        ("software", Accel::Software),
-                        ("hardware", Accel::Hardware),
-                    ],
-                )
-            })
+            .map(|a| named("accel", a, &meshtrace::request::ACCELS))
             .transpose()?;
         let request = RenderRequest {
             device: Some(choice),
