@@ -159,7 +159,11 @@ fn start_at_rect(l: Light, pmf: f32, u: vec2<f32>, rng: Rng) -> LightSubpathStar
     if !(cos_m > 0.0 && pdf_dir > 0.0 && pdf_point > 0.0) {
         return no_light_subpath_start();
     }
-    return LightSubpathStart(Ray(q, dir), l.intensity * (cos_m / (pdf_point * pdf_dir)), 0.0, true);
+    let pdf = pdf_point * pdf_dir / cos_m;
+    if !(pdf > 0.0) {
+        return no_light_subpath_start();
+    }
+    return LightSubpathStart(Ray(q, dir), l.intensity * (cos_m / (pdf_point * pdf_dir)), pdf, true);
 }
 
 // mirror: src/render/caustics.rs `start_at_directional`
@@ -421,12 +425,10 @@ fn light_vertex_seen(lv: LightVertex, wc: vec3<f32>) -> SeenLightVertex {
 }
 
 // mirror: src/render/caustics.rs `caustic_hit_weight`
-fn caustic_hit_weight(tri: u32, p: vec3<f32>, dir: vec3<f32>, cos_l: f32, pdf_bsdf: f32) -> f32 {
-    let pmf = load_shading(tri).emitter_pmf;
+fn caustic_hit_weight(pmf: f32, area: f32, p: vec3<f32>, dir: vec3<f32>, cos_l: f32, pdf_bsdf: f32) -> f32 {
     if pmf == 0.0 || !(cos_l > 0.0) {
         return 1.0;
     }
-    let area = triangle_area(load_tri(tri));
     let pdf_light = LIGHT_SUBPATH_RATE * pmf / area * target_pdf(p, -dir) / cos_l;
     return caustic_weight(pdf_light / pdf_bsdf);
 }

@@ -89,6 +89,9 @@ fn path_vertex(st: ptr<function, PathState>, rng: Rng, branches: u32) -> PathVer
     }
     (*st).rays += 1u;
     let hit = traverse_closest((*st).ray, T_INF, (*st).depth == 0u);
+    if (*st).depth != 0u {
+        add_rect_hits(st, select(hit.t, T_INF, hit.tri == NO_HIT));
+    }
     if hit.tri == NO_HIT {
         var w = 1.0;
         if !(*st).prev_delta && params.sky_pmf != 0.0 {
@@ -110,7 +113,9 @@ fn path_vertex(st: ptr<function, PathState>, rng: Rng, branches: u32) -> PathVer
         if !(*st).prev_delta {
             w = power_heuristic((*st).prev_pdf, light_pdf(si.tri, hit.t, cos_l));
         } else if CAUSTICS && (*st).caustic_pdf > 0.0 {
-            w = caustic_hit_weight(si.tri, si.p, (*st).ray.dir, cos_l, (*st).caustic_pdf);
+            let pmf = load_shading(si.tri).emitter_pmf;
+            let area = triangle_area(load_tri(si.tri));
+            w = caustic_hit_weight(pmf, area, si.p, (*st).ray.dir, cos_l, (*st).caustic_pdf);
         }
         (*st).radiance += (*st).beta * w * mat.emission;
     }
@@ -158,6 +163,27 @@ fn path_vertex(st: ptr<function, PathState>, rng: Rng, branches: u32) -> PathVer
     v.area_pdf = area_pdf;
     v.valid = true;
     return v;
+}
+
+// Adds the emission of the rectangle lights that the BSDF-sampled ray meets before t_max,
+// weighed against next event estimation or the light subpath that could make the same path.
+// mirror: src/render/integrator.rs `add_rect_hits`
+fn add_rect_hits(st: ptr<function, PathState>, t_max: f32) {
+    for (var k = params.first_rect_light; k < params.num_lights; k++) {
+        let l = load_light(k);
+        let h = hit_rect(l, (*st).ray, t_max);
+        if !h.valid {
+            continue;
+        }
+        var w = 1.0;
+        if !(*st).prev_delta {
+            w = power_heuristic((*st).prev_pdf, l.pmf * rect_pdf(l, (*st).ray.origin, h.t, h.cos_l));
+        } else if CAUSTICS && (*st).caustic_pdf > 0.0 {
+            let q = (*st).ray.origin + h.t * (*st).ray.dir;
+            w = caustic_hit_weight(l.pmf, l.area, q, (*st).ray.dir, h.cos_l, (*st).caustic_pdf);
+        }
+        (*st).radiance += (*st).beta * w * l.intensity;
+    }
 }
 
 // Adds light sample ls (where valid), seen through mat at the vertex whose shading frame is

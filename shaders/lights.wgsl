@@ -126,7 +126,7 @@ fn sample_punctual(index: u32, p: vec3<f32>, ng: vec3<f32>, pmf: f32, u: vec2<f3
         if !(dist > 0.0 && r.pdf > 0.0) {
             return none;
         }
-        return LightSample(origin, to_light * (1.0 / dist), dist * (1.0 - 1e-4), l.intensity * (1.0 / r.pdf), pmf, true, true);
+        return LightSample(origin, to_light * (1.0 / dist), dist * (1.0 - 1e-4), l.intensity, pmf * r.pdf, false, true);
     }
     let origin = offset_ray_origin(p, ng, l.position - p);
     let to_light = l.position - origin;
@@ -154,61 +154,138 @@ struct RectSample {
     valid: bool,
 }
 
-// mirror: src/render/lights.rs `sample_rect`
-fn sample_rect(l: Light, p: vec3<f32>, u: vec2<f32>) -> RectSample {
-    let s = l.position;
+// A rectangle light seen from a point (valid stands for the Option around the Rust
+// twin). mirror: src/render/lights.rs `RectView`
+struct RectView {
+    x: vec3<f32>,
+    y: vec3<f32>,
+    n: vec3<f32>,
+    x0: f32,
+    y0: f32,
+    x1: f32,
+    y1: f32,
+    z0: f32,
+    n0: vec3<f32>,
+    n2: vec3<f32>,
+    g: vec4<f32>,
+    solid_angle: f32,
+    valid: bool,
+}
+
+// mirror: src/render/lights.rs `rect_view`
+fn rect_view(l: Light, p: vec3<f32>) -> RectView {
+    var v: RectView;
+    v.valid = false;
     let ex = l.direction;
     let ey = l.edge;
     let exl = length(ex);
     let eyl = length(ey);
-    let x = ex * (1.0 / exl);
-    let y = ey * (1.0 / eyl);
-    let n = cross(x, y);
-    let d = s - p;
-    let z0 = dot(d, n);
-    if !(z0 < 0.0) {
+    v.x = ex * (1.0 / exl);
+    v.y = ey * (1.0 / eyl);
+    v.n = cross(v.x, v.y);
+    let d = l.position - p;
+    v.z0 = dot(d, v.n);
+    if !(v.z0 < 0.0) {
+        return v;
+    }
+    v.x0 = dot(d, v.x);
+    v.y0 = dot(d, v.y);
+    v.x1 = v.x0 + exl;
+    v.y1 = v.y0 + eyl;
+    let v00 = vec3<f32>(v.x0, v.y0, v.z0);
+    let v01 = vec3<f32>(v.x0, v.y1, v.z0);
+    let v10 = vec3<f32>(v.x1, v.y0, v.z0);
+    let v11 = vec3<f32>(v.x1, v.y1, v.z0);
+    v.n0 = normalize(cross(v00, v10));
+    let n1 = normalize(cross(v10, v11));
+    v.n2 = normalize(cross(v11, v01));
+    let n3 = normalize(cross(v01, v00));
+    v.g = vec4<f32>(
+        angle_between(-v.n0, n1),
+        angle_between(-n1, v.n2),
+        angle_between(-v.n2, n3),
+        angle_between(-n3, v.n0),
+    );
+    v.solid_angle = v.g.x + v.g.y + v.g.z + v.g.w - 2.0 * PI;
+    v.valid = true;
+    return v;
+}
+
+// mirror: src/render/lights.rs `rect_by_area`
+fn rect_by_area(v: RectView) -> bool {
+    return !(v.solid_angle >= 1e-3);
+}
+
+// mirror: src/render/lights.rs `sample_rect`
+fn sample_rect(l: Light, p: vec3<f32>, u: vec2<f32>) -> RectSample {
+    let v = rect_view(l, p);
+    if !v.valid {
         return RectSample(vec3<f32>(0.0), 0.0, false);
     }
-    let x0 = dot(d, x);
-    let y0 = dot(d, y);
-    let x1 = x0 + exl;
-    let y1 = y0 + eyl;
-    let v00 = vec3<f32>(x0, y0, z0);
-    let v01 = vec3<f32>(x0, y1, z0);
-    let v10 = vec3<f32>(x1, y0, z0);
-    let v11 = vec3<f32>(x1, y1, z0);
-    let n0 = normalize(cross(v00, v10));
-    let n1 = normalize(cross(v10, v11));
-    let n2 = normalize(cross(v11, v01));
-    let n3 = normalize(cross(v01, v00));
-    let g0 = angle_between(-n0, n1);
-    let g1 = angle_between(-n1, n2);
-    let g2 = angle_between(-n2, n3);
-    let g3 = angle_between(-n3, n0);
-    let solid_angle = g0 + g1 + g2 + g3 - 2.0 * PI;
-    if !(solid_angle >= 1e-3) {
-        let q = s + u.x * ex + u.y * ey;
+    if rect_by_area(v) {
+        let q = l.position + u.x * l.direction + u.y * l.edge;
         let to = q - p;
         let dist2 = dot(to, to);
-        let cos_l = -dot(to, n) / sqrt(dist2);
+        let cos_l = -dot(to, v.n) / sqrt(dist2);
         return RectSample(q, dist2 / (cos_l * l.area), true);
     }
-    let b0 = n0.z;
-    let b1 = n2.z;
-    let au = u.x * (g0 + g1 - 2.0 * PI) + (u.x - 1.0) * (g2 + g3);
+    let b0 = v.n0.z;
+    let b1 = v.n2.z;
+    let au = u.x * (v.g.x + v.g.y - 2.0 * PI) + (u.x - 1.0) * (v.g.z + v.g.w);
     let fu = (cos(au) * b0 - b1) / sin(au);
     let cu = clamp(select(-1.0, 1.0, fu >= 0.0) / sqrt(fu * fu + b0 * b0), -ONE_MINUS_EPSILON, ONE_MINUS_EPSILON);
-    let xu = clamp(-(cu * z0) / sqrt(max(1.0 - cu * cu, 0.0)), x0, x1);
-    let dd = sqrt(xu * xu + z0 * z0);
-    let h0 = y0 / sqrt(dd * dd + y0 * y0);
-    let h1 = y1 / sqrt(dd * dd + y1 * y1);
+    let xu = clamp(-(cu * v.z0) / sqrt(max(1.0 - cu * cu, 0.0)), v.x0, v.x1);
+    let dd = sqrt(xu * xu + v.z0 * v.z0);
+    let h0 = v.y0 / sqrt(dd * dd + v.y0 * v.y0);
+    let h1 = v.y1 / sqrt(dd * dd + v.y1 * v.y1);
     let hv = h0 + u.y * (h1 - h0);
     let hv2 = hv * hv;
-    var yv = y1;
+    var yv = v.y1;
     if hv2 < 1.0 - 1e-4 {
         yv = hv * dd / sqrt(1.0 - hv2);
     }
-    return RectSample(p + xu * x + yv * y + z0 * n, 1.0 / solid_angle, true);
+    return RectSample(p + xu * v.x + yv * v.y + v.z0 * v.n, 1.0 / v.solid_angle, true);
+}
+
+// mirror: src/render/lights.rs `rect_pdf`
+fn rect_pdf(l: Light, p: vec3<f32>, dist: f32, cos_l: f32) -> f32 {
+    let v = rect_view(l, p);
+    if !v.valid {
+        return 0.0;
+    }
+    if rect_by_area(v) {
+        return dist * dist / (cos_l * l.area);
+    }
+    return 1.0 / v.solid_angle;
+}
+
+// Where a ray meets the emitting side of a rectangle light before t_max: the distance and
+// the cosine there (valid stands for the Option around the Rust twin's pair).
+struct RectHit {
+    t: f32,
+    cos_l: f32,
+    valid: bool,
+}
+
+// mirror: src/render/lights.rs `hit_rect`
+fn hit_rect(l: Light, ray: Ray, t_max: f32) -> RectHit {
+    let none = RectHit(0.0, 0.0, false);
+    let n = normalize(cross(l.direction, l.edge));
+    let cos_l = -dot(ray.dir, n);
+    if !(cos_l > 0.0) {
+        return none;
+    }
+    let t = -dot(l.position - ray.origin, n) / cos_l;
+    if !(t > 0.0 && t < t_max) {
+        return none;
+    }
+    let q = ray.origin + t * ray.dir - l.position;
+    let a = dot(q, l.direction) / dot(l.direction, l.direction);
+    let b = dot(q, l.edge) / dot(l.edge, l.edge);
+    if !(a >= 0.0 && a <= 1.0 && b >= 0.0 && b <= 1.0) {
+        return none;
+    }
+    return RectHit(t, cos_l, true);
 }
 
 // mirror: src/render/lights.rs `angle_between`

@@ -46,7 +46,7 @@ fn caustic_link(si: SurfaceHit, mat: Material, frame: ShadingFrame, wo_world: ve
     return link;
 }
 
-fn caustic_hit_weight(tri: u32, p: vec3<f32>, dir: vec3<f32>, cos_l: f32, pdf_bsdf: f32) -> f32 {
+fn caustic_hit_weight(pmf: f32, area: f32, p: vec3<f32>, dir: vec3<f32>, cos_l: f32, pdf_bsdf: f32) -> f32 {
     return 1.0;
 }
 

@@ -80,7 +80,8 @@ struct Light {
     shadows: u32,
     area: f32,
     edge: vec3<f32>,
-    _pad: u32,
+    // The probability that next event estimation picks the light (0 where it does not).
+    pmf: f32,
 }
 
 // mirror: src/render/tables.rs `CausticTarget` (16 bytes): a sphere around specular
@@ -90,7 +91,7 @@ struct CausticTarget {
     radius: f32,
 }
 
-// mirror: src/render/gpu/params.rs `Params` (224 bytes): one dispatch's camera, sky and range.
+// mirror: src/render/gpu/params.rs `Params` (240 bytes): one dispatch's camera, sky and range.
 struct Params {
     cam_position: vec3<f32>,
     width: u32,
@@ -148,6 +149,12 @@ struct Params {
     filter_width: f32,
     // The pixels [x0, x1) × [y0, y1) whose camera rays may meet the scene.
     window: vec4<u32>,
+    // The lights in the lights table, and the index of the first rectangle among them
+    // (RenderScene::first_rect_light): BSDF-sampled rays test those from there on.
+    num_lights: u32,
+    first_rect_light: u32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 

@@ -282,6 +282,43 @@ fn a_rect_light_gives_lamberts_polygon_irradiance() {
     );
 }
 
+/// BSDF-sampled rays meet rectangle lights, as in Cycles: a perfect mirror (reflectance 1)
+/// under a rectangle shows its radiance, exactly, on both renderers (next event estimation
+/// cannot sample a mirror, so before BSDF rays met them mirrors showed nothing). A camera
+/// looking straight at the rectangle does not see it.
+#[test]
+fn a_mirror_shows_a_rect_light_that_the_camera_does_not_see() {
+    let dir = TempDir::new("rect-mirror");
+    dir.write(
+        "floor.obj",
+        "v -50 0 -50\nv 50 0 -50\nv 50 0 50\nv -50 0 50\nf 1 4 3 2\n",
+    );
+    for (name, look_at, facing, want) in [
+        ("mirror", [0.0, 0.0, 0.0], -1.0, [1.0f32, 2.0, 3.0]),
+        ("straight at it", [0.0, 2.0, 0.0], -1.0, [0.0; 3]),
+    ] {
+        let toml = format!(
+            "[camera]\nposition = [0.0, 1.0, 0.0]\nlook_at = {look_at:?}\nup = [0.0, 0.0, -1.0]\n\
+             vfov = 0.2\n[render]\nwidth = 8\nheight = 8\nspp = 4\nmax_depth = 4\n\
+             [materials.mirror]\ntype = \"conductor\"\nalbedo = [1.0, 1.0, 1.0]\n\
+             [[objects]]\nmesh = \"floor.obj\"\nmaterial = \"mirror\"\n\
+             [[lights]]\ntype = \"rect\"\nposition = [0.0, 2.0, 0.0]\ndirection = [0.0, {facing}, 0.0]\n\
+             size = [10.0, 10.0]\nradiance = [1.0, 2.0, 3.0]\n"
+        );
+        let scene = load_scene(&dir.write("scene.toml", toml)).unwrap_or_else(|e| panic!("{e}"));
+        for (device, film) in common::render_both(name, &scene) {
+            for p in film.mean() {
+                for c in 0..3 {
+                    assert!(
+                        (p[c] - want[c]).abs() <= 1e-5 * want[c].max(1.0),
+                        "{name} on the {device}: {p} against {want:?}"
+                    );
+                }
+            }
+        }
+    }
+}
+
 #[test]
 fn bad_lights_are_errors_naming_the_field() {
     let dir = TempDir::new("bad-lights");

@@ -1192,7 +1192,9 @@ fn light_subpath_check(ctx: &GpuContext, file: &str) {
     let out = run(ctx, &rs, &settings, "test_light_subpath", &cases);
     let cam = CameraRays::new(&rs.camera, settings.width, settings.height);
     let mut counts = Tally::new("vertex count, rays and segments differ", 0.01);
-    let mut position = Worst::new("first vertex position (abs)", 1e-4);
+    // The rect scene's 60 × 60 light starts subpaths up to 42 units from the first vertex,
+    // where single precision's rounding of the ray comes to about 1e-4.
+    let mut position = Worst::new("first vertex position (abs)", 2e-4);
     // A fraction, not a maximum: a spot's falloff is linear in the angle from its axis, an
     // acos that the two devices round apart, which near the cutoff (where the falloff nears
     // 0) is a relative error of the throughput above 1e-3 (7 of 2172 vertices of the

@@ -185,6 +185,12 @@ impl RenderScene {
         } else {
             Vec::new()
         };
+        // Rectangles last, each kind in the scene's order.
+        let (mut lights, rects): (Vec<PunctualLight>, Vec<PunctualLight>) = scene
+            .lights
+            .iter()
+            .partition(|l| !matches!(l, PunctualLight::Rect { .. }));
+        lights.extend(rects);
         let mut rs = Self {
             wide: WideBvh::collapse(&bvh.nodes, &tris),
             bvh,
@@ -199,7 +205,11 @@ impl RenderScene {
             textures: scene.textures.records.clone(),
             texels: scene.textures.texels.clone(),
             texel_lut,
-            lights: scene.lights.iter().map(Light::new).collect(),
+            lights: lights.iter().map(Light::new).collect(),
+            first_rect_light: lights
+                .iter()
+                .position(|l| matches!(l, PunctualLight::Rect { .. }))
+                .unwrap_or(lights.len()) as u32,
             emitters: Vec::new(),
             emitter_cdf: Vec::new(),
             emitter_areas: Vec::new(),
@@ -226,7 +236,7 @@ impl RenderScene {
             };
             rs.env_cdf = env_distribution(&rs, texture);
         }
-        rs.build_emitters(&scene.lights);
+        rs.build_emitters(&lights);
         Ok(rs)
     }
 
@@ -347,8 +357,11 @@ impl RenderScene {
             .collect();
         let mut prev = 0.0;
         for (k, &i) in emitters.iter().enumerate() {
+            let pmf = emitter_cdf[k] - prev;
             if i & LIGHT_EMITTER == 0 {
-                self.shading[i as usize].emitter_pmf = emitter_cdf[k] - prev;
+                self.shading[i as usize].emitter_pmf = pmf;
+            } else {
+                self.lights[(i & !LIGHT_EMITTER) as usize].pmf = pmf;
             }
             prev = emitter_cdf[k];
         }

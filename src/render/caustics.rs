@@ -37,9 +37,9 @@
 //! densities as the cosines at their ends; where that is not exact (shading normals) the
 //! weights still sum to one, which is all unbiasedness needs.
 //!
-//! Emissive triangles and punctual lights (point, spot and directional) start light
-//! subpaths. A punctual light's subpath is the only strategy for its paths (BSDF sampling
-//! never reaches a point or a single direction), so its connections weigh 1
+//! Emissive triangles, rectangle lights and punctual lights (point, spot and directional)
+//! start light subpaths. A punctual light's subpath is the only strategy for its paths (BSDF
+//! sampling never reaches a point or a single direction), so its connections weigh 1
 //! ([`link_weight`]): without light subpaths those caustics are missing, not noisy.
 //! Caustics of the sky stay with BSDF sampling alone. Scenes without materials that may be delta (or
 //! rendered with `caustics = false`) have no targets and trace no light subpath: their
@@ -62,7 +62,7 @@ use super::tables::{
     SKY_EMITTER,
 };
 use super::texture::{alpha_test, material_at};
-use crate::geometry::{self, T_INF};
+use crate::geometry::T_INF;
 use crate::math::{Ray, onb_from_normal};
 use crate::scene::Material;
 use glam::{Vec2, Vec3, Vec4};
@@ -333,9 +333,9 @@ pub fn start_at_punctual(
 
 /// A light subpath's start on rectangle light `l` (picked with probability `pmf`): the
 /// point the pick's pair `u` puts on it, uniform in area, and a direction towards the
-/// targets from the pair `DIM_CAUSTIC_DIR_U` of bounce 0, as an emissive triangle's. Its pdf
-/// is 0: no ray hits a rectangle light, so the light subpath is the only strategy for its
-/// caustics. `None` where the direction leaves by its back.
+/// targets from the pair `DIM_CAUSTIC_DIR_U` of bounce 0, as an emissive triangle's, with
+/// the same pdf: BSDF-sampled rays reach a rectangle too. `None` where the direction
+/// leaves by its back.
 /// mirror: shaders/caustics.wgsl `start_at_rect`
 pub fn start_at_rect(
     scene: &RenderScene,
@@ -353,10 +353,14 @@ pub fn start_at_rect(
     if !(cos_m > 0.0 && pdf_dir > 0.0 && pdf_point > 0.0) {
         return None;
     }
+    let pdf = pdf_point * pdf_dir / cos_m;
+    if pdf.is_nan() || pdf <= 0.0 {
+        return None;
+    }
     Some(LightSubpathStart {
         ray: Ray::new(q, dir),
         beta: Vec3::from(l.intensity) * (cos_m / (pdf_point * pdf_dir)),
-        pdf: 0.0,
+        pdf,
     })
 }
 
@@ -679,21 +683,21 @@ pub fn light_vertex_seen(
 /// The weight of emission that BSDF sampling found at the end of a specular chain, against
 /// the light subpath that could have made the same path: `pdf_bsdf` is the path's
 /// [`PathState::caustic_pdf`](super::integrator::PathState::caustic_pdf), and the light
-/// point lies on triangle `tri` at `p`, the path arriving along unit `dir` with cosine
-/// `cos_l` to its normal. mirror: shaders/caustics.wgsl `caustic_hit_weight`
+/// point lies at `p` on an emitter of area `area` (a triangle, a rectangle) that light
+/// subpaths start on with pick probability `pmf`, the path arriving along unit `dir` with
+/// cosine `cos_l` to its normal. mirror: shaders/caustics.wgsl `caustic_hit_weight`
 pub fn caustic_hit_weight(
     scene: &RenderScene,
-    tri: u32,
+    pmf: f32,
+    area: f32,
     p: Vec3,
     dir: Vec3,
     cos_l: f32,
     pdf_bsdf: f32,
 ) -> f32 {
-    let pmf = scene.shading[tri as usize].emitter_pmf;
     if pmf == 0.0 || cos_l.is_nan() || cos_l <= 0.0 {
         return 1.0;
     }
-    let area = geometry::triangle_area(&scene.tris[tri as usize]);
     let pdf_light = LIGHT_SUBPATH_RATE * pmf / area * target_pdf(scene, p, -dir) / cos_l;
     caustic_weight(pdf_light / pdf_bsdf)
 }

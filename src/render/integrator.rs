@@ -16,7 +16,10 @@ use super::caustics::{
     LightPath, MAX_CAUSTIC_HOPS, camera_link, camera_pdf, caustic_hit_weight, caustic_link,
     trace_light_subpath,
 };
-use super::lights::{LightSample, light_pdf, sample_light, sample_punctual, sky_pdf, sky_radiance};
+use super::lights::{
+    LightSample, hit_rect, light_pdf, rect_pdf, sample_light, sample_punctual, sky_pdf,
+    sky_radiance,
+};
 use super::rng::{self, Rng};
 use super::sampling::power_heuristic;
 /// Also reachable here, the path that callers outside the renderer (`crate::bench`) name.
@@ -28,7 +31,7 @@ use super::tables::{LIGHT_RECT, RenderScene};
 use super::texture::{alpha_test, material_at};
 use crate::bvh::traverse_closest_counted;
 use crate::film::NO_ID;
-use crate::geometry::T_INF;
+use crate::geometry::{T_INF, triangle_area};
 use crate::math::Ray;
 use crate::scene::{Material, MaterialKind};
 use glam::{Vec2, Vec3, Vec4};
@@ -180,9 +183,11 @@ pub fn path_vertex<'a, const CAUSTICS: bool>(
     };
     st.rays += 1;
     let camera = st.depth == 0;
-    let Some(hit) =
-        wide.traverse_closest(&st.ray, T_INF, |t, u, v| alpha_test(scene, t, u, v, camera))
-    else {
+    let found = wide.traverse_closest(&st.ray, T_INF, |t, u, v| alpha_test(scene, t, u, v, camera));
+    if !camera {
+        add_rect_hits::<CAUSTICS>(scene, st, found.as_ref().map_or(T_INF, |h| h.t));
+    }
+    let Some(hit) = found else {
         let w = if st.prev_delta || scene.sky_pmf == 0.0 {
             1.0
         } else {
@@ -216,7 +221,9 @@ pub fn path_vertex<'a, const CAUSTICS: bool>(
         let w = if !st.prev_delta {
             power_heuristic(st.prev_pdf, light_pdf(scene, si.tri, hit.t, cos_l))
         } else if CAUSTICS && st.caustic_pdf > 0.0 {
-            caustic_hit_weight(scene, si.tri, si.p, st.ray.dir, cos_l, st.caustic_pdf)
+            let pmf = scene.shading[si.tri as usize].emitter_pmf;
+            let area = triangle_area(&scene.tris[si.tri as usize]);
+            caustic_hit_weight(scene, pmf, area, si.p, st.ray.dir, cos_l, st.caustic_pdf)
         } else {
             1.0
         };
@@ -275,6 +282,30 @@ pub fn path_vertex<'a, const CAUSTICS: bool>(
         u_lobe,
         u,
     })
+}
+
+/// Adds the emission of the rectangle lights that the BSDF-sampled ray `st.ray` meets
+/// before `t_max` (its hit, if any: the lights shadow nothing and the ray goes on), weighed
+/// against next event estimation by the power heuristic, or after a specular chain against
+/// the light subpath that could make the same path, as emissive triangles are. The light
+/// sample's density is taken from the ray's origin, the previous vertex offset from its
+/// surface. mirror: shaders/integrator.wgsl `add_rect_hits`
+#[inline(always)]
+fn add_rect_hits<const CAUSTICS: bool>(scene: &RenderScene, st: &mut PathState, t_max: f32) {
+    for l in &scene.lights[scene.first_rect_light as usize..] {
+        let Some((t, cos_l)) = hit_rect(l, &st.ray, t_max) else {
+            continue;
+        };
+        let w = if !st.prev_delta {
+            power_heuristic(st.prev_pdf, l.pmf * rect_pdf(l, st.ray.origin, t, cos_l))
+        } else if CAUSTICS && st.caustic_pdf > 0.0 {
+            let q = st.ray.origin + t * st.ray.dir;
+            caustic_hit_weight(scene, l.pmf, l.area, q, st.ray.dir, cos_l, st.caustic_pdf)
+        } else {
+            1.0
+        };
+        st.radiance += st.beta * w * Vec3::from(l.intensity);
+    }
 }
 
 /// Adds light sample `ls`, seen through `mat` at the vertex whose shading frame is `frame`

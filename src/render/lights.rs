@@ -13,6 +13,7 @@ use super::tables::{
 };
 use super::texture::{alpha_test, material_at, triangle_uv};
 use crate::geometry::{self, T_INF};
+use crate::math::Ray;
 use crate::scene::{NO_TEXTURE, Sky};
 use glam::{Vec2, Vec3, Vec4};
 use std::f32::consts::PI;
@@ -184,11 +185,12 @@ pub fn triangle_emission(scene: &RenderScene, light: u32, bary: Vec2) -> Vec3 {
 
 /// The shadow ray and arriving radiance of light `index`, picked with probability `pmf`,
 /// seen from `p`: a point or spot light's intensity over the squared distance (a spot's
-/// times its falloff), a directional light's irradiance, or a rectangle's radiance over the
-/// solid-angle density of the point `u` draws on it ([`sample_rect`]). A rectangle, which
-/// no ray hits, is reached by this strategy alone, as a point light. A light without
-/// shadows gets a shadow ray of length 0, which nothing blocks. `None` where it sends no
-/// light. mirror: shaders/lights.wgsl `sample_punctual`
+/// times its falloff), a directional light's irradiance, or a rectangle's radiance at the
+/// point `u` draws on it ([`sample_rect`]), with that point's solid-angle density (times
+/// `pmf`): BSDF-sampled rays reach a rectangle too ([`hit_rect`]), and the two are weighed
+/// by the power heuristic. A light without shadows gets a shadow ray of length 0, which
+/// nothing blocks. `None` where it sends no light.
+/// mirror: shaders/lights.wgsl `sample_punctual`
 pub fn sample_punctual(
     scene: &RenderScene,
     index: u32,
@@ -222,9 +224,9 @@ pub fn sample_punctual(
             origin,
             wi: to_light * (1.0 / dist),
             t_max: dist * (1.0 - 1e-4),
-            le: intensity * (1.0 / pdf),
-            pdf: pmf,
-            delta: true,
+            le: intensity,
+            pdf: pmf * pdf,
+            delta: false,
         });
     }
     let position = Vec3::from(l.position);
@@ -253,14 +255,30 @@ pub fn sample_punctual(
     })
 }
 
-/// A point of rectangle light `l` for the pair `u`, as seen from `p`, and the solid-angle
-/// density of its direction: uniform in the solid angle the rectangle subtends (Ureña,
-/// Fajardo and King 2013, "An area-preserving parametrization for spherical rectangles", as
-/// pbrt-v4 writes it), so that a light as wide as the sky is sampled as well as a small
-/// one; uniform in area where the rectangle subtends under 10⁻³ sr, where the two agree
-/// and the spherical form loses precision. `None` where `p` is behind the emitting side.
-/// mirror: shaders/lights.wgsl `sample_rect`
-pub fn sample_rect(l: &Light, p: Vec3, u: Vec2) -> Option<(Vec3, f32)> {
+/// Rectangle light `l` seen from a point: its frame (unit edges `x`, `y` and the normal
+/// `n` of its emitting side), the point's coordinates in that frame relative to the corner
+/// (`x0`..`x1` and `y0`..`y1` span the rectangle, at height `z0` < 0), and the spherical
+/// rectangle it subtends: the normals of its four great-circle edges, its inner angles and
+/// its solid angle. mirror: shaders/lights.wgsl `RectView`
+#[derive(Clone, Copy, Debug)]
+pub struct RectView {
+    pub x: Vec3,
+    pub y: Vec3,
+    pub n: Vec3,
+    pub x0: f32,
+    pub y0: f32,
+    pub x1: f32,
+    pub y1: f32,
+    pub z0: f32,
+    pub n0: Vec3,
+    pub n2: Vec3,
+    pub g: [f32; 4],
+    pub solid_angle: f32,
+}
+
+/// Rectangle light `l` seen from `p` ([`RectView`]); `None` where `p` is behind its
+/// emitting side. mirror: shaders/lights.wgsl `rect_view`
+pub fn rect_view(l: &Light, p: Vec3) -> Option<RectView> {
     let (s, ex, ey) = (
         Vec3::from(l.position),
         Vec3::from(l.direction),
@@ -285,13 +303,60 @@ pub fn sample_rect(l: &Light, p: Vec3, u: Vec2) -> Option<(Vec3, f32)> {
     let n1 = v10.cross(v11).normalize();
     let n2 = v11.cross(v01).normalize();
     let n3 = v01.cross(v00).normalize();
-    let g0 = angle_between(-n0, n1);
-    let g1 = angle_between(-n1, n2);
-    let g2 = angle_between(-n2, n3);
-    let g3 = angle_between(-n3, n0);
-    let solid_angle = g0 + g1 + g2 + g3 - 2.0 * PI;
-    if solid_angle.is_nan() || solid_angle < 1e-3 {
-        let q = s + u.x * ex + u.y * ey;
+    let g = [
+        angle_between(-n0, n1),
+        angle_between(-n1, n2),
+        angle_between(-n2, n3),
+        angle_between(-n3, n0),
+    ];
+    let solid_angle = g[0] + g[1] + g[2] + g[3] - 2.0 * PI;
+    Some(RectView {
+        x,
+        y,
+        n,
+        x0,
+        y0,
+        x1,
+        y1,
+        z0,
+        n0,
+        n2,
+        g,
+        solid_angle,
+    })
+}
+
+/// Whether [`sample_rect`] draws uniformly in area, not in solid angle, for a rectangle
+/// seen as `view`: under 10⁻³ sr, where the two agree and the spherical form loses
+/// precision. mirror: shaders/lights.wgsl `rect_by_area`
+pub fn rect_by_area(view: &RectView) -> bool {
+    view.solid_angle.is_nan() || view.solid_angle < 1e-3
+}
+
+/// A point of rectangle light `l` for the pair `u`, as seen from `p`, and the solid-angle
+/// density of its direction: uniform in the solid angle the rectangle subtends (Ureña,
+/// Fajardo and King 2013, "An area-preserving parametrization for spherical rectangles", as
+/// pbrt-v4 writes it), so that a light as wide as the sky is sampled as well as a small
+/// one; uniform in area where [`rect_by_area`]. `None` where `p` is behind the emitting
+/// side. mirror: shaders/lights.wgsl `sample_rect`
+pub fn sample_rect(l: &Light, p: Vec3, u: Vec2) -> Option<(Vec3, f32)> {
+    let view = rect_view(l, p)?;
+    let RectView {
+        x,
+        y,
+        n,
+        x0,
+        y0,
+        x1,
+        y1,
+        z0,
+        n0,
+        n2,
+        g: [g0, g1, g2, g3],
+        solid_angle,
+    } = view;
+    if rect_by_area(&view) {
+        let q = Vec3::from(l.position) + u.x * Vec3::from(l.direction) + u.y * Vec3::from(l.edge);
         let to = q - p;
         let dist2 = to.length_squared();
         let cos_l = -to.dot(n) / dist2.sqrt();
@@ -314,6 +379,40 @@ pub fn sample_rect(l: &Light, p: Vec3, u: Vec2) -> Option<(Vec3, f32)> {
         y1
     };
     Some((p + xu * x + yv * y + z0 * n, 1.0 / solid_angle))
+}
+
+/// The solid-angle density with which [`sample_rect`] draws, from `p`, the direction to the
+/// point of rectangle light `l` at distance `dist` whose cosine towards `p` is `cos_l`.
+/// mirror: shaders/lights.wgsl `rect_pdf`
+pub fn rect_pdf(l: &Light, p: Vec3, dist: f32, cos_l: f32) -> f32 {
+    match rect_view(l, p) {
+        None => 0.0,
+        Some(view) if rect_by_area(&view) => dist * dist / (cos_l * l.area),
+        Some(view) => 1.0 / view.solid_angle,
+    }
+}
+
+/// Where `ray` meets the emitting side of rectangle light `l` before `t_max`: the distance
+/// and the cosine there between the ray and the light's normal, reversed.
+/// mirror: shaders/lights.wgsl `hit_rect`
+pub fn hit_rect(l: &Light, ray: &Ray, t_max: f32) -> Option<(f32, f32)> {
+    let (ex, ey) = (Vec3::from(l.direction), Vec3::from(l.edge));
+    let n = ex.cross(ey).normalize();
+    let cos_l = -ray.dir.dot(n);
+    if cos_l.is_nan() || cos_l <= 0.0 {
+        return None;
+    }
+    let to = Vec3::from(l.position) - ray.origin;
+    let t = -to.dot(n) / cos_l;
+    if !(t > 0.0 && t < t_max) {
+        return None;
+    }
+    let q = ray.origin + t * ray.dir - Vec3::from(l.position);
+    let (a, b) = (
+        q.dot(ex) / ex.length_squared(),
+        q.dot(ey) / ey.length_squared(),
+    );
+    ((0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b)).then_some((t, cos_l))
 }
 
 /// The angle between unit vectors `a` and `b`, accurate near 0 and π (where acos of their

@@ -100,7 +100,10 @@ pub struct Light {
     pub area: f32,
     /// A rectangle's second edge: its light leaves on the side of `direction × edge`.
     pub edge: [f32; 3],
-    pub _pad: u32,
+    /// The probability that next event estimation picks the light among
+    /// [`RenderScene::emitters`] (0 where it is not among them): what a BSDF-sampled ray
+    /// that meets a rectangle weighs its light sample by.
+    pub pmf: f32,
 }
 
 /// [`Light::kind`] codes.
@@ -153,8 +156,11 @@ pub struct RenderScene {
     /// Where a material has sheen, the sheen's albedo table follows
     /// (`sheen::sheen_table`, which the CPU reads where it lies).
     pub texel_lut: Vec<f32>,
-    /// Point, spot and directional lights.
+    /// Point, spot, directional and rectangle lights, the rectangles last (from
+    /// `first_rect_light`), so that BSDF-sampled rays test them alone.
     pub lights: Vec<Light>,
+    /// The index of the first rectangle light in `lights` (its length where there is none).
+    pub first_rect_light: u32,
     /// The lights next event estimation picks from: leaf-order indices of emissive
     /// triangles, then punctual lights ([`LIGHT_EMITTER`] | index), then [`SKY_EMITTER`]
     /// if the sky is not black; and their inclusive CDF.

@@ -17,7 +17,7 @@ pub const SKY_CONSTANT: u32 = 0;
 pub const SKY_GRADIENT: u32 = 1;
 pub const SKY_ENVIRONMENT: u32 = 2;
 
-/// One dispatch's parameters (224 bytes). mirror: shaders/types.wgsl `Params`
+/// One dispatch's parameters (240 bytes). mirror: shaders/types.wgsl `Params`
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Params {
@@ -74,6 +74,10 @@ pub struct Params {
     pub filter_width: f32,
     /// [`CameraRays::window`]: the pixels whose camera rays may meet the scene.
     pub window: [u32; 4],
+    /// The lights in the table, and [`RenderScene::first_rect_light`].
+    pub num_lights: u32,
+    pub first_rect_light: u32,
+    pub _pad: [u32; 2],
 }
 
 impl Params {
@@ -117,6 +121,9 @@ impl Params {
             lights_in_full,
             filter_width,
             window,
+            num_lights,
+            first_rect_light,
+            _pad,
         })
     }
 
@@ -148,6 +155,8 @@ impl Params {
             scene_center: scene.scene_sphere.0.into(),
             scene_radius: scene.scene_sphere.1,
             lights_in_full: scene.lights_in_full,
+            num_lights: scene.lights.len() as u32,
+            first_rect_light: scene.first_rect_light,
             ..Self::default()
         }
     }

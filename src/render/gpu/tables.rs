@@ -201,7 +201,7 @@ pub const TABLES: &[Table] = &[
                 shadows,
                 area,
                 edge,
-                _pad,
+                pmf,
             }))
         },
         bytes: |s| bytemuck::cast_slice(&s.lights),
