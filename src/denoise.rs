@@ -108,6 +108,9 @@ impl Denoiser {
             .hdr(true)
             .image_dimensions(width as usize, height as usize);
         match (albedo, normal) {
+            // Noisy guides (OIDN's default): a few samples a pixel average them. (The crate
+            // passes `clean_aux` to OIDN 2 under a name it ignores; setting OIDN's own
+            // `cleanAux` made the dataset job's noise worse: BENCHMARKS.md, Denoising.)
             (Some(a), Some(n)) => {
                 filter
                     .albedo_normal(bytemuck::cast_slice(a), bytemuck::cast_slice(n))
