@@ -56,6 +56,10 @@ def test_ctrl_c_stops_a_render():
         """
         import os, signal, threading, time
         import meshtrace as mt
+        # A job that a shell starts in the background without job control (`cmd &` in a
+        # script, as CI runners may) inherits SIGINT ignored, which Python keeps: handle it
+        # as an interactive session does.
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         r = mt.Renderer(device="cpu")
         scene = mt.load("builtin:cornell")
         # One pass of the CPU renderer: 2^20 paths, 64 spp at 128×128.
