@@ -340,45 +340,32 @@ pub fn rect_by_area(view: &RectView) -> bool {
 /// one; uniform in area where [`rect_by_area`]. `None` where `p` is behind the emitting
 /// side. mirror: shaders/lights.wgsl `sample_rect`
 pub fn sample_rect(l: &Light, p: Vec3, u: Vec2) -> Option<(Vec3, f32)> {
-    let view = rect_view(l, p)?;
-    let RectView {
-        x,
-        y,
-        n,
-        x0,
-        y0,
-        x1,
-        y1,
-        z0,
-        n0,
-        n2,
-        g: [g0, g1, g2, g3],
-        solid_angle,
-    } = view;
-    if rect_by_area(&view) {
+    let v = rect_view(l, p)?;
+    if rect_by_area(&v) {
         let q = Vec3::from(l.position) + u.x * Vec3::from(l.direction) + u.y * Vec3::from(l.edge);
         let to = q - p;
         let dist2 = to.length_squared();
-        let cos_l = -to.dot(n) / dist2.sqrt();
+        let cos_l = -to.dot(v.n) / dist2.sqrt();
         return Some((q, dist2 / (cos_l * l.area)));
     }
-    let (b0, b1) = (n0.z, n2.z);
+    let [g0, g1, g2, g3] = v.g;
+    let (b0, b1) = (v.n0.z, v.n2.z);
     let au = u.x * (g0 + g1 - 2.0 * PI) + (u.x - 1.0) * (g2 + g3);
     let fu = (au.cos() * b0 - b1) / au.sin();
     let sign = if fu >= 0.0 { 1.0 } else { -1.0 };
     let cu = (sign / (fu * fu + b0 * b0).sqrt()).clamp(-ONE_MINUS_EPSILON, ONE_MINUS_EPSILON);
-    let xu = (-(cu * z0) / (1.0 - cu * cu).max(0.0).sqrt()).clamp(x0, x1);
-    let dd = (xu * xu + z0 * z0).sqrt();
-    let h0 = y0 / (dd * dd + y0 * y0).sqrt();
-    let h1 = y1 / (dd * dd + y1 * y1).sqrt();
+    let xu = (-(cu * v.z0) / (1.0 - cu * cu).max(0.0).sqrt()).clamp(v.x0, v.x1);
+    let dd = (xu * xu + v.z0 * v.z0).sqrt();
+    let h0 = v.y0 / (dd * dd + v.y0 * v.y0).sqrt();
+    let h1 = v.y1 / (dd * dd + v.y1 * v.y1).sqrt();
     let hv = h0 + u.y * (h1 - h0);
     let hv2 = hv * hv;
     let yv = if hv2 < 1.0 - 1e-4 {
         hv * dd / (1.0 - hv2).sqrt()
     } else {
-        y1
+        v.y1
     };
-    Some((p + xu * x + yv * y + z0 * n, 1.0 / solid_angle))
+    Some((p + xu * v.x + yv * v.y + v.z0 * v.n, 1.0 / v.solid_angle))
 }
 
 /// The solid-angle density with which [`sample_rect`] draws, from `p`, the direction to the
