@@ -102,3 +102,20 @@ pub fn onb_from_normal(n: Vec3) -> (Vec3, Vec3) {
 pub fn luminance(c: Vec3) -> f32 {
     c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
 }
+
+/// A number uniform in [0, 1) for object `uid`, view `view` and dimension `dim`: a pure
+/// function of the three (FNV-1a of the uid, mixed with the view and dimension by
+/// SplitMix64's finaliser). The dataset scripts draw from unseeded generators; a batch
+/// preset (and a lighting preset's suns) draws from the same distributions, reproducibly
+/// and independently per object and view.
+pub fn uniform(uid: &str, view: u32, dim: u32) -> f64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    for b in uid.bytes() {
+        h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    let mut x = h ^ ((view as u64) << 32 | dim as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    x ^= x >> 31;
+    (x >> 11) as f64 / (1u64 << 53) as f64
+}

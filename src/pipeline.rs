@@ -60,7 +60,7 @@ pub fn load(input: &Path, request: &RenderRequest) -> Result<Scene, PipelineErro
 }
 
 /// Stages a loaded `scene` as `request` asks, as [`load`] does: the sky replaced by the
-/// requested environment, textures larger than the requested maximum scaled down (each
+/// requested environment, or the sky and lights by the requested lighting preset, textures larger than the requested maximum scaled down (each
 /// with a warning in [`Scene::warnings`]). For scenes that come from elsewhere than a
 /// file (the Python API's dictionaries).
 pub fn stage(mut scene: Scene, request: &RenderRequest) -> Result<Scene, PipelineError> {
@@ -69,6 +69,9 @@ pub fn stage(mut scene: Scene, request: &RenderRequest) -> Result<Scene, Pipelin
             field: "environment",
             message,
         })?;
+    }
+    if let Some(lighting) = &request.lighting {
+        lighting.apply(&mut scene, &Fs)?;
     }
     if let Some(max) = request.max_texture_size {
         for t in scene.textures.limit_size(max) {

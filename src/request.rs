@@ -1,7 +1,7 @@
 //! A render request: everything that decides an image beyond the input itself — size,
 //! samples, depth, seed, branches, caustics, the device, adapter and accel, the AOVs,
-//! transparency, a bare mesh's up axis, an environment that replaces the sky, the largest
-//! texture size, the part of a split render and denoising. Every source fills the same type: command-line flags, a
+//! transparency, a bare mesh's up axis, an environment or a lighting preset that replaces the
+//! sky, the largest texture size, the part of a split render and denoising. Every source fills the same type: command-line flags, a
 //! batch manifest's `[render]` table (deserialised straight into it) and library callers.
 //! A field left `None` keeps what the input says (a scene file's own `[render]` table), or
 //! the default. [`RenderRequest::validate`] is the one check, and its errors name the field
@@ -12,6 +12,7 @@ use crate::film::{Aov, BitDepth};
 use crate::render::backend::{Backend, DeviceChoice};
 use crate::render::gpu::{Accel, GpuError};
 use crate::scene::RenderSettings;
+use crate::scene::lighting::Lighting;
 use crate::scene::studio::{BareOptions, Up};
 use serde::{Deserialize, Deserializer};
 use std::path::PathBuf;
@@ -51,6 +52,9 @@ pub struct RenderRequest {
     pub up: Option<Up>,
     /// An equirectangular image (.hdr, .exr) that lights the scene instead of its sky.
     pub environment: Option<PathBuf>,
+    /// A lighting preset that replaces the input's sky and lights (with `environment`, an
+    /// error: both set the sky).
+    pub lighting: Option<Lighting>,
     /// The most texels a texture may have along its larger side: larger images are scaled
     /// down once loaded ([`Textures::limit_size`](crate::scene::Textures::limit_size)), so
     /// that a scene whose texel table is too large for a GPU renders on it.
@@ -124,6 +128,7 @@ impl RenderRequest {
             transparent: r.transparent.or(u.transparent),
             up: r.up.or(u.up),
             environment: r.environment.or(u.environment),
+            lighting: r.lighting.or(u.lighting),
             max_texture_size: r.max_texture_size.or(u.max_texture_size),
             part: r.part.or(u.part),
             denoise: r.denoise.or(u.denoise),
@@ -190,6 +195,13 @@ impl RenderRequest {
             return Err(RequestError::new(
                 "bit_depth",
                 format!("must be 8 or 16 (bits per channel of a PNG), got {bits}"),
+            ));
+        }
+        if self.environment.is_some() && self.lighting.is_some() {
+            return Err(RequestError::new(
+                "lighting",
+                "cannot be combined with `environment`: both set the sky (a lighting preset \
+                 `hdri` takes an image)",
             ));
         }
         if self.max_texture_size == Some(0) {

@@ -1313,3 +1313,37 @@ fn the_syncdreamer_preset_renders_as_its_script_does_in_cycles() {
 fn the_objaverse_preset_renders_as_its_script_does_in_cycles() {
     preset_against_cycles("objaverse", 4, &[0, 7], 512, (0.13, 0.2));
 }
+
+/// A manifest's `render.lighting` lights each input in place of a dataset preset's script
+/// lighting: under a black uniform world the zero123 preset's object comes out black
+/// (its area and point lights gone) where the preset's own lights show it.
+#[test]
+fn a_manifests_lighting_replaces_the_presets_lights() {
+    let covered_rgb = |lighting: &str| {
+        let dir = TempDir::new("batch-lighting");
+        let models = dir.path().join("models");
+        std::fs::create_dir_all(&models).unwrap();
+        std::fs::copy(data("box.obj"), models.join("box.obj")).unwrap();
+        let manifest = format!(
+            "[render]\nspp = 2\nwidth = 24\nheight = 24\n{lighting}\n\n[[jobs]]\n\
+             meshes = \"models/*\"\npreset = \"zero123\"\nviews = 1\n"
+        );
+        std::fs::write(dir.path().join("m.toml"), manifest).unwrap();
+        let (code, stderr) = run(&dir, &["batch", "m.toml", "--device", "cpu"]);
+        assert_eq!(code, 0, "{stderr}");
+        let image = image::open(dir.path().join("views/box/000.png"))
+            .unwrap()
+            .into_rgba8();
+        let covered: Vec<_> = image.pixels().filter(|p| p[3] == 255).collect();
+        assert!(!covered.is_empty(), "the box covers no pixel");
+        covered
+            .iter()
+            .map(|p| p[0] as u64 + p[1] as u64 + p[2] as u64)
+            .sum::<u64>()
+    };
+    assert!(covered_rgb("") > 0);
+    assert_eq!(
+        covered_rgb("lighting = { preset = \"uniform\", color = [0.0, 0.0, 0.0] }"),
+        0
+    );
+}

@@ -484,7 +484,7 @@ fn info_into_a_closed_pipe_ends_quietly() {
 /// `--up` and `--env`: a bad value or a file that is not there fails cleanly, naming the
 /// option; a bare mesh renders with `--up z` and lit by another map with `--env`.
 #[test]
-fn up_and_env_options() {
+fn up_env_and_lighting_options() {
     let dir = TempDir::new("up-env");
     dir.write("t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     dir.write("junk.hdr", "not an image");
@@ -505,8 +505,46 @@ fn up_and_env_options() {
         &["render", "builtin:cornell", "--up", "z"],
         &["--up", "bare mesh"],
     );
+    assert_fails(
+        &dir,
+        &["render", "t.obj", "--lighting", "sunny"],
+        &["--lighting", "`sunny` is not a lighting preset"],
+    );
+    assert_fails(
+        &dir,
+        &[
+            "render",
+            "t.obj",
+            "--lighting",
+            "{ preset = \"hdri\", environment = \"gone.hdr\" }",
+        ],
+        &["lighting.environment", "gone.hdr"],
+    );
+    assert_fails(
+        &dir,
+        &["render", "t.obj", "--env", map, "--lighting", "studio"],
+        &["--lighting", "cannot be combined with `environment`"],
+    );
+    let hdri = format!("{{ preset = \"hdri\", environment = \"{map}\", rotate = 90 }}");
     for args in [
         &["render", "t.obj", "--up", "z", "-o", "up.png"][..],
+        &[
+            "render",
+            "t.obj",
+            "--lighting",
+            "{ preset = \"suns\", count = 2 }",
+            "-o",
+            "suns.png",
+        ],
+        &[
+            "render",
+            "builtin:cornell",
+            "--lighting",
+            "area",
+            "-o",
+            "area.png",
+        ],
+        &["render", "t.obj", "--lighting", &hdri, "-o", "hdri.png"],
         &["render", "t.obj", "--env", map, "-o", "env.png"],
         &[
             "render",

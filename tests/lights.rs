@@ -363,3 +363,92 @@ fn bad_lights_are_errors_naming_the_field() {
         assert!(!message.contains('\n'), "{message}");
     }
 }
+
+/// A lighting preset whose light the floor's irradiance has a closed form for: the area key
+/// light straight above gives its `irradiance` at the floor's centre (where the bounding
+/// sphere is centred, and where the camera looks); a uniform world gives π times its
+/// radiance; the suns give the sum of their irradiances times their cosines, read from the
+/// lights the preset made, which the scene file's name (its uid) and the seed draw.
+#[test]
+fn lighting_presets_give_their_closed_forms() {
+    // A light that adds nothing, for the helper's `[[lights]]` table.
+    let dark = "type = \"point\"\nposition = [0.0, 5.0, 0.0]\nintensity = [0.0, 0.0, 0.0]";
+    let area = "[lighting]\npreset = \"area\"\nelevation = 90.0\nirradiance = 2.0\nworld = 0.0";
+    assert_radiance_within("lighting area", dark, area, 256, 1e-2, [2.0; 3]);
+    let uniform = "[lighting]\npreset = \"uniform\"\ncolor = [0.2, 0.4, 0.8]";
+    let e = [0.2f32, 0.4, 0.8].map(|c| std::f32::consts::PI * c);
+    assert_radiance_within("lighting uniform", dark, uniform, 1024, 1e-2, e);
+
+    let suns = "[lighting]\npreset = \"suns\"\ncount = 3\nseed = 5\nworld = 0.0";
+    let scene_with = |file: &str| {
+        let dir = TempDir::new("lighting suns drawn");
+        let toml = format!(
+            "[camera]\nposition = [0.0, 1.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\n{suns}\n\
+             [[objects]]\nsphere = {{ center = [0.0, 0.0, 0.0], radius = 1.0 }}\n"
+        );
+        load_scene(&dir.write(file, toml)).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let lights = scene_with("scene.toml").lights;
+    assert_eq!(lights.len(), 3);
+    assert_eq!(
+        scene_with("scene.toml").lights,
+        lights,
+        "the same uid, the same suns"
+    );
+    assert_ne!(
+        scene_with("other.toml").lights,
+        lights,
+        "another uid, other suns"
+    );
+    let mut e = 0.0;
+    for light in &lights {
+        let meshtrace::scene::PunctualLight::Directional {
+            direction,
+            irradiance,
+            shadows: true,
+        } = light
+        else {
+            panic!("not a sun with shadows: {light:?}");
+        };
+        e += irradiance.x * -direction.y;
+    }
+    // The helper's scene file is scene.toml too: the same suns.
+    assert_radiance_within("lighting suns", dark, suns, 4, 1e-3, [e; 3]);
+}
+
+#[test]
+fn bad_lighting_is_an_error_naming_the_key() {
+    let dir = TempDir::new("bad-lighting");
+    for (body, needle) in [
+        (
+            "preset = \"suns\"\nsize = 2.0",
+            "lighting.size: is not a parameter of the `suns` preset",
+        ),
+        (
+            "preset = \"sunny\"",
+            "lighting.preset: `sunny` is not a lighting preset",
+        ),
+        (
+            "preset = \"area\"\nirradiance = -1.0",
+            "lighting.irradiance: must be at least 0",
+        ),
+        (
+            "preset = \"hdri\"\nenvironment = \"missing.hdr\"",
+            "lighting.environment",
+        ),
+        (
+            "preset = \"uniform\"\n[sky]\ncolor = [1.0, 1.0, 1.0]",
+            "lighting: cannot be combined with `[sky]`",
+        ),
+    ] {
+        let toml = format!(
+            "[camera]\nposition = [0.0, 1.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\n[lighting]\n{body}\n"
+        );
+        let message = load_scene(&dir.write("scene.toml", toml))
+            .expect_err(body)
+            .to_string();
+        assert!(message.contains("scene.toml"), "{body}: {message}");
+        assert!(message.contains(needle), "{body}: {message}");
+        assert!(!message.contains('\n'), "{message}");
+    }
+}

@@ -351,7 +351,7 @@ pub fn preset(
         })?;
     let uid = match (uid, &s.path) {
         (Some(u), _) => u,
-        (None, Some(p)) => meshtrace::batch::uid(p),
+        (None, Some(p)) => meshtrace::scene::uid(p),
         (None, None) => return Err(errors::message("uid: give one for a scene without a file")),
     };
     let views = views.unwrap_or(preset.views);

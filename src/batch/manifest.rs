@@ -126,6 +126,7 @@ impl Manifest {
         if let Some(env) = &request.environment {
             request.environment = Some(dir.join(env));
         }
+        request.lighting = request.lighting.map(|l| l.relative_to(&dir));
         request
             .validate()
             .map_err(|e| invalid(format!("render.{}", e.field), e.message))?;

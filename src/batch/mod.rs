@@ -43,16 +43,6 @@ pub struct Task {
     pub output: PathBuf,
 }
 
-/// An input's uid, as the dataset scripts name an object: its file name up to the first
-/// dot.
-pub fn uid(input: &Path) -> String {
-    let name = input
-        .file_name()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    name.split('.').next().unwrap_or_default().to_string()
-}
-
 impl Manifest {
     /// Every task of every job, in a fixed order: jobs in manifest order, a glob's files
     /// sorted by path, views in order. Two tasks writing the same output are an error.
@@ -79,7 +69,7 @@ impl Manifest {
                     .map(|s| s.to_string_lossy().into_owned())
                     .unwrap_or_default();
                 let stem = stem.strip_prefix("builtin:").unwrap_or(&stem).to_string();
-                let uid = uid(&input);
+                let uid = crate::scene::uid(&input);
                 for view in 0..job.views {
                     let name = job.preset.as_ref().and_then(|p| p.view_name(view));
                     let output =

@@ -7,7 +7,7 @@
 //! Rather than move the mesh, the scene is left where the file puts it and the cameras
 //! and lights are moved by the inverse of the normalisation: the images are the same.
 
-use crate::math::Aabb;
+use crate::math::{Aabb, uniform};
 use crate::request::RenderRequest;
 use crate::scene::camera::Camera;
 use crate::scene::light::PunctualLight;
@@ -313,7 +313,7 @@ impl Preset {
     /// is opaque and takes its mask and normals from [`Preset::aovs`]), no studio, and the
     /// mesh read with +Y up, as Blender's glTF and OBJ importers read it.
     pub fn request(&self) -> RenderRequest {
-        let rig = self.poses == Poses::RtTxt;
+        let rig = self.rig();
         RenderRequest {
             up: Some(Up::Y),
             width: Some(self.size),
@@ -328,9 +328,10 @@ impl Preset {
 
     /// The AOVs the preset's files are made of, whatever else the manifest asks for.
     pub fn aovs(&self) -> &'static [crate::film::Aov] {
-        match self.poses {
-            Poses::RtTxt => &[crate::film::Aov::Normal, crate::film::Aov::ObjectId],
-            _ => &[],
+        if self.rig() {
+            &[crate::film::Aov::Normal, crate::film::Aov::ObjectId]
+        } else {
+            &[]
         }
     }
 
@@ -348,7 +349,13 @@ impl Preset {
     /// The script's name of view `view` where its views have names (Wonder3D's
     /// `000_front`; [`wonder3d::view_name`]).
     pub fn view_name(&self, view: u32) -> Option<String> {
-        matches!(self.layout, Layout::Rig { .. }).then(|| wonder3d::view_name(view))
+        self.rig().then(|| wonder3d::view_name(view))
+    }
+
+    /// Whether the views are Wonder3D's rig ([`Layout::Rig`]): named views on an opaque
+    /// film, whose mask and normals go into the script's own images rather than beside them.
+    pub fn rig(&self) -> bool {
+        matches!(self.layout, Layout::Rig { .. })
     }
 
     /// The script's normalisation of a mesh of bounds `b` ([`Fit`]); `None` for an empty
@@ -633,22 +640,6 @@ fn radical_inverse_2(i: u32) -> f64 {
 const OBJECT: u32 = u32::MAX;
 /// The dimension of a shell view's radius, past the direction's (and its redraws').
 const SHELL_RADIUS: u32 = 1 << 16;
-
-/// A number uniform in [0, 1) for object `uid`, view `view` and dimension `dim`: a pure
-/// function of the three (FNV-1a of the uid, mixed with the view and dimension by
-/// SplitMix64's finaliser). The scripts draw from unseeded generators; a preset draws from
-/// the same distributions, reproducibly and independently per object and view.
-pub fn uniform(uid: &str, view: u32, dim: u32) -> f64 {
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
-    for b in uid.bytes() {
-        h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    let mut x = h ^ ((view as u64) << 32 | dim as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    x ^= x >> 31;
-    (x >> 11) as f64 / (1u64 << 53) as f64
-}
 
 /// Blender's factory point light (1,000 W at (4.0762, 1.0055, 5.9039)) in the frame of a
 /// mesh that `norm` normalises. It is a root object when the scripts normalise, so it moves

@@ -50,8 +50,8 @@ pub fn turn(uid: &str, rig: u32, random: bool) -> DMat3 {
     if !random {
         return DMat3::IDENTITY;
     }
-    let delta_z = -60.0 + 120.0 * super::preset::uniform(uid, rig, TURN_Z);
-    let delta_x = -15.0 + 45.0 * super::preset::uniform(uid, rig, TURN_X);
+    let delta_z = -60.0 + 120.0 * crate::math::uniform(uid, rig, TURN_Z);
+    let delta_x = -15.0 + 45.0 * crate::math::uniform(uid, rig, TURN_X);
     DMat3::from_rotation_x(-f64::to_radians(delta_x))
         * DMat3::from_rotation_z(-f64::to_radians(delta_z))
 }
@@ -107,10 +107,9 @@ pub fn images(film: &Film, camera: &Camera) -> Result<(Vec<u8>, Vec<u8>), String
         Some([AovValues::U32(ids)]) => ids.iter().map(|&id| id != NO_ID).collect::<Vec<_>>(),
         _ => return Err("the render has no object_id AOV for the mask".into()),
     };
-    let normal = match film.aov_values(Aov::Normal).as_deref() {
-        Some([AovValues::F32(x), AovValues::F32(y), AovValues::F32(z)]) => {
-            (x.clone(), y.clone(), z.clone())
-        }
+    let normal_values = film.aov_values(Aov::Normal);
+    let normal = match normal_values.as_deref() {
+        Some([AovValues::F32(x), AovValues::F32(y), AovValues::F32(z)]) => (x, y, z),
         _ => return Err("the render has no normal AOV".into()),
     };
     let alpha = |hit: bool| if hit { 255 } else { 0 };

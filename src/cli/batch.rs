@@ -403,7 +403,7 @@ fn run_input(
 ) -> Result<()> {
     let job = &manifest.jobs[group[0].job];
     // Wonder3D's preset writes its AOVs into its own images, not beside them.
-    let named = job.preset.as_ref().is_some_and(|p| p.poses == Poses::RtTxt);
+    let named = job.preset.as_ref().is_some_and(Preset::rig);
     let aovs = request.aov_mask() != 0 && !named;
     let done: Vec<bool> = group.iter().map(|t| complete(t, aovs)).collect();
     // A preset writes its script's files alone: no transforms.json.
@@ -438,7 +438,7 @@ fn run_input(
         }
         e => pipeline_error(e),
     };
-    let uid = batch::uid(&group[0].input);
+    let uid = meshtrace::scene::uid(&group[0].input);
     let t = Instant::now();
     let mut scene = meshtrace::pipeline::load(&group[0].input, &request).map_err(request_error)?;
     for w in &scene.warnings {
@@ -484,9 +484,12 @@ fn run_input(
                     wonder3d::savetxt(&dir.join("scale_offset_matrix.txt"), &rows)?;
                 }
             }
-            preset
-                .light(&mut scene, &norm, &uid)
-                .map_err(|e| pipeline_error(e.into()))?;
+            // A lighting preset in the request has lit the scene instead.
+            if request.lighting.is_none() {
+                preset
+                    .light(&mut scene, &norm, &uid)
+                    .map_err(|e| pipeline_error(e.into()))?;
+            }
             Some(norm)
         }
     };

@@ -13,6 +13,7 @@ use meshtrace::pipeline::Prepared;
 use meshtrace::render::backend::Backend;
 use meshtrace::request::{Part, RenderRequest};
 use meshtrace::scene::builtin;
+use meshtrace::scene::lighting::Lighting;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -97,6 +98,11 @@ pub struct RenderArgs {
     /// instead of its own sky.
     #[arg(long, value_name = "FILE")]
     pub env: Option<PathBuf>,
+    /// Light the scene or the bare mesh with a lighting preset instead of its own sky and
+    /// lights: `area`, `suns`, `uniform`, `studio`, or a TOML inline table with its
+    /// parameters, `'{ preset = "suns", count = 6, seed = 2 }'` (docs/scene-format.md).
+    #[arg(long, value_name = "PRESET|TABLE")]
+    pub lighting: Option<String>,
     /// Scale every texture (environment maps included) whose larger side exceeds N texels
     /// down to N on that side, keeping its aspect ratio, with a warning for each: for a
     /// scene whose textures are too large for the GPU, or to save memory.
@@ -122,6 +128,24 @@ pub struct RenderArgs {
     pub preview: bool,
 }
 
+/// `--lighting`: a preset's name, or a TOML inline table of a preset and its parameters.
+fn parse_lighting(text: &str) -> Result<Lighting, String> {
+    let value = if text.trim_start().starts_with('{') {
+        toml::from_str::<toml::Table>(&format!("lighting = {text}"))
+            .map_err(|e| e.message().replace('\n', " "))?
+            .remove("lighting")
+            .unwrap_or(toml::Value::Boolean(false))
+    } else {
+        toml::Value::Table(toml::Table::from_iter([(
+            "preset".to_string(),
+            toml::Value::String(text.to_string()),
+        )]))
+    };
+    value
+        .try_into()
+        .map_err(|e: toml::de::Error| e.message().to_string())
+}
+
 /// `on` or `off`, listed as such in `--help`.
 fn on_off() -> impl TypedValueParser<Value = bool> {
     PossibleValuesParser::new(["on", "off"]).map(|v| v == "on")
@@ -140,6 +164,10 @@ impl RenderArgs {
             Some(list) => Some(Aov::parse_list(list).context("--aov")?),
             None => None,
         };
+        let lighting = (self.lighting.as_deref())
+            .map(parse_lighting)
+            .transpose()
+            .map_err(|e| anyhow::anyhow!("--lighting: {e}"))?;
         Ok(RenderRequest {
             width: self.width,
             height: self.height,
@@ -155,6 +183,7 @@ impl RenderArgs {
             geometry_only: Some(self.geometry_only),
             up: self.up.map(UpAxis::up),
             environment: self.env.clone(),
+            lighting,
             max_texture_size: self.max_texture_size,
             part: part.map(|(index, count)| Part { index, count }),
             denoise: Some(self.denoise),

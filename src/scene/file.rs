@@ -14,6 +14,8 @@ pub struct SceneFile {
     #[serde(default)]
     pub render: RenderFile,
     pub sky: Option<SkyFile>,
+    /// A lighting preset, instead of `[sky]`.
+    pub lighting: Option<super::lighting::Lighting>,
     #[serde(default)]
     pub materials: BTreeMap<String, MaterialFile>,
     #[serde(default)]

@@ -94,6 +94,12 @@ fn parse_scene_from(text: &str, path: &Path, files: &dyn FileSource) -> Result<S
     let camera = ctx.camera(&file)?;
     let settings = ctx.settings(&file)?;
     let mut builder = Builder::default();
+    if file.lighting.is_some() && file.sky.is_some() {
+        return Err(ctx.invalid(
+            "lighting",
+            "cannot be combined with `[sky]`: a lighting preset sets the sky",
+        ));
+    }
     let sky = ctx.sky(&file, &mut builder.textures)?;
     for (name, m) in &file.materials {
         let mat = ctx.material(name, m, &mut builder.textures)?;
@@ -104,8 +110,15 @@ fn parse_scene_from(text: &str, path: &Path, files: &dyn FileSource) -> Result<S
         builder.object = i as u32;
         ctx.object(&mut builder, i, object)?;
     }
-    for (i, light) in file.lights.iter().enumerate() {
-        builder.lights.push(ctx.light(i, light)?);
+    let lights = (file.lights.iter().enumerate())
+        .map(|(i, light)| ctx.light(i, light))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut scene = builder.finish(Some(path.to_path_buf()), camera, sky, settings);
+    // A preset replaces the sky and the lights that glTF objects bring; the file's own
+    // `[[lights]]` add to it.
+    if let Some(lighting) = file.lighting {
+        lighting.relative_to(&ctx.dir).apply(&mut scene, files)?;
     }
-    Ok(builder.finish(Some(path.to_path_buf()), camera, sky, settings))
+    scene.lights.extend(lights);
+    Ok(scene)
 }

@@ -13,6 +13,7 @@ pub mod error;
 pub mod file;
 pub mod gltf;
 pub mod light;
+pub mod lighting;
 pub mod lines;
 pub mod load;
 pub mod material;
@@ -35,7 +36,7 @@ pub use settings::{BRANCHES_DEFAULT, CAUSTICS_DEFAULT, MAX_BRANCHES, MAX_PIXELS,
 pub use texture::{Texture, TextureFormat, Textures, Wrap};
 
 use glam::{Vec2, Vec3, Vec4};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Index value of a triangle corner that has no vertex normal.
 pub const NO_NORMAL: u32 = u32::MAX;
@@ -182,4 +183,14 @@ pub struct Scene {
     /// (the ground left out), for other views framed alike (`meshtrace batch`'s turntables).
     /// `None` for a scene file.
     pub framed: Option<crate::math::Aabb>,
+}
+
+/// An input's uid, as the dataset scripts name an object: its file name up to the first
+/// dot.
+pub fn uid(input: &Path) -> String {
+    let name = input
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    name.split('.').next().unwrap_or_default().to_string()
 }

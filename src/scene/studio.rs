@@ -135,27 +135,31 @@ pub const GROUND_ALBEDO: f32 = 0.6;
 
 /// The studio environment's strength: its irradiance on an upward surface is 2.23 π, so a
 /// white surface facing up comes out at 0.9 and the ground at 0.54, within a PNG's range.
-const STUDIO_STRENGTH: f32 = 0.4;
+pub const STUDIO_STRENGTH: f32 = 0.4;
 
 /// The studio environment, added to `textures`.
 pub fn sky(textures: &mut Textures) -> Result<Sky, SceneError> {
+    Ok(Sky::Environment {
+        texture: environment(textures)?,
+        strength: STUDIO_STRENGTH,
+        rotation: 0.0,
+    })
+}
+
+/// The studio environment's image, added to `textures`: its index there.
+pub fn environment(textures: &mut Textures) -> Result<u32, SceneError> {
     let r = TextureRef::environment(TextureSource::Memory {
         name: "studio.hdr (built in)".into(),
         bytes: Arc::from(STUDIO_HDR),
         format: Some(ImageType::Image(image::ImageFormat::Hdr)),
     });
-    let texture = textures.add(&r, &super::source::Fs).map_err(|e| match e {
+    textures.add(&r, &super::source::Fs).map_err(|e| match e {
         TextureError::Fatal(e) => e,
         TextureError::Missing(name) => SceneError::Invalid {
             path: name,
             field: "sky".into(),
             message: "the built-in studio environment cannot be read".into(),
         },
-    })?;
-    Ok(Sky::Environment {
-        texture,
-        strength: STUDIO_STRENGTH,
-        rotation: 0.0,
     })
 }
 
