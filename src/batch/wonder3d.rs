@@ -69,14 +69,17 @@ pub fn local_axes(camera: usize) -> [DVec3; 3] {
 /// Writes `rows` as NumPy's `np.savetxt` does with its default format: each value as
 /// `%.18e`, separated by spaces, a row a line.
 pub fn savetxt(path: &std::path::Path, rows: &[Vec<f64>]) -> Result<(), crate::film::FilmError> {
-    let text: String = rows
-        .iter()
+    crate::film::write_bytes(path, savetxt_text(rows).as_bytes())
+}
+
+/// The text [`savetxt`] writes.
+pub fn savetxt_text(rows: &[Vec<f64>]) -> String {
+    rows.iter()
         .map(|row| {
             let cells: Vec<String> = row.iter().map(|&x| percent_e(x)).collect();
             cells.join(" ") + "\n"
         })
-        .collect();
-    crate::film::write_bytes(path, text.as_bytes())
+        .collect()
 }
 
 /// `x` as C's `%.18e`: 18 digits after the point and a signed exponent of at least two

@@ -4,14 +4,16 @@
 
 use super::{DeviceArgs, Interrupted, backend, pipeline_error, set_threads, warn};
 use anyhow::{Context, Result, bail};
+use meshtrace::batch::preset::Normalisation;
 use meshtrace::batch::preset::{Poses, Preset, metadata, write_npy};
 use meshtrace::batch::transforms::{self, Frame, Intrinsics};
 use meshtrace::batch::wonder3d;
 use meshtrace::batch::{self, Manifest, Task};
-use meshtrace::film::{Film, Format};
+use meshtrace::film::{BitDepth, Film, Format};
 use meshtrace::pipeline::Prepared;
 use meshtrace::render::backend::Backend;
 use meshtrace::request::RenderRequest;
+use meshtrace::scene::camera::Camera;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -125,7 +127,7 @@ fn complete(task: &Task, aovs: bool) -> bool {
 }
 
 /// The `transforms.json` entry of `task` seen through `camera`.
-fn frame(task: &Task, camera: &meshtrace::scene::camera::Camera, w: u32, h: u32) -> Frame {
+fn frame(task: &Task, camera: &Camera, w: u32, h: u32) -> Frame {
     Frame {
         file_path: task
             .output
@@ -232,6 +234,7 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
     };
     let mut flushed = Instant::now();
     // The tasks of one input are consecutive: load and prepare it once for all its views.
+    let mut groups = Vec::new();
     let mut rest = &tasks[..];
     while let Some(first) = rest.first() {
         let len = rest
@@ -239,35 +242,84 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
             .take_while(|t| t.job == first.job && t.input == first.input)
             .count();
         let (group, next) = rest.split_at(len);
+        groups.push(group);
         rest = next;
-        if cancel.load(Ordering::SeqCst) {
-            break;
-        }
-        if known_failures.contains(&(first.job, first.input.clone())) {
-            tally.skipped_failed += group.len();
-            continue;
-        }
-        let before = tally.rendered + tally.skipped;
-        let watchdog = Watchdog::start(cancel.clone(), limit);
-        let result = run_input(
-            &manifest, &request, group, &backend, &watchdog, args.quiet, &mut tally,
-        );
-        drop(watchdog);
-        if flushed.elapsed().as_secs_f64() > FLUSH_SECONDS {
-            record(&std::mem::take(&mut tally.frames))?;
-            flushed = Instant::now();
-        }
-        if let Err(e) = result {
-            if e.is::<Interrupted>() {
+    }
+    // The next input loads and builds its BVH on a thread of its own while this one
+    // renders, one waiting ready at most; with worker threads of its own, as the renders
+    // keep the global pool busy (half as many: on a GPU they have the CPU to themselves,
+    // on the CPU they share it with the renders).
+    let loader_pool = rayon::ThreadPoolBuilder::new()
+        .num_threads((rayon::current_num_threads() / 2).max(1))
+        .thread_name(|i| format!("meshtrace-loader-{i}"))
+        .build()
+        .context("cannot start the loader's worker threads")?;
+    std::thread::scope(|s| -> Result<()> {
+        let (send, receive) = std::sync::mpsc::sync_channel::<Result<Loaded>>(0);
+        let loading = {
+            let (groups, cancel, manifest, request) = (&groups, &cancel, &manifest, &request);
+            let (known_failures, pool) = (&known_failures, &loader_pool);
+            s.spawn(move || {
+                for group in groups {
+                    if cancel.load(Ordering::SeqCst) {
+                        break;
+                    }
+                    let loaded =
+                        pool.install(|| load_input(manifest, request, group, known_failures));
+                    if send.send(loaded).is_err() {
+                        break;
+                    }
+                }
+            })
+        };
+        for group in &groups {
+            let first = &group[0];
+            if cancel.load(Ordering::SeqCst) {
                 break;
             }
-            let reason = crate::one_line(&e);
-            eprintln!("error: {}: {reason}", first.input.display());
-            batch::failures::append(&failure_log, first.job, &first.input, &reason)?;
-            tally.failed_images += group.len() - (tally.rendered + tally.skipped - before);
-            tally.failed.push(reason);
+            let Ok(loaded) = receive.recv() else {
+                break;
+            };
+            let before = tally.rendered + tally.skipped;
+            let result = match loaded {
+                Ok(Loaded::FailedBefore) => {
+                    tally.skipped_failed += group.len();
+                    continue;
+                }
+                Ok(Loaded::Complete) => {
+                    tally.skipped += group.len();
+                    continue;
+                }
+                Ok(Loaded::Ready(input)) => {
+                    let watchdog = Watchdog::start(cancel.clone(), limit, input.load + input.build);
+                    render_input(
+                        &manifest, *input, group, &backend, &watchdog, args.quiet, &mut tally,
+                    )
+                }
+                Err(e) => Err(e),
+            };
+            if flushed.elapsed().as_secs_f64() > FLUSH_SECONDS {
+                record(&std::mem::take(&mut tally.frames))?;
+                flushed = Instant::now();
+            }
+            if let Err(e) = result {
+                if e.is::<Interrupted>() {
+                    break;
+                }
+                let reason = crate::one_line(&e);
+                eprintln!("error: {}: {reason}", first.input.display());
+                batch::failures::append(&failure_log, first.job, &first.input, &reason)?;
+                tally.failed_images += group.len() - (tally.rendered + tally.skipped - before);
+                tally.failed.push(reason);
+            }
         }
-    }
+        // The loader stops at its next hand-over.
+        drop(receive);
+        loading
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        Ok(())
+    })?;
     record(&tally.frames)?;
     let seconds = start.elapsed().as_secs_f64();
     let per_hour = tally.rendered as f64 / seconds.max(1e-9) * 3600.0;
@@ -337,10 +389,12 @@ struct Watchdog {
 }
 
 impl Watchdog {
-    fn start(cancel: Arc<AtomicBool>, limit: Option<Duration>) -> Self {
+    /// Watches an input that has taken `spent` already (loading it, ahead of its renders).
+    fn start(cancel: Arc<AtomicBool>, limit: Option<Duration>, spent: Duration) -> Self {
         let stop = Arc::new(AtomicBool::new(false));
         let done = Arc::new(AtomicBool::new(false));
-        let start = Instant::now();
+        let now = Instant::now();
+        let start = now.checked_sub(spent).unwrap_or(now);
         let thread = {
             let (stop, done) = (stop.clone(), done.clone());
             std::thread::spawn(move || {
@@ -390,18 +444,45 @@ fn count(n: usize, thing: &str) -> String {
     format!("{n} {thing}{}", if n == 1 { "" } else { "s" })
 }
 
-/// Renders the views of one input that are not complete yet and records every view's
-/// camera. The input is loaded only if some view needs rendering or recording.
-fn run_input(
+/// One input as the loader thread hands it to the renders: made ready, or why not.
+enum Loaded {
+    /// Every view is complete and recorded: nothing was loaded.
+    Complete,
+    /// The failure log lists the input (and `--retry-failed` was not given).
+    FailedBefore,
+    Ready(Box<Input>),
+}
+
+/// An input loaded, lit and built, its views still to render.
+struct Input {
+    /// The request its images take: the manifest's, the job's and its preset's.
+    request: RenderRequest,
+    /// Per task, whether its output is complete already.
+    done: Vec<bool>,
+    norm: Option<Normalisation>,
+    uid: String,
+    /// A preset's per-object files (metadata, poses of the whole object), each path with
+    /// its text: written by the renders, so that an input loaded ahead and never rendered
+    /// leaves nothing behind.
+    files: Vec<(PathBuf, String)>,
+    prepared: Prepared,
+    /// Time spent loading (reading, decoding, lighting) and building its tables and BVH.
+    load: Duration,
+    build: Duration,
+}
+
+/// Loads the input of `group` as its job asks, where some view needs rendering or
+/// recording: on the loader thread, while the previous input renders.
+fn load_input(
     manifest: &Manifest,
     request: &RenderRequest,
     group: &[Task],
-    backend: &Backend,
-    watchdog: &Watchdog,
-    quiet: bool,
-    tally: &mut Tally,
-) -> Result<()> {
+    known_failures: &std::collections::HashSet<(usize, PathBuf)>,
+) -> Result<Loaded> {
     let job = &manifest.jobs[group[0].job];
+    if known_failures.contains(&(group[0].job, group[0].input.clone())) {
+        return Ok(Loaded::FailedBefore);
+    }
     // Wonder3D's preset writes its AOVs into its own images, not beside them.
     let named = job.preset.as_ref().is_some_and(Preset::rig);
     let aovs = request.aov_mask() != 0 && !named;
@@ -409,8 +490,7 @@ fn run_input(
     // A preset writes its script's files alone: no transforms.json.
     let recorded = job.preset.is_some() || all_recorded(group);
     if done.iter().all(|&d| d) && recorded {
-        tally.skipped += group.len();
-        return Ok(());
+        return Ok(Loaded::Complete);
     }
     // The job's up axis, where it gives one, over the request's, over the preset's.
     let preset_request = job.preset.as_ref().map(Preset::request).unwrap_or_default();
@@ -432,18 +512,14 @@ fn run_input(
         );
         request.aov = Some(aovs);
     }
-    let request_error = |e| match e {
-        meshtrace::pipeline::PipelineError::Request(e) => {
-            anyhow::anyhow!("{}: render.{e}", manifest.path.display())
-        }
-        e => pipeline_error(e),
-    };
+    let request_error = |e| request_error(manifest, e);
     let uid = meshtrace::scene::uid(&group[0].input);
     let t = Instant::now();
     let mut scene = meshtrace::pipeline::load(&group[0].input, &request).map_err(request_error)?;
     for w in &scene.warnings {
         warn(w);
     }
+    let mut files = Vec::new();
     let norm = match &job.preset {
         None => None,
         Some(preset) => {
@@ -455,34 +531,27 @@ fn run_input(
                 .context("the mesh has no extent to normalise")?;
             // Per object, beside its first view's image (before the preset's lights, which
             // the metadata does not count).
-            let mut files = Vec::new();
+            let dir = group[0].output.parent().unwrap_or(Path::new(""));
+            let json = |value: serde_json::Value| serde_json::to_string_pretty(&value);
             if preset.metadata {
-                files.push(("metadata.json", metadata(&group[0].input, &scene, &norm)));
+                let value = metadata(&group[0].input, &scene, &norm);
+                files.push((dir.join("metadata.json"), json(value)? + "\n"));
             }
             if preset.poses == Poses::Transforms {
-                files.push(("transforms.json", preset.trellis_transforms(&uid, &norm)));
+                let value = preset.trellis_transforms(&uid, &norm);
+                files.push((dir.join("transforms.json"), json(value)? + "\n"));
             }
-            if let Some(dir) = group[0].output.parent() {
-                for (name, value) in files {
-                    let path = dir.join(name);
-                    let text = serde_json::to_string_pretty(&value)? + "\n";
-                    std::fs::create_dir_all(dir)
-                        .and_then(|()| std::fs::write(&path, text))
-                        .with_context(|| format!("cannot write {}", path.display()))?;
-                }
-                if preset.poses == Poses::RtTxt {
-                    // np.savetxt([scale] + list(offset) + [ortho_scale]): the offset is
-                    // Blender's single-precision vector.
-                    let offset = norm.blender_offset().to_array().map(|x| x as f32 as f64);
-                    let values = [norm.scale as f64]
-                        .into_iter()
-                        .chain(offset)
-                        .chain([decimal(preset.ortho_scale)]);
-                    let rows: Vec<Vec<f64>> = values.map(|v| vec![v]).collect();
-                    std::fs::create_dir_all(dir)
-                        .with_context(|| format!("cannot create {}", dir.display()))?;
-                    wonder3d::savetxt(&dir.join("scale_offset_matrix.txt"), &rows)?;
-                }
+            if preset.poses == Poses::RtTxt {
+                // np.savetxt([scale] + list(offset) + [ortho_scale]): the offset is
+                // Blender's single-precision vector.
+                let offset = norm.blender_offset().to_array().map(|x| x as f32 as f64);
+                let values = [norm.scale as f64]
+                    .into_iter()
+                    .chain(offset)
+                    .chain([decimal(preset.ortho_scale)]);
+                let rows: Vec<Vec<f64>> = values.map(|v| vec![v]).collect();
+                let text = wonder3d::savetxt_text(&rows);
+                files.push((dir.join("scale_offset_matrix.txt"), text));
             }
             // A lighting preset in the request has lit the scene instead.
             if request.lighting.is_none() {
@@ -493,79 +562,205 @@ fn run_input(
             Some(norm)
         }
     };
-    tally.stages[Stage::Load as usize] += t.elapsed();
-    watchdog.check("to load")?;
+    let load = t.elapsed();
     let t = Instant::now();
     let prepared = Prepared::from_scene(scene, &request).map_err(request_error)?;
-    let settings = prepared.job.settings;
-    let own = prepared.scene.camera.clone();
-    if own.is_orthographic() && job.preset.is_none() {
+    if prepared.scene.camera.is_orthographic() && job.preset.is_none() {
         bail!(
             "its camera is orthographic, which transforms.json's pinhole intrinsics cannot \
              describe; give it a perspective camera, or render it with `meshtrace render`"
         );
     }
+    Ok(Loaded::Ready(Box::new(Input {
+        request,
+        done,
+        norm,
+        uid,
+        files,
+        prepared,
+        load,
+        build: t.elapsed(),
+    })))
+}
+
+/// A pipeline error as a batch says it: a request's field as the manifest's key.
+fn request_error(manifest: &Manifest, e: meshtrace::pipeline::PipelineError) -> anyhow::Error {
+    match e {
+        meshtrace::pipeline::PipelineError::Request(e) => {
+            anyhow::anyhow!("{}: render.{e}", manifest.path.display())
+        }
+        e => pipeline_error(e),
+    }
+}
+
+/// Renders the views of `input` (the input of `group`) that are not complete yet and
+/// records every view's camera. The images are encoded and written on a thread of their
+/// own while the next view renders; the input's result waits for them.
+fn render_input(
+    manifest: &Manifest,
+    input: Input,
+    group: &[Task],
+    backend: &Backend,
+    watchdog: &Watchdog,
+    quiet: bool,
+    tally: &mut Tally,
+) -> Result<()> {
+    let job = &manifest.jobs[group[0].job];
+    let Input {
+        request,
+        done,
+        norm,
+        uid,
+        files,
+        prepared,
+        load,
+        build,
+    } = input;
+    tally.stages[Stage::Load as usize] += load;
+    watchdog.check("to load")?;
+    for (path, text) in files {
+        if let Some(dir) = path.parent() {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create {}", dir.display()))?;
+        }
+        meshtrace::film::write_bytes(&path, text.as_bytes())?;
+    }
+    let t = Instant::now();
+    let settings = prepared.job.settings;
+    let own = prepared.scene.camera.clone();
     let framed = prepared.framed;
     let mut views = prepared.views(backend).map_err(pipeline_error)?;
     views.job_mut().cancel = Some(watchdog.stop.clone());
-    tally.stages[Stage::Build as usize] += t.elapsed();
-    for (task, done) in group.iter().zip(done) {
-        let camera = match (&job.preset, &norm) {
-            (Some(preset), Some(norm)) => preset.camera(&uid, task.view, norm),
-            _ => batch::view_camera(job, task.view, &own, framed.as_ref()),
-        }
-        .with_context(|| format!("view {} cannot be framed", task.view))?;
-        if job.preset.is_none() {
-            let f = frame(task, &camera, settings.width, settings.height);
-            tally.frames.push((task.output.clone(), f));
-        }
-        if done {
-            tally.skipped += 1;
-            continue;
-        }
-        let t0 = Instant::now();
-        let film = views.render(&camera, &|_| {}).map_err(pipeline_error)?;
-        let t = Instant::now();
-        tally.stages[Stage::Render as usize] += t - t0;
-        if film.samples < settings.spp {
-            // An image cut short is not written (nor its frame): a resumed run renders it.
-            if job.preset.is_none() {
-                tally.frames.pop();
+    tally.stages[Stage::Build as usize] += build + t.elapsed();
+    let encoder = Encoder {
+        preset: job.preset.as_ref(),
+        norm: norm.as_ref(),
+        uid: &uid,
+        bit_depth: request.bit_depth(),
+        quiet,
+    };
+    std::thread::scope(|s| {
+        // Two images at most wait for the encoder: memory stays bounded where it is
+        // slower than the renders.
+        let (send, receive) = std::sync::mpsc::sync_channel::<Rendered>(2);
+        let encoding = s.spawn(|| encoder.run(receive));
+        let rendered = (|| {
+            for (task, &done) in group.iter().zip(&done) {
+                let camera = match (&job.preset, &norm) {
+                    (Some(preset), Some(norm)) => preset.camera(&uid, task.view, norm),
+                    _ => batch::view_camera(job, task.view, &own, framed.as_ref()),
+                }
+                .with_context(|| format!("view {} cannot be framed", task.view))?;
+                if job.preset.is_none() {
+                    let f = frame(task, &camera, settings.width, settings.height);
+                    tally.frames.push((task.output.clone(), f));
+                }
+                if done {
+                    tally.skipped += 1;
+                    continue;
+                }
+                let began = Instant::now();
+                let film = views.render(&camera, &|_| {}).map_err(pipeline_error)?;
+                tally.stages[Stage::Render as usize] += began.elapsed();
+                if film.samples < settings.spp {
+                    // An image cut short is not written (nor its frame): a resumed run
+                    // renders it.
+                    if job.preset.is_none() {
+                        tally.frames.pop();
+                    }
+                    watchdog.check(&format!("by view {}", task.view))?;
+                    return Err(Interrupted("interrupted".into()).into());
+                }
+                let view = Rendered {
+                    task: task.clone(),
+                    film,
+                    camera,
+                    began,
+                };
+                if send.send(view).is_err() {
+                    // The encoder stopped at an error, which is the input's.
+                    break;
+                }
             }
-            watchdog.check(&format!("by view {}", task.view))?;
-            return Err(Interrupted("interrupted".into()).into());
+            Ok(())
+        })();
+        drop(send);
+        let (written, seconds, encoded) = encoding
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        tally.rendered += written;
+        tally.stages[Stage::Encode as usize] += seconds;
+        if tally.first_peak.is_none() && tally.rendered >= tally.warm_up {
+            tally.first_peak = peak_kib();
         }
+        rendered.and(encoded)
+    })
+}
+
+/// One rendered view on its way to the encoder thread.
+struct Rendered {
+    task: Task,
+    film: Film,
+    camera: Camera,
+    /// When its render began, for the line that reports it.
+    began: Instant,
+}
+
+/// Writes the files of an input's rendered views, off the render thread.
+struct Encoder<'a> {
+    preset: Option<&'a Preset>,
+    norm: Option<&'a Normalisation>,
+    uid: &'a str,
+    bit_depth: BitDepth,
+    quiet: bool,
+}
+
+impl Encoder<'_> {
+    /// Writes each view that `receive` brings until the renders end or a write fails:
+    /// the images written, the time spent, and the first error.
+    fn run(&self, receive: std::sync::mpsc::Receiver<Rendered>) -> (usize, Duration, Result<()>) {
+        let (mut written, mut spent) = (0, Duration::ZERO);
+        for view in receive {
+            let t = Instant::now();
+            if let Err(e) = self.write(&view) {
+                return (written, spent, Err(e));
+            }
+            spent += t.elapsed();
+            written += 1;
+            if !self.quiet {
+                eprintln!(
+                    "{} ({:.2} s)",
+                    view.task.output.display(),
+                    view.began.elapsed().as_secs_f64()
+                );
+            }
+        }
+        (written, spent, Ok(()))
+    }
+
+    /// A view's files: its pose first, as the image marks the view complete.
+    fn write(&self, view: &Rendered) -> Result<()> {
+        let Rendered {
+            task, film, camera, ..
+        } = view;
         if let Some(dir) = task.output.parent() {
             std::fs::create_dir_all(dir)
                 .with_context(|| format!("cannot create {}", dir.display()))?;
         }
-        // The pose first: the image marks the view complete.
-        match (&job.preset, &norm) {
+        match (self.preset, self.norm) {
             (Some(preset), Some(norm)) if preset.poses == Poses::Npy => {
                 let path = task.output.with_extension("npy");
-                write_npy(&path, &preset.pose(&uid, task.view, norm))
+                write_npy(&path, &preset.pose(self.uid, task.view, norm))
                     .with_context(|| format!("cannot write {}", path.display()))?;
-                film.save_as(&task.output, request.bit_depth())?;
+                film.save_as(&task.output, self.bit_depth)?;
             }
             (Some(preset), Some(norm)) if preset.poses == Poses::RtTxt => {
-                write_wonder3d(preset, norm, &uid, task, &film, &camera)?;
+                write_wonder3d(preset, norm, self.uid, task, film, camera)?;
             }
-            _ => film.save_as(&task.output, request.bit_depth())?,
+            _ => film.save_as(&task.output, self.bit_depth)?,
         }
-        tally.stages[Stage::Encode as usize] += t.elapsed();
-        tally.rendered += 1;
-        if tally.first_peak.is_none() && tally.rendered >= tally.warm_up {
-            tally.first_peak = peak_kib();
-        }
-        if !quiet {
-            eprintln!(
-                "{} ({:.2} s)",
-                task.output.display(),
-                t0.elapsed().as_secs_f64()
-            );
-        }
+        Ok(())
     }
-    Ok(())
 }
 
 /// The f64 nearest the shortest decimal of `x` (1.35f32 → 1.35, not 1.35000002384…): the
@@ -580,11 +775,11 @@ fn decimal(x: f32) -> f64 {
 /// name with `normals` for its leading `rgb`) and the colour image with the mask as alpha.
 fn write_wonder3d(
     preset: &Preset,
-    norm: &meshtrace::batch::preset::Normalisation,
+    norm: &Normalisation,
     uid: &str,
     task: &Task,
     film: &Film,
-    camera: &meshtrace::scene::camera::Camera,
+    camera: &Camera,
 ) -> Result<()> {
     let dir = task.output.parent().unwrap_or(Path::new(""));
     let name = preset.view_name(task.view).unwrap_or_default();
