@@ -131,6 +131,7 @@ class Renderer:
         denoise: Optional[bool] = None,
         up: Optional[Literal["x", "y", "z"]] = None,
         environment: Optional[_Path] = None,
+        lighting: Optional[Union[str, dict]] = None,
         max_texture_size: Optional[int] = None,
     ) -> Output: ...
 
@@ -139,6 +140,7 @@ def load(
     *,
     up: Optional[Literal["x", "y", "z"]] = None,
     environment: Optional[_Path] = None,
+    lighting: Optional[Union[str, dict]] = None,
     max_texture_size: Optional[int] = None,
     studio: bool = True,
 ) -> Scene: ...

@@ -29,7 +29,8 @@ fn table(d: &Bound<'_, PyDict>, at: &str) -> PyResult<toml::Table> {
     Ok(t)
 }
 
-fn value(v: &Bound<'_, PyAny>, at: &str) -> PyResult<toml::Value> {
+/// The TOML value of `v`, at key path `at` for messages.
+pub fn value(v: &Bound<'_, PyAny>, at: &str) -> PyResult<toml::Value> {
     // bool before int: Python's bool is an int.
     if v.is_instance_of::<PyBool>() {
         return Ok(toml::Value::Boolean(v.extract()?));

@@ -194,7 +194,8 @@ impl Renderer {
     #[pyo3(signature = (
         scene, *, camera=None, width=None, height=None, spp=None, max_depth=None, seed=None,
         caustics=None, branches=None, filter_width=None, aovs=None, transparent=None,
-        geometry_only=None, denoise=None, up=None, environment=None, max_texture_size=None
+        geometry_only=None, denoise=None, up=None, environment=None, lighting=None,
+        max_texture_size=None
     ))]
     #[allow(clippy::too_many_arguments)]
     fn render(
@@ -216,6 +217,7 @@ impl Renderer {
         denoise: Option<bool>,
         up: Option<&str>,
         environment: Option<PathBuf>,
+        lighting: Option<&Bound<'_, PyAny>>,
         max_texture_size: Option<u32>,
     ) -> PyResult<Output> {
         // An empty list asks for none (the command line's list has at least one name).
@@ -241,6 +243,7 @@ impl Renderer {
             denoise,
             up: scene::up_axis(up)?,
             environment,
+            lighting: lighting.map(scene::lighting_arg).transpose()?,
             max_texture_size,
             ..Default::default()
         };

@@ -7,6 +7,7 @@ use crate::{dict, errors};
 use meshtrace::pipeline::{self, PipelineError, Views};
 use meshtrace::request::{RenderRequest, RequestError};
 use meshtrace::scene::SceneError;
+use meshtrace::scene::lighting::Lighting;
 use meshtrace::scene::studio::Up;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -51,6 +52,7 @@ fn loading(request: &RenderRequest) -> RenderRequest {
     RenderRequest {
         up: request.up,
         environment: request.environment.clone(),
+        lighting: request.lighting.clone(),
         max_texture_size: request.max_texture_size,
         without_studio: request.without_studio,
         ..Default::default()
@@ -257,28 +259,49 @@ fn open(py: Python<'_>, source: Source, options: RenderRequest) -> PyResult<Scen
 /// built-in scene (`builtin:cornell`). `up` turns a bare mesh (`x`, `y` or `z`; detected
 /// when None), `environment` lights it with an equirectangular image instead of its sky,
 /// `max_texture_size` scales larger textures down: the command line's `--up`, `--env` and
-/// `--max-texture-size`. `studio=False` leaves a bare mesh's studio out (its ground and
-/// its light: a black sky), for a caller that lights it with `environment`, as the dataset
-/// presets leave it out.
+/// `--max-texture-size`. `lighting` lights it with a lighting preset instead of its own
+/// sky and lights: a name (`"area"`) or a dict (`{"preset": "suns", "count": 6}`), as
+/// `--lighting`. `studio=False` leaves a bare mesh's studio out (its ground and its light:
+/// a black sky), for a caller that lights it with `environment`, as the dataset presets
+/// leave it out.
 #[pyfunction]
-#[pyo3(signature = (path, *, up=None, environment=None, max_texture_size=None, studio=true))]
+#[pyo3(signature = (
+    path, *, up=None, environment=None, lighting=None, max_texture_size=None, studio=true
+))]
 pub fn load(
     py: Python<'_>,
     path: PathBuf,
     up: Option<&str>,
     environment: Option<PathBuf>,
+    lighting: Option<&Bound<'_, PyAny>>,
     max_texture_size: Option<u32>,
     studio: bool,
 ) -> PyResult<Scene> {
     let options = RenderRequest {
         up: up_axis(up)?,
         environment,
+        lighting: lighting.map(lighting_arg).transpose()?,
         max_texture_size,
         without_studio: !studio,
         ..Default::default()
     };
     options.validate().map_err(|e| errors::error(&e))?;
     open(py, Source::File(path), options)
+}
+
+/// A `lighting` argument: a preset's name, or a dict of a preset and its parameters (the
+/// scene file's `[lighting]` table).
+pub fn lighting_arg(v: &Bound<'_, PyAny>) -> PyResult<Lighting> {
+    let table = match v.extract::<String>() {
+        Ok(name) => toml::Value::Table(toml::Table::from_iter([(
+            "preset".to_string(),
+            toml::Value::String(name),
+        )])),
+        Err(_) => dict::value(v, "lighting")?,
+    };
+    table
+        .try_into()
+        .map_err(|e: toml::de::Error| errors::message(e.message().to_string()))
 }
 
 /// A scene argument: a [`Scene`], or a path to load.

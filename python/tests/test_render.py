@@ -130,6 +130,21 @@ def test_without_the_studio_the_mask_holds_the_mesh_alone(cpu, glb, repo):
     assert not np.array_equal(other["color"], alone["color"])
 
 
+def test_a_lighting_preset_replaces_the_scenes_light(cpu, glb):
+    # A black world lights nothing; the mask stays the mesh's.
+    sphere = mt.Scene.from_dict(sphere_dict())
+    assert cpu.render(sphere, **SMALL)["color"].max() > 0.0
+    dark = cpu.render(sphere, **SMALL, transparent=True, lighting={"preset": "uniform", "color": [0, 0, 0]})
+    assert dark["alpha"].max() == 1.0 and dark["color"].max() == 0.0
+    suns = mt.load(glb, lighting="suns")
+    lit = cpu.render(suns, **SMALL, transparent=True)
+    assert lit["color"].max() > 0.0
+    with pytest.raises(mt.MeshtraceError, match="lighting.count: is not a parameter of the `area` preset"):
+        cpu.render(glb, **SMALL, lighting={"preset": "area", "count": 3})
+    with pytest.raises(mt.MeshtraceError, match="`sunny` is not a lighting preset"):
+        mt.load(glb, lighting="sunny")
+
+
 def test_the_dataset_example_writes_a_dataset(repo, tmp_path):
     import subprocess
     import sys
