@@ -1346,4 +1346,20 @@ fn a_manifests_lighting_replaces_the_presets_lights() {
         covered_rgb("lighting = { preset = \"uniform\", color = [0.0, 0.0, 0.0] }"),
         0
     );
+
+    // Objaverse-XL's metadata counts the input's own lights, not the preset's suns.
+    let dir = TempDir::new("batch-lighting-metadata");
+    let models = dir.path().join("models");
+    std::fs::create_dir_all(&models).unwrap();
+    std::fs::copy(data("box.obj"), models.join("box.obj")).unwrap();
+    let manifest = "[render]\nspp = 1\nwidth = 16\nheight = 16\n\
+                    lighting = { preset = \"suns\", count = 3 }\n\n[[jobs]]\n\
+                    meshes = \"models/*\"\npreset = \"objaverse-xl\"\nviews = 1\n";
+    std::fs::write(dir.path().join("m.toml"), manifest).unwrap();
+    let (code, stderr) = run(&dir, &["batch", "m.toml", "--device", "cpu"]);
+    assert_eq!(code, 0, "{stderr}");
+    let metadata: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("views/box/metadata.json")).unwrap())
+            .unwrap();
+    assert_eq!(metadata["lamp_count"], 0, "{metadata}");
 }

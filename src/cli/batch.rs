@@ -14,6 +14,7 @@ use meshtrace::pipeline::Prepared;
 use meshtrace::render::backend::Backend;
 use meshtrace::request::RenderRequest;
 use meshtrace::scene::camera::Camera;
+use meshtrace::scene::source::Fs;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -264,8 +265,8 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
                     if cancel.load(Ordering::SeqCst) {
                         break;
                     }
-                    let loaded =
-                        pool.install(|| load_input(manifest, request, group, known_failures));
+                    let loaded = pool
+                        .install(|| load_input(manifest, request, group, known_failures, cancel));
                     if send.send(loaded).is_err() {
                         break;
                     }
@@ -280,6 +281,9 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
             let Ok(loaded) = receive.recv() else {
                 break;
             };
+            if cancel.load(Ordering::SeqCst) {
+                break;
+            }
             let before = tally.rendered + tally.skipped;
             let result = match loaded {
                 Ok(Loaded::FailedBefore) => {
@@ -313,6 +317,9 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
                 tally.failed.push(reason);
             }
         }
+        // The frames finished are recorded before the loader, which may be loading ahead,
+        // is waited for (a SIGTERM's grace period may not cover that load).
+        record(&std::mem::take(&mut tally.frames))?;
         // The loader stops at its next hand-over.
         drop(receive);
         loading
@@ -478,6 +485,7 @@ fn load_input(
     request: &RenderRequest,
     group: &[Task],
     known_failures: &std::collections::HashSet<(usize, PathBuf)>,
+    cancel: &AtomicBool,
 ) -> Result<Loaded> {
     let job = &manifest.jobs[group[0].job];
     if known_failures.contains(&(group[0].job, group[0].input.clone())) {
@@ -515,9 +523,19 @@ fn load_input(
     let request_error = |e| request_error(manifest, e);
     let uid = meshtrace::scene::uid(&group[0].input);
     let t = Instant::now();
-    let mut scene = meshtrace::pipeline::load(&group[0].input, &request).map_err(request_error)?;
+    // A lighting preset is applied below, once a preset's metadata has counted the input's
+    // own lights.
+    let unlit = RenderRequest {
+        lighting: None,
+        ..request.clone()
+    };
+    let mut scene = meshtrace::pipeline::load(&group[0].input, &unlit).map_err(request_error)?;
     for w in &scene.warnings {
         warn(w);
+    }
+    if cancel.load(Ordering::SeqCst) {
+        // Interrupted while loading ahead: not built, and dropped.
+        return Err(Interrupted("interrupted".into()).into());
     }
     let mut files = Vec::new();
     let norm = match &job.preset {
@@ -553,15 +571,15 @@ fn load_input(
                 let text = wonder3d::savetxt_text(&rows);
                 files.push((dir.join("scale_offset_matrix.txt"), text));
             }
-            // A lighting preset in the request has lit the scene instead.
-            if request.lighting.is_none() {
-                preset
-                    .light(&mut scene, &norm, &uid)
-                    .map_err(|e| pipeline_error(e.into()))?;
-            }
             Some(norm)
         }
     };
+    // The request's lighting preset, else a dataset preset's script lighting.
+    match (&request.lighting, &job.preset, &norm) {
+        (Some(lighting), _, _) => lighting.apply(&mut scene, &Fs)?,
+        (None, Some(preset), Some(norm)) => preset.light(&mut scene, norm, &uid)?,
+        _ => {}
+    }
     let load = t.elapsed();
     let t = Instant::now();
     let prepared = Prepared::from_scene(scene, &request).map_err(request_error)?;
@@ -618,13 +636,6 @@ fn render_input(
     } = input;
     tally.stages[Stage::Load as usize] += load;
     watchdog.check("to load")?;
-    for (path, text) in files {
-        if let Some(dir) = path.parent() {
-            std::fs::create_dir_all(dir)
-                .with_context(|| format!("cannot create {}", dir.display()))?;
-        }
-        meshtrace::film::write_bytes(&path, text.as_bytes())?;
-    }
     let t = Instant::now();
     let settings = prepared.job.settings;
     let own = prepared.scene.camera.clone();
@@ -643,7 +654,7 @@ fn render_input(
         // Two images at most wait for the encoder: memory stays bounded where it is
         // slower than the renders.
         let (send, receive) = std::sync::mpsc::sync_channel::<Rendered>(2);
-        let encoding = s.spawn(|| encoder.run(receive));
+        let encoding = s.spawn(|| encoder.run(receive, files));
         let rendered = (|| {
             for (task, &done) in group.iter().zip(&done) {
                 let camera = match (&job.preset, &norm) {
@@ -693,7 +704,8 @@ fn render_input(
         if tally.first_peak.is_none() && tally.rendered >= tally.warm_up {
             tally.first_peak = peak_kib();
         }
-        rendered.and(encoded)
+        // A write that failed is the input's error even where the renders stopped too.
+        encoded.and(rendered)
     })
 }
 
@@ -716,13 +728,24 @@ struct Encoder<'a> {
 }
 
 impl Encoder<'_> {
-    /// Writes each view that `receive` brings until the renders end or a write fails:
-    /// the images written, the time spent, and the first error.
-    fn run(&self, receive: std::sync::mpsc::Receiver<Rendered>) -> (usize, Duration, Result<()>) {
+    /// Writes each view that `receive` brings until the renders end or a write fails,
+    /// the input's own `files` (path and text) before the first, so that an input with no
+    /// finished view leaves nothing: the images written, the time spent, and the first
+    /// error.
+    fn run(
+        &self,
+        receive: std::sync::mpsc::Receiver<Rendered>,
+        mut files: Vec<(PathBuf, String)>,
+    ) -> (usize, Duration, Result<()>) {
         let (mut written, mut spent) = (0, Duration::ZERO);
         for view in receive {
             let t = Instant::now();
-            if let Err(e) = self.write(&view) {
+            let own = std::mem::take(&mut files).into_iter();
+            if let Err(e) = own
+                .map(|(path, text)| write_file(&path, &text))
+                .collect::<Result<()>>()
+                .and_then(|()| self.write(&view))
+            {
                 return (written, spent, Err(e));
             }
             spent += t.elapsed();
@@ -767,6 +790,15 @@ impl Encoder<'_> {
 /// value as a manifest or a script's command line writes it.
 fn decimal(x: f32) -> f64 {
     x.to_string().parse().unwrap_or(x as f64)
+}
+
+/// Writes `text` to `path` (through a temporary file), its folder made first.
+fn write_file(path: &Path, text: &str) -> Result<()> {
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    meshtrace::film::write_bytes(path, text.as_bytes())?;
+    Ok(())
 }
 
 /// Wonder3D's files of `task` (rendered into `film` through `camera`), in the order that
