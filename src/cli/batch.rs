@@ -740,10 +740,9 @@ impl Encoder<'_> {
         let (mut written, mut spent) = (0, Duration::ZERO);
         for view in receive {
             let t = Instant::now();
-            let own = std::mem::take(&mut files).into_iter();
+            let mut own = std::mem::take(&mut files).into_iter();
             if let Err(e) = own
-                .map(|(path, text)| write_file(&path, &text))
-                .collect::<Result<()>>()
+                .try_for_each(|(path, text)| write_file(&path, &text))
                 .and_then(|()| self.write(&view))
             {
                 return (written, spent, Err(e));
