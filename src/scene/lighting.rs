@@ -215,7 +215,7 @@ impl TryFrom<LightingFile> for Lighting {
                 }
             }
             "suns" => {
-                let [lo, hi] = f.irradiance.map_or([1.0, 3.0], Span::range);
+                let [lo, hi] = f.irradiance.map_or([0.5, 1.5], Span::range);
                 let [e0, e1] = f.elevation.map_or([15.0, 75.0], Span::range);
                 if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= hi) {
                     return Err(format!(
