@@ -60,9 +60,10 @@ pub fn load(input: &Path, request: &RenderRequest) -> Result<Scene, PipelineErro
 }
 
 /// Stages a loaded `scene` as `request` asks, as [`load`] does: the sky replaced by the
-/// requested environment, or the sky and lights by the requested lighting preset, textures larger than the requested maximum scaled down (each
-/// with a warning in [`Scene::warnings`]). For scenes that come from elsewhere than a
-/// file (the Python API's dictionaries).
+/// requested environment, or the sky and lights by the requested lighting preset, textures
+/// larger than the requested maximum scaled down (each with a warning in
+/// [`Scene::warnings`]). For scenes that come from elsewhere than a file (the Python API's
+/// dictionaries).
 pub fn stage(mut scene: Scene, request: &RenderRequest) -> Result<Scene, PipelineError> {
     if let Some(env) = &request.environment {
         load::replace_environment(&mut scene, env).map_err(|message| RequestError {

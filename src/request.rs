@@ -1,8 +1,9 @@
 //! A render request: everything that decides an image beyond the input itself — size,
 //! samples, depth, seed, branches, caustics, the device, adapter and accel, the AOVs,
 //! transparency, a bare mesh's up axis, an environment or a lighting preset that replaces the
-//! sky, the largest texture size, the part of a split render and denoising. Every source fills the same type: command-line flags, a
-//! batch manifest's `[render]` table (deserialised straight into it) and library callers.
+//! sky, the largest texture size, the part of a split render and denoising. Every source
+//! fills the same type: command-line flags, a batch manifest's `[render]` table
+//! (deserialised straight into it) and library callers.
 //! A field left `None` keeps what the input says (a scene file's own `[render]` table), or
 //! the default. [`RenderRequest::validate`] is the one check, and its errors name the field
 //! as the manifest spells it (`max_depth`), for the caller to place (`--max-depth`,
