@@ -4,13 +4,14 @@
 //! [`Watch`](super::watch::Watch) is told of each tile as a thread starts and ends it. No I/O.
 
 use super::camera::{CameraRays, generate_camera_ray, pixel_centre_ray};
-use super::integrator::{FirstHit, first_hit, trace_path};
+use super::integrator::{FirstHit, first_hit, first_hit_uncounted, trace_path};
 use super::job::{Checkpoints, RenderJob};
 use super::rng::{Rng, SeedTable};
 use super::tables::RenderScene;
 use super::watch::Region;
 use crate::film::{Aov, Film};
 use crate::fixed::{Texel, fixed_add, fixed_add3, texel_add, to_fixed, to_fixed3};
+use crate::math::Ray;
 use crate::scene::RenderSettings;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -188,10 +189,13 @@ pub fn first_hits(scene: &RenderScene, settings: &RenderSettings, samples: u32, 
             let mut rng = Rng::with_table(i, 0, settings.seed, &table);
             for sample in 0..samples {
                 rng.set_sample(sample);
-                let fh = first_hit(scene, &generate_camera_ray(&cam, x, y, &rng));
+                let fh = aov_hit(scene, &generate_camera_ray(&cam, x, y, &rng), aovs);
                 add_aov_sample(&mut sums, &cam, &fh);
             }
-            set_aov_ids(&mut sums, &first_hit(scene, &pixel_centre_ray(&cam, x, y)));
+            set_aov_ids(
+                &mut sums,
+                &first_hit_uncounted(scene, &pixel_centre_ray(&cam, x, y)),
+            );
             sums
         })
         .collect();
@@ -214,14 +218,18 @@ pub fn geometry_pixel(
     samples: std::ops::Range<u32>,
     mut acc: PixelSums,
     mut aov: Option<&mut AovSums>,
+    aovs: u32,
 ) -> PixelSums {
     for sample in samples {
         rng.set_sample(sample);
-        let fh = first_hit(scene, &generate_camera_ray(cam, x, y, rng));
+        let fh = aov_hit(scene, &generate_camera_ray(cam, x, y, rng), aovs);
         if let Some(aov) = aov.as_deref_mut() {
             add_aov_sample(aov, cam, &fh);
             if sample == 0 {
-                set_aov_ids(aov, &first_hit(scene, &pixel_centre_ray(cam, x, y)));
+                set_aov_ids(
+                    aov,
+                    &first_hit_uncounted(scene, &pixel_centre_ray(cam, x, y)),
+                );
             }
         }
         acc.rays = fixed_add(acc.rays, to_fixed(1.0));
@@ -281,6 +289,17 @@ pub fn set_aov_ids(sums: &mut AovSums, fh: &FirstHit) {
     sums.0[Aov::MaterialId as usize] = split(fh.material);
 }
 
+/// Camera ray `ray`'s first hit for the AOVs `aovs`, counting its BVH cost only where
+/// `bvh_cost` is among them (the counting traversal walks the binary tree, slower than
+/// the wide one).
+fn aov_hit(scene: &RenderScene, ray: &Ray, aovs: u32) -> FirstHit {
+    if aovs & Aov::BvhCost.bit() != 0 {
+        first_hit(scene, ray)
+    } else {
+        first_hit_uncounted(scene, ray)
+    }
+}
+
 /// Whether pixel (`x`, `y`) of a transparent render need not be traced: its camera rays all
 /// miss the scene ([`CameraRays::outside_window`]), and a missed sample adds only its ray
 /// to the film (a transparent film takes no sky radiance, and without caustic targets no
@@ -323,7 +342,7 @@ pub fn render_pixel(
         Rng::new(pixel, samples.start, s.seed)
     };
     if job.geometry {
-        return geometry_pixel(scene, cam, x, y, &mut rng, samples, acc, aov);
+        return geometry_pixel(scene, cam, x, y, &mut rng, samples, acc, aov, job.aovs);
     }
     if skips_pixel(scene, cam, job, x, y) {
         // What its samples would add: one ray each, no radiance, and the ids of a miss.
@@ -342,11 +361,14 @@ pub fn render_pixel(
         let ray = generate_camera_ray(cam, x, y, &rng);
         let mut seen = true;
         if let Some(aov) = aov.as_deref_mut() {
-            let fh = first_hit(scene, &ray);
+            let fh = aov_hit(scene, &ray, job.aovs);
             add_aov_sample(aov, cam, &fh);
             seen = fh.hit || !job.transparent;
             if sample == 0 {
-                set_aov_ids(aov, &first_hit(scene, &pixel_centre_ray(cam, x, y)));
+                set_aov_ids(
+                    aov,
+                    &first_hit_uncounted(scene, &pixel_centre_ray(cam, x, y)),
+                );
             }
         }
         let ps = trace_path(

@@ -29,7 +29,7 @@ use super::surface::{
 };
 use super::tables::{LIGHT_RECT, RenderScene};
 use super::texture::{alpha_test, material_at};
-use crate::bvh::traverse_closest_counted;
+use crate::bvh::{Hit, traverse_closest_counted};
 use crate::film::NO_ID;
 use crate::geometry::{T_INF, triangle_area};
 use crate::math::Ray;
@@ -682,6 +682,23 @@ pub fn first_hit(scene: &RenderScene, ray: &Ray) -> FirstHit {
         traverse_closest_counted(&scene.bvh.nodes, &scene.tris, ray, T_INF, |t, u, v| {
             alpha_test(scene, t, u, v, true)
         });
+    first_hit_at(scene, ray, hit, cost)
+}
+
+/// [`first_hit`] without the BVH cost (0): the CPU's faster traversal of the wide tree,
+/// which finds the same hit, for the AOVs of renders that do not ask for `bvh_cost`
+/// (every transparent or denoised render has AOVs, and this traversal is its second per
+/// sample).
+pub fn first_hit_uncounted(scene: &RenderScene, ray: &Ray) -> FirstHit {
+    let hit = scene
+        .wide
+        .traverse_closest(ray, T_INF, |t, u, v| alpha_test(scene, t, u, v, true));
+    first_hit_at(scene, ray, hit, 0)
+}
+
+/// What the AOVs read of `hit`, camera ray `ray`'s closest hit (if any), found at BVH cost
+/// `cost`.
+fn first_hit_at(scene: &RenderScene, ray: &Ray, hit: Option<Hit>, cost: u32) -> FirstHit {
     let Some(hit) = hit else {
         return FirstHit {
             cost,
