@@ -35,36 +35,73 @@ pub mod traversal;
 use meshtrace::film::Film;
 use meshtrace::render::gpu::{Accel, GpuContext, GpuError, GpuRenderer};
 use meshtrace::render::{RenderJob, RenderScene, cpu};
+use std::sync::{Mutex, OnceLock};
 
-/// The test's GPU, tracing with the software BVH (the WGSL twin of the CPU's walk), or
-/// `None` (after saying "skipped: no adapter") where there is none. With
+/// The test binary's GPU, tracing with the software BVH (the WGSL twin of the CPU's walk),
+/// or `None` (after saying "skipped: no adapter") where there is none. With
 /// `MESHTRACE_REQUIRE_GPU=1`, as CI sets it, a missing adapter fails the test instead, so a
 /// broken driver set-up can never pass silently.
+///
+/// Every test of a binary gets a clone of one context, which shares its compiled kernels:
+/// lavapipe finishes compiling a kernel at its first dispatch (about 3 s with Mesa's disk
+/// cache warm, up to a minute cold), so a context per test paid that in every test.
 pub fn gpu(test: &str) -> Option<GpuContext> {
-    let required = std::env::var("MESHTRACE_REQUIRE_GPU").is_ok_and(|v| v == "1");
-    match GpuContext::new(None, Accel::Software) {
-        Ok(ctx) => Some(ctx),
-        Err(GpuError::NoAdapter) if !required => {
-            eprintln!("{test}: skipped: no adapter");
-            None
-        }
-        Err(e) => panic!("{test}: MESHTRACE_REQUIRE_GPU=1 but the GPU is unusable: {e}"),
-    }
+    static SHARED: OnceLock<Option<GpuContext>> = OnceLock::new();
+    shared(
+        &SHARED,
+        test,
+        Accel::Software,
+        "MESHTRACE_REQUIRE_GPU",
+        "the GPU",
+    )
 }
 
-/// The test's GPU tracing with hardware ray queries, or `None` (after saying why) where
-/// there is no adapter or it offers no ray queries. With `MESHTRACE_REQUIRE_RAY_QUERY=1`,
-/// as CI sets it for its Mesa 25 lavapipe step, either fails the test instead.
+/// The test binary's GPU tracing with hardware ray queries, as [`gpu`] shares it, or `None`
+/// (after saying why) where there is no adapter or it offers no ray queries. With
+/// `MESHTRACE_REQUIRE_RAY_QUERY=1`, as CI sets it for its Mesa 25 lavapipe step, either
+/// fails the test instead.
 pub fn ray_query_gpu(test: &str) -> Option<GpuContext> {
-    let required = std::env::var("MESHTRACE_REQUIRE_RAY_QUERY").is_ok_and(|v| v == "1");
-    match GpuContext::new(None, Accel::Hardware) {
-        Ok(ctx) => Some(ctx),
-        Err(e @ (GpuError::NoAdapter | GpuError::NoRayQuery(_))) if !required => {
-            eprintln!("{test}: skipped: {e}");
-            None
+    static SHARED: OnceLock<Option<GpuContext>> = OnceLock::new();
+    let accel = Accel::Hardware;
+    shared(
+        &SHARED,
+        test,
+        accel,
+        "MESHTRACE_REQUIRE_RAY_QUERY",
+        "ray queries",
+    )
+}
+
+/// A clone of the context in `cell`, opened with `accel` by the first test that asks; a
+/// missing adapter (or ray queries) skips the test unless `require` is set to 1.
+fn shared(
+    cell: &OnceLock<Option<GpuContext>>,
+    test: &str,
+    accel: Accel,
+    require: &str,
+    what: &str,
+) -> Option<GpuContext> {
+    static WHY: Mutex<String> = Mutex::new(String::new());
+    let ctx = cell.get_or_init(|| {
+        let required = std::env::var(require).is_ok_and(|v| v == "1");
+        match GpuContext::new(None, accel) {
+            Ok(ctx) => Some(ctx),
+            Err(GpuError::NoAdapter) if !required => {
+                *WHY.lock().unwrap_or_else(|p| p.into_inner()) = "no adapter".into();
+                None
+            }
+            Err(e @ GpuError::NoRayQuery(_)) if !required => {
+                *WHY.lock().unwrap_or_else(|p| p.into_inner()) = e.to_string();
+                None
+            }
+            Err(e) => panic!("{test}: {require}=1 but {what} is unusable: {e}"),
         }
-        Err(e) => panic!("{test}: MESHTRACE_REQUIRE_RAY_QUERY=1 but ray queries are unusable: {e}"),
+    });
+    if ctx.is_none() {
+        let why = WHY.lock().unwrap_or_else(|p| p.into_inner());
+        eprintln!("{test}: skipped: {why}");
     }
+    ctx.clone()
 }
 
 /// `job` of `scene` on the CPU and, where there is a GPU (see [`gpu`]), on the GPU: the
