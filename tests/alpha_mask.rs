@@ -8,7 +8,7 @@
 //! unlit quad (KHR_materials_unlit) is seen by the camera as its colour and by no other
 //! ray: it casts no shadow.
 
-mod common;
+use crate::common;
 
 use common::fs::TempDir;
 use common::gltf::Asset;

@@ -7,7 +7,7 @@
 //! within 5 standard errors (a false alarm once in ~3.5 million runs), and that the standard
 //! error is small enough for a 1% bias to fail.
 
-mod common;
+use crate::common;
 
 use common::scenes::{add_box, emissive_enclosure, scene, square};
 use common::stats::assert_mean;

@@ -2,7 +2,7 @@
 //! normals of a sphere, the coverage along an edge through pixel centres, the ids of a
 //! two-object scene; the EXR layout they are written in; transparent PNGs.
 
-mod common;
+use crate::common;
 
 use common::fs::TempDir;
 use glam::Vec3;

@@ -1,8 +1,8 @@
 //! `meshtrace batch`: a manifest of meshes × turntable views split into shards that run at
 //! once, one transforms.json per folder with every view's pose, resuming without
-//! re-rendering, flat memory over 1,000 jobs, and one-line errors for bad manifests.
+//! re-rendering, flat memory over 3,000 jobs, and one-line errors for bad manifests.
 
-mod common;
+use crate::common;
 
 use common::cli::{assert_fails, run};
 use common::fs::{TempDir, data};
@@ -168,7 +168,6 @@ fn two_shards_render_every_view_once_and_resume_without_rendering() {
     assert_eq!(frames(&dir.path().join("out/transforms.json")).1.len(), 12);
 }
 
-/// Peak memory over 1,000 small jobs grows by under 10% after the first tenth.
 /// A distinct mesh for asset `i`: a grid of n × n quads (n from 4 to 32), its heights a
 /// wave whose phase and frequency depend on `i`.
 fn generated_obj(i: usize) -> String {
@@ -191,15 +190,17 @@ fn generated_obj(i: usize) -> String {
     obj
 }
 
-/// Peak memory over a batch of distinct generated assets (1,000 here; set
+/// Peak memory over a batch of distinct generated assets (3,000 here; set
 /// MESHTRACE_MEMORY_ASSETS for more, 10,000 for the figure in BENCHMARKS.md), each into
-/// its own folder, grows less than 10% after the first tenth of the images.
+/// its own folder, grows less than 10% after the first tenth of the images. (The loader
+/// and encoder threads warm their allocator arenas over the first few hundred inputs: the
+/// first tenth of 1,000 ends inside that, at 8-10% growth, of 3,000 after it.)
 #[test]
 fn memory_stays_flat_over_distinct_assets() {
     let count: usize = std::env::var("MESHTRACE_MEMORY_ASSETS")
         .ok()
         .and_then(|v| v.parse().ok())
-        .unwrap_or(1000);
+        .unwrap_or(3000);
     let dir = TempDir::new("batch-memory");
     let models = dir.path().join("models");
     std::fs::create_dir_all(&models).unwrap();

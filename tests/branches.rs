@@ -14,7 +14,7 @@
 //! And the branches share their sample's camera ray and first vertex: 4 branches trace
 //! more rays than 1 camera sample and fewer than 4.
 
-mod common;
+use crate::common;
 
 use common::images::{assert_same_image, renders};
 use common::scenes::{cornell, square};

@@ -28,7 +28,7 @@
 //! use, so each run sees the same numbers.
 //! Run with `--nocapture` to see the measured p-values, albedos and errors.
 
-mod common;
+use crate::common;
 
 use common::chi2::{Binning, chi2_of, chi2_survival, show_chi2, sidak_level};
 use common::gamma::ln_gamma;

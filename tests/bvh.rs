@@ -1,7 +1,7 @@
 //! The BVH against brute force: for 100k random rays, closest hit over the tree equals the
 //! closest hit over every triangle, and any-hit agrees with it; and the tree's invariants.
 
-mod common;
+use crate::common;
 
 use common::rand::hashed_unit;
 use glam::Vec3;

@@ -32,7 +32,7 @@
 //! caustic paths moves whole regions by far more than their noise (a spot's falloff left
 //! out: z 14.6; a directional light's line density off by 20%: z 16.5).
 
-mod common;
+use crate::common;
 
 use common::images::{assert_same_image, renders};
 use common::scenes::{add_box, add_sphere, scene, square};

@@ -2,7 +2,7 @@
 //! file and the line or field at fault, and leaves no output file behind. And on good input,
 //! it writes the image and nothing else.
 
-mod common;
+use crate::common;
 
 use common::cli::{assert_fails, output, run};
 use common::fs::{TempDir, data};

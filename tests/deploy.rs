@@ -4,7 +4,7 @@
 //! (the schema checks neither). Skipped, saying so, without kubernetes-validate, unless
 //! `MESHTRACE_REQUIRE_K8S_VALIDATE=1` (as CI sets it).
 
-mod common;
+use crate::common;
 
 use common::fs::root;
 use std::process::Command;

@@ -7,7 +7,7 @@
 //! column j, ((j + 1) / 16, (i + 1) / 8, 0.5), except a sun of (8192, 4096, 2048) at
 //! row 2, column 11 and black at row 5, column 0.
 
-mod common;
+use crate::common;
 
 use common::chi2::{Binning, chi2_of, show_chi2};
 use common::fs::{TempDir, root};

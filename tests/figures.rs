@@ -2,7 +2,7 @@
 //! counts, ray for ray, colours it by its scale and has a legend; the boxes of a level cover
 //! every triangle; bad arguments fail on one line with no file left.
 
-mod common;
+use crate::common;
 
 use common::cli::{assert_fails, output, run};
 use common::fs::TempDir;

@@ -4,7 +4,7 @@
 //! the bare-file set-up and glTF meshes in scene files. Errors are `tests/gltf_errors.rs`;
 //! Khronos's sample assets are `tests/gltf_samples.rs`.
 
-mod common;
+use crate::common;
 
 use common::fs::TempDir;
 use common::gltf::*;

@@ -5,7 +5,7 @@
 //! original (`NAME.expected.json`): skins bent, morph targets at their default weights,
 //! every instance placed, compressed geometry decoded.
 
-mod common;
+use crate::common;
 
 use common::fs::data;
 use glam::{DMat3, DVec3};

@@ -5,7 +5,7 @@
 //! textures without texture coordinates, non-finite positions, invalid references, node
 //! cycles.
 
-mod common;
+use crate::common;
 
 use common::fs::TempDir;
 use common::gltf::*;

@@ -1,7 +1,7 @@
 //! Khronos's glTF sample assets in `tests/data/gltf/` (see its README for their sources and
 //! licences), loaded as bare files: what each contains.
 
-mod common;
+use crate::common;
 
 use common::fs::data;
 use glam::Vec3;

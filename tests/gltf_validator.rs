@@ -4,7 +4,7 @@
 //! MESHTRACE_GLTF_VALIDATOR says (.ci/run installs it); skipped without them unless
 //! MESHTRACE_REQUIRE_GLTF_VALIDATOR=1.
 
-mod common;
+use crate::common;
 
 use common::fs::{data, root};
 use std::process::Command;

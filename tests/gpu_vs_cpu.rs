@@ -1,6 +1,6 @@
 //! The GPU renderer against the CPU reference on whole images, and GPU determinism.
 
-mod common;
+use crate::common;
 
 use common::scenes::{cornell, square};
 use common::stats::{fraction_close, mean_and_sd, pixel_channels as channels, same_rays};

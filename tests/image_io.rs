@@ -1,7 +1,7 @@
 //! The film's image files: what each format keeps of the radiance, atomic writes, merging
 //! of sample ranges, and the sRGB transfer function.
 
-mod common;
+use crate::common;
 
 use common::fs::TempDir;
 use glam::Vec3;

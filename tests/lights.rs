@@ -5,7 +5,7 @@
 //! spot (times the spot's falloff), E cos for a directional light, Lambert's polygon
 //! formula for a rectangle.
 
-mod common;
+use crate::common;
 
 use common::fs::TempDir;
 use meshtrace::scene::load_scene;

@@ -35,7 +35,7 @@
 //! The references and Mitsuba's own numbers come from
 //! `python3 tools/make_references.py --materials` (tests/references/<scene>.json).
 
-mod common;
+use crate::common;
 
 use common::fs::root;
 use glam::Vec3;

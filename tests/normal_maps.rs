@@ -7,7 +7,7 @@
 //! wrong sign of either axis, a swapped axis or a missing map gives a different value.
 //! Tangents come from MikkTSpace (OBJ, glTF without TANGENT) or from the file.
 
-mod common;
+use crate::common;
 
 use common::fs::TempDir;
 use common::gltf::Asset;

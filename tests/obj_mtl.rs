@@ -1,7 +1,7 @@
 //! OBJ and MTL files as the scene format maps them (shared/specs/scene-format.md,
 //! "OBJ and MTL" and "A bare OBJ"): through `load_obj`, scene files and bare OBJs.
 
-mod common;
+use crate::common;
 
 use common::fs::{TempDir, data};
 use common::studio::without_ground;

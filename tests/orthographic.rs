@@ -3,7 +3,7 @@
 //! depth is its distance along the view axis everywhere; a glTF orthographic camera reads
 //! `ymag`; scene files refuse a perspective camera's fields on it.
 
-mod common;
+use crate::common;
 
 use common::fs::TempDir;
 use meshtrace::film::{Aov, AovValues, Film};

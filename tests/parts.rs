@@ -3,7 +3,7 @@
 //! render's image (a gap, an overlap, another scene, seed or device) is refused with one
 //! line and no output.
 
-mod common;
+use crate::common;
 
 use common::cli::{assert_fails, run};
 use common::fs::TempDir;

@@ -11,7 +11,7 @@
 //!   and about narrow lobes, for wo normal, oblique and grazing (and from inside a volume),
 //!   on the CPU and the GPU.
 
-mod common;
+use crate::common;
 
 use common::chi2::{Binning, chi2_of, show_chi2, sidak_level};
 use common::kernels::{gpu_bsdf_evals, gpu_bsdf_samples};

@@ -6,7 +6,7 @@
 //! Needs Xvfb, xdotool, ImageMagick's `import` and x11-utils' `xwininfo`; skipped, saying
 //! so, without them, unless `MESHTRACE_REQUIRE_XVFB=1` (as CI sets it), which fails instead.
 
-mod common;
+use crate::common;
 
 use common::fs::{TempDir, root};
 use image::RgbImage;

@@ -2,7 +2,7 @@
 //! tiny triangles included) against brute force, and scene files generated from the
 //! format's grammar, which must parse or fail with a one-line error naming the file.
 
-mod common;
+use crate::common;
 
 use glam::Vec3;
 use meshtrace::bvh::{BuildParams, Bvh, solid, traverse_any, traverse_closest, validate};

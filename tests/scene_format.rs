@@ -2,7 +2,7 @@
 //! `load_scene`: exact values of a full scene, the defaults, and every error, each of
 //! which must be one line naming the file and the field or line at fault.
 
-mod common;
+use crate::common;
 
 use common::fs::{TempDir, data};
 use glam::Vec3;

@@ -6,7 +6,7 @@
 //! lights, an environment map, glTF materials, textures in every wrap mode, normal maps,
 //! alpha masks, AOVs) renders checked with no failure and gives the trusted kernel's bits.
 
-mod common;
+use crate::common;
 
 use common::fs::TempDir;
 use meshtrace::bvh::BuildParams;

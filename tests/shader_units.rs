@@ -4,7 +4,7 @@
 //!
 //! Run with `--nocapture` to see the cases, maximum errors and agreement of each kernel.
 
-mod common;
+use crate::common;
 
 use common::kernels::{
     Case, GpuBsdfSample, b, bsdf_eval_case, bsdf_eval_output, bsdf_sample_case, f, run, v3, word,

@@ -7,7 +7,7 @@
 //! Needs root and Debian's slurmctld, slurmd, slurm-client and munge; skipped, saying so,
 //! without them, unless `MESHTRACE_REQUIRE_SLURM=1` (as CI sets it), which fails instead.
 
-mod common;
+use crate::common;
 
 use common::fs::{TempDir, data, root};
 use std::path::{Path, PathBuf};

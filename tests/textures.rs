@@ -4,7 +4,7 @@
 //! Radiance HDR files read with either signature, and `max_texture_size` scales textures
 //! down.
 
-mod common;
+use crate::common;
 
 use common::fs::TempDir;
 use common::rand::SplitMix;

@@ -15,7 +15,8 @@
 //! - [`kernels`]: running the WGSL test kernels (case packing, bits, BSDF cases).
 //! - [`traversal`]: the GPU's traversal against the CPU's over random rays, with bounds.
 //!
-//! Every test file that says `mod common;` compiles all of it, hence `dead_code` is allowed.
+//! The suite (`tests/main.rs`) and the binaries of their own (`ray_query`, `denoise`) each
+//! compile all of it, hence `dead_code` is allowed.
 #![allow(dead_code)]
 
 pub mod chi2;
