@@ -416,6 +416,31 @@ fn lighting_presets_give_their_closed_forms() {
     assert_radiance_within("lighting suns", dark, suns, 4, 1e-3, [e; 3]);
 }
 
+/// The `hdri` preset, against the floor's closed form: a latitude-longitude image whose
+/// upper half is one colour and lower half a far brighter one, at strength 2. The floor
+/// sees the upper half alone, E = π · 2 · upper (the halves meet at the horizon, where the
+/// cosine is 0); an image read upside down, or a strength not applied, would be far off.
+#[test]
+fn the_hdri_preset_lights_the_floor_from_its_upper_half() {
+    let dark = "type = \"point\"\nposition = [0.0, 5.0, 0.0]\nintensity = [0.0, 0.0, 0.0]";
+    let dir = TempDir::new("lighting hdri image");
+    let (w, h) = (8, 64);
+    let (upper, lower) = ([0.3f32, 0.2, 0.1], [5.0f32, 5.0, 5.0]);
+    let texels: Vec<[f32; 4]> = (0..w * h)
+        .map(|i| {
+            let c = if i / w < h / 2 { upper } else { lower };
+            [c[0], c[1], c[2], 1.0]
+        })
+        .collect();
+    let sky = dir.write_exr("sky.exr", w, h, &texels);
+    let hdri = format!(
+        "[lighting]\npreset = \"hdri\"\nenvironment = \"{}\"\nstrength = 2.0",
+        sky.display()
+    );
+    let e = upper.map(|c| std::f32::consts::PI * 2.0 * c);
+    assert_radiance_within("lighting hdri", dark, &hdri, 1024, 1e-2, e);
+}
+
 #[test]
 fn bad_lighting_is_an_error_naming_the_key() {
     let dir = TempDir::new("bad-lighting");
