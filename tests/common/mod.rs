@@ -36,7 +36,7 @@ pub mod traversal;
 use meshtrace::film::Film;
 use meshtrace::render::gpu::{Accel, GpuContext, GpuError, GpuRenderer};
 use meshtrace::render::{RenderJob, RenderScene, cpu};
-use std::sync::{Mutex, OnceLock};
+use std::sync::OnceLock;
 
 /// The test binary's GPU, tracing with the software BVH (the WGSL twin of the CPU's walk),
 /// or `None` (after saying "skipped: no adapter") where there is none. With
@@ -47,7 +47,7 @@ use std::sync::{Mutex, OnceLock};
 /// lavapipe finishes compiling a kernel at its first dispatch (about 3 s with Mesa's disk
 /// cache warm, up to a minute cold), so a context per test paid that in every test.
 pub fn gpu(test: &str) -> Option<GpuContext> {
-    static SHARED: OnceLock<Option<GpuContext>> = OnceLock::new();
+    static SHARED: OnceLock<Result<GpuContext, String>> = OnceLock::new();
     shared(
         &SHARED,
         test,
@@ -62,47 +62,42 @@ pub fn gpu(test: &str) -> Option<GpuContext> {
 /// `MESHTRACE_REQUIRE_RAY_QUERY=1`, as CI sets it for its Mesa 25 lavapipe step, either
 /// fails the test instead.
 pub fn ray_query_gpu(test: &str) -> Option<GpuContext> {
-    static SHARED: OnceLock<Option<GpuContext>> = OnceLock::new();
-    let accel = Accel::Hardware;
+    static SHARED: OnceLock<Result<GpuContext, String>> = OnceLock::new();
     shared(
         &SHARED,
         test,
-        accel,
+        Accel::Hardware,
         "MESHTRACE_REQUIRE_RAY_QUERY",
         "ray queries",
     )
 }
 
-/// A clone of the context in `cell`, opened with `accel` by the first test that asks; a
-/// missing adapter (or ray queries) skips the test unless `require` is set to 1.
+/// A clone of the context in `cell`, opened with `accel` by the first test that asks, or
+/// `None` after saying why the test skips: a missing adapter (or ray queries), which fails
+/// instead where `require` is set to 1.
 fn shared(
-    cell: &OnceLock<Option<GpuContext>>,
+    cell: &OnceLock<Result<GpuContext, String>>,
     test: &str,
     accel: Accel,
     require: &str,
     what: &str,
 ) -> Option<GpuContext> {
-    static WHY: Mutex<String> = Mutex::new(String::new());
-    let ctx = cell.get_or_init(|| {
+    let opened = cell.get_or_init(|| {
         let required = std::env::var(require).is_ok_and(|v| v == "1");
         match GpuContext::new(None, accel) {
-            Ok(ctx) => Some(ctx),
-            Err(GpuError::NoAdapter) if !required => {
-                *WHY.lock().unwrap_or_else(|p| p.into_inner()) = "no adapter".into();
-                None
-            }
-            Err(e @ GpuError::NoRayQuery(_)) if !required => {
-                *WHY.lock().unwrap_or_else(|p| p.into_inner()) = e.to_string();
-                None
-            }
+            Ok(ctx) => Ok(ctx),
+            Err(GpuError::NoAdapter) if !required => Err("no adapter".into()),
+            Err(e @ GpuError::NoRayQuery(_)) if !required => Err(e.to_string()),
             Err(e) => panic!("{test}: {require}=1 but {what} is unusable: {e}"),
         }
     });
-    if ctx.is_none() {
-        let why = WHY.lock().unwrap_or_else(|p| p.into_inner());
-        eprintln!("{test}: skipped: {why}");
+    match opened {
+        Ok(ctx) => Some(ctx.clone()),
+        Err(why) => {
+            eprintln!("{test}: skipped: {why}");
+            None
+        }
     }
-    ctx.clone()
 }
 
 /// `job` of `scene` on the CPU and, where there is a GPU (see [`gpu`]), on the GPU: the
