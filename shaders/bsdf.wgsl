@@ -7,10 +7,20 @@ struct BsdfSample {
     delta: bool,
     eta: f32,
     valid: bool,
+    // LOBE_DIFFUSE, LOBE_GLOSSY or LOBE_TRANSMISSION, for the path's bounce limits.
+    lobe: u32,
 }
 
 fn no_sample() -> BsdfSample {
-    return BsdfSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, false, 1.0, false);
+    return BsdfSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, false, 1.0, false, LOBE_DIFFUSE);
+}
+
+// mirror: src/render/bsdf.rs `lobe_of`
+fn lobe_of(wo: vec3<f32>, wi: vec3<f32>, diffuse: bool) -> u32 {
+    if wo.z * wi.z < 0.0 {
+        return LOBE_TRANSMISSION;
+    }
+    return select(LOBE_GLOSSY, LOBE_DIFFUSE, diffuse);
 }
 
 // mirror: src/render/bsdf.rs `bsdf_is_delta`
@@ -109,13 +119,13 @@ fn bsdf_sample(m: Material, wo: vec3<f32>, u_lobe: f32, u: vec2<f32>) -> BsdfSam
         if pdf <= 0.0 {
             return no_sample();
         }
-        return BsdfSample(wi, m.albedo, pdf, false, 1.0, true);
+        return BsdfSample(wi, m.albedo, pdf, false, 1.0, true, LOBE_DIFFUSE);
     }
     if m.kind == MAT_CONDUCTOR {
         if wo.z <= 0.0 {
             return no_sample();
         }
-        return BsdfSample(vec3<f32>(-wo.x, -wo.y, wo.z), m.albedo, 1.0, true, 1.0, true);
+        return BsdfSample(vec3<f32>(-wo.x, -wo.y, wo.z), m.albedo, 1.0, true, 1.0, true, LOBE_GLOSSY);
     }
     if m.kind == MAT_ROUGH_CONDUCTOR {
         if wo.z <= 0.0 {
@@ -128,17 +138,17 @@ fn bsdf_sample(m: Material, wo: vec3<f32>, u_lobe: f32, u: vec2<f32>) -> BsdfSam
             return no_sample();
         }
         let pdf = ggx_g1(wo, alpha) * ggx_d(h, alpha) / (4.0 * wo.z);
-        return BsdfSample(wi, m.albedo * ggx_g1(wi, alpha), pdf, false, 1.0, true);
+        return BsdfSample(wi, m.albedo * ggx_g1(wi, alpha), pdf, false, 1.0, true, LOBE_GLOSSY);
     }
     if m.kind == MAT_DIELECTRIC {
         let fr = fresnel_dielectric(wo.z, m.ior);
         let f = fr.x;
         if u_lobe < f {
-            return BsdfSample(vec3<f32>(-wo.x, -wo.y, wo.z), vec3<f32>(1.0), f, true, 1.0, true);
+            return BsdfSample(vec3<f32>(-wo.x, -wo.y, wo.z), vec3<f32>(1.0), f, true, 1.0, true, LOBE_GLOSSY);
         }
         let eta_ti = fr.w;
         let wi = vec3<f32>(-eta_ti * wo.x, -eta_ti * wo.y, fr.y);
-        return BsdfSample(wi, vec3<f32>(eta_ti * eta_ti), 1.0 - f, true, fr.z, true);
+        return BsdfSample(wi, vec3<f32>(eta_ti * eta_ti), 1.0 - f, true, fr.z, true, LOBE_TRANSMISSION);
     }
     if m.kind == MAT_PBR {
         return pbr_sample(m, wo, u_lobe, u);
@@ -398,14 +408,14 @@ fn base_sample(m: Material, wo: vec3<f32>, u_lobe: f32, u: vec2<f32>) -> BsdfSam
         let c = wo.z;
         let mirrored = vec3<f32>(-wo.x, -wo.y, wo.z);
         if lobe == 0u {
-            return BsdfSample(mirrored, fresnel_schlick(m.albedo, c) * m.metallic / p.x, p.x, true, 1.0, true);
+            return BsdfSample(mirrored, fresnel_schlick(m.albedo, c) * m.metallic / p.x, p.x, true, 1.0, true, LOBE_GLOSSY);
         }
         if lobe == 1u {
-            return BsdfSample(mirrored, pbr_fresnel(m, c) * dielectric / p.y, p.y, true, 1.0, true);
+            return BsdfSample(mirrored, pbr_fresnel(m, c) * dielectric / p.y, p.y, true, 1.0, true, LOBE_GLOSSY);
         }
         let trans = m.albedo * (vec3<f32>(1.0) - pbr_fresnel(m, c)) * (dielectric * m.transmission);
         if thin {
-            return BsdfSample(-wo, trans / p.z, p.z, true, 1.0, true);
+            return BsdfSample(-wo, trans / p.z, p.z, true, 1.0, true, LOBE_TRANSMISSION);
         }
         let fr = fresnel_dielectric(c, m.ior);
         if fr.x >= 1.0 {
@@ -413,7 +423,7 @@ fn base_sample(m: Material, wo: vec3<f32>, u_lobe: f32, u: vec2<f32>) -> BsdfSam
         }
         let eta_ti = fr.w;
         let wi = vec3<f32>(-eta_ti * wo.x, -eta_ti * wo.y, fr.y);
-        return BsdfSample(wi, trans * (eta_ti * eta_ti) / p.z, p.z, true, fr.z, true);
+        return BsdfSample(wi, trans * (eta_ti * eta_ti) / p.z, p.z, true, fr.z, true, LOBE_TRANSMISSION);
     }
     var wi: vec3<f32>;
     if lobe == 3u {
@@ -453,7 +463,7 @@ fn base_sample(m: Material, wo: vec3<f32>, u_lobe: f32, u: vec2<f32>) -> BsdfSam
     if wo.z * wi.z < 0.0 && !thin {
         eta = pbr_etap(m, wo);
     }
-    return BsdfSample(wi, base_eval(m, wo, wi) / pdf, pdf, false, eta, true);
+    return BsdfSample(wi, base_eval(m, wo, wi) / pdf, pdf, false, eta, true, lobe_of(wo, wi, lobe == 3u));
 }
 
 // The sheen and clear-coat layers over the pbr base (src/render/bsdf.rs says how they
@@ -565,6 +575,7 @@ fn pbr_sample(m: Material, wo: vec3<f32>, u_lobe: f32, u: vec2<f32>) -> BsdfSamp
     }
     let p = layer_pdfs(m, wo);
     var wi: vec3<f32>;
+    var lobe: u32;
     if u_lobe < p.x {
         let f = onb_from_normal(m.coat_normal);
         let o = to_coat(m, wo);
@@ -573,7 +584,7 @@ fn pbr_sample(m: Material, wo: vec3<f32>, u_lobe: f32, u: vec2<f32>) -> BsdfSamp
             if o.z <= 0.0 || mirrored.z <= 0.0 {
                 return no_sample();
             }
-            return BsdfSample(mirrored, vec3<f32>(m.clearcoat * coat_fresnel(o.z) / p.x), p.x, true, 1.0, true);
+            return BsdfSample(mirrored, vec3<f32>(m.clearcoat * coat_fresnel(o.z) / p.x), p.x, true, 1.0, true, LOBE_GLOSSY);
         }
         if o.z <= 0.0 {
             return no_sample();
@@ -581,8 +592,10 @@ fn pbr_sample(m: Material, wo: vec3<f32>, u_lobe: f32, u: vec2<f32>) -> BsdfSamp
         let h = ggx_sample_visible(o, ggx_alpha(m.clearcoat_roughness), u);
         let i = 2.0 * dot(o, h) * h - o;
         wi = i.x * f[0] + i.y * f[1] + i.z * m.coat_normal;
+        lobe = lobe_of(wo, wi, false);
     } else if u_lobe < p.x + p.y {
         wi = sample_cosine_hemisphere(u);
+        lobe = lobe_of(wo, wi, true);
     } else {
         if p.z <= 0.0 {
             return no_sample();
@@ -596,9 +609,10 @@ fn pbr_sample(m: Material, wo: vec3<f32>, u_lobe: f32, u: vec2<f32>) -> BsdfSamp
             let po = layers_pass(m, wo);
             let pi = layers_pass(m, bs.wi);
             let through = po.x * pi.x * min(po.y, pi.y);
-            return BsdfSample(bs.wi, bs.weight * (through / p.z), bs.pdf * p.z, true, bs.eta, true);
+            return BsdfSample(bs.wi, bs.weight * (through / p.z), bs.pdf * p.z, true, bs.eta, true, bs.lobe);
         }
         wi = bs.wi;
+        lobe = bs.lobe;
     }
     let pdf = pbr_pdf(m, wo, wi);
     if !(pdf > 0.0) {
@@ -608,5 +622,5 @@ fn pbr_sample(m: Material, wo: vec3<f32>, u_lobe: f32, u: vec2<f32>) -> BsdfSamp
     if wo.z * wi.z < 0.0 && (m.flags & MAT_THIN_WALLED) == 0u {
         eta = pbr_etap(m, wo);
     }
-    return BsdfSample(wi, pbr_eval(m, wo, wi) / pdf, pdf, false, eta, true);
+    return BsdfSample(wi, pbr_eval(m, wo, wi) / pdf, pdf, false, eta, true, lobe);
 }

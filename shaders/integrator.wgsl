@@ -17,12 +17,23 @@ struct PathState {
     depth: u32,
     caustic_pdf: f32,
     caustic_hops: u32,
+    // The diffuse, glossy and transmission scatterings the path may still take (indexed
+    // by BsdfSample::lobe).
+    bounces_left: vec3<u32>,
 }
 
-// A path about to trace its camera ray, drawn with density camera_pdf.
+// A path about to trace its camera ray, drawn with density camera_pdf, with the
+// scatterings of each lobe kind its bounce limits allow.
 // mirror: src/render/integrator.rs `path_start`
 fn path_start(ray: Ray, camera_pdf: f32) -> PathState {
-    return PathState(ray, vec3<f32>(0.0), vec3<f32>(1.0), 0u, camera_pdf, true, 1.0, 0u, 0.0, 0u);
+    let bounces = vec3<u32>(params.diffuse_bounces, params.glossy_bounces, params.transmission_bounces);
+    return PathState(ray, vec3<f32>(0.0), vec3<f32>(1.0), 0u, camera_pdf, true, 1.0, 0u, 0.0, 0u, bounces);
+}
+
+// Whether the vertex the path has just reached is its last: it adds its emission alone.
+// mirror: src/render/integrator.rs `path_ends_at_vertex`
+fn path_ends_at_vertex(st: ptr<function, PathState>) -> bool {
+    return (*st).depth + 1u >= params.max_depth || any((*st).bounces_left == vec3<u32>(0u));
 }
 
 // path_step's caustic connection to one light vertex.
@@ -84,7 +95,7 @@ fn path_vertex(st: ptr<function, PathState>, rng: Rng, branches: u32) -> PathVer
     // The light pair, drawn before the traversal (as on the CPU, where that hides its
     // latency; on a miss, a delta material or the last segment it goes unused).
     var u_light = vec2<f32>(0.0);
-    if params.num_emitters > 0u && (*st).depth + 1u < params.max_depth {
+    if params.num_emitters > 0u && !path_ends_at_vertex(st) {
         u_light = rng_2d(rng, (*st).depth, DIM_LIGHT_U);
     }
     (*st).rays += 1u;
@@ -126,7 +137,7 @@ fn path_vertex(st: ptr<function, PathState>, rng: Rng, branches: u32) -> PathVer
     if caustics && ((*st).depth == 0u || !(*st).prev_delta) {
         area_pdf = (*st).prev_pdf * abs(dot((*st).ray.dir, si.ng)) / (hit.t * hit.t);
     }
-    if (*st).depth + 1u >= params.max_depth {
+    if path_ends_at_vertex(st) {
         return v;
     }
     let wo_world = -(*st).ray.dir;
@@ -269,6 +280,7 @@ fn path_continue(st: ptr<function, PathState>, v: PathVertex, rng: Rng) -> bool 
     (*st).prev_pdf = bs.pdf;
     (*st).prev_delta = bs.delta;
     (*st).eta_scale *= bs.eta;
+    (*st).bounces_left[bs.lobe] -= 1u;
     (*st).depth += 1u;
     if (*st).depth >= RR_DEPTH {
         let q = min(max3((*st).beta) * (*st).eta_scale * (*st).eta_scale, 0.95);

@@ -109,7 +109,7 @@ fn test_light_pick(@builtin(global_invocation_id) gid: vec3<u32>) {
 }
 
 // in: (wo xyz, material), (u_lobe, u1, u2, _) | out: (wi xyz, pdf), (weight xyz, flags:
-// bit 0 valid, bit 1 delta) ; and eval/pdf of the sampled direction are checked on the host.
+// bit 0 valid, bit 1 delta, bits 2.. the lobe) ; and eval/pdf of the sampled direction are checked on the host.
 @compute @workgroup_size(64)
 fn test_bsdf_sample(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = case_index(gid);
@@ -118,7 +118,7 @@ fn test_bsdf_sample(@builtin(global_invocation_id) gid: vec3<u32>) {
     let u = f4(case_in(i, 1u));
     let m = load_material(a.w);
     let s = bsdf_sample(m, f4(a).xyz, u.x, u.yz);
-    let flags = select(0u, 1u, s.valid) | select(0u, 2u, s.delta);
+    let flags = select(0u, 1u, s.valid) | select(0u, 2u, s.delta) | (s.lobe << 2u);
     case_out(i, u4(vec4<f32>(s.wi, s.pdf)), vec4<u32>(u4(vec4<f32>(s.weight, 0.0)).xyz, flags));
 }
 

@@ -91,7 +91,7 @@ struct CausticTarget {
     radius: f32,
 }
 
-// mirror: src/render/gpu/params.rs `Params` (240 bytes): one dispatch's camera, sky and range.
+// mirror: src/render/gpu/params.rs `Params` (256 bytes): one dispatch's camera, sky and range.
 struct Params {
     cam_position: vec3<f32>,
     width: u32,
@@ -153,8 +153,14 @@ struct Params {
     // (RenderScene::first_rect_light): BSDF-sampled rays test those from there on.
     num_lights: u32,
     first_rect_light: u32,
+    // The diffuse, glossy and transmission scatterings a path may take: each bounce limit
+    // plus one, or the largest u32 for none (src/scene/settings.rs `BounceLimits`).
+    diffuse_bounces: u32,
+    glossy_bounces: u32,
+    transmission_bounces: u32,
     _pad0: u32,
     _pad1: u32,
+    _pad2: u32,
 }
 
 

@@ -353,6 +353,7 @@ pub fn bench_scene(
         caustics: scene.settings.caustics,
         branches: scene.settings.branches,
         filter_width: scene.settings.filter_width,
+        bounces: scene.settings.bounces,
     };
     let job = RenderJob::new(settings);
     let samples = opts.width as f64 * opts.height as f64 * opts.spp as f64;

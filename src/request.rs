@@ -12,9 +12,9 @@
 use crate::film::{Aov, BitDepth};
 use crate::render::backend::{Backend, DeviceChoice};
 use crate::render::gpu::{Accel, GpuError};
-use crate::scene::RenderSettings;
 use crate::scene::lighting::Lighting;
 use crate::scene::studio::{BareOptions, Up};
+use crate::scene::{BounceLimits, RenderSettings};
 use serde::{Deserialize, Deserializer};
 use std::path::PathBuf;
 
@@ -35,6 +35,11 @@ pub struct RenderRequest {
     /// The side in pixels of the square a pixel's camera samples fall in (1; 0 for its
     /// centre alone).
     pub filter_width: Option<f32>,
+    /// The most diffuse, glossy and transmission bounces of a path, as Cycles' settings of
+    /// those names limit them ([`BounceLimits`]).
+    pub diffuse_bounces: Option<u32>,
+    pub glossy_bounces: Option<u32>,
+    pub transmission_bounces: Option<u32>,
     /// `auto` (a hardware GPU, else the CPU), `cpu` or `gpu`.
     #[serde(default, deserialize_with = "device")]
     pub device: Option<DeviceChoice>,
@@ -122,6 +127,9 @@ impl RenderRequest {
             caustics: r.caustics.or(u.caustics),
             branches: r.branches.or(u.branches),
             filter_width: r.filter_width.or(u.filter_width),
+            diffuse_bounces: r.diffuse_bounces.or(u.diffuse_bounces),
+            glossy_bounces: r.glossy_bounces.or(u.glossy_bounces),
+            transmission_bounces: r.transmission_bounces.or(u.transmission_bounces),
             device: r.device.or(u.device),
             adapter: r.adapter.or(u.adapter),
             accel: r.accel.or(u.accel),
@@ -150,6 +158,11 @@ impl RenderRequest {
             caustics: self.caustics.unwrap_or(own.caustics),
             branches: self.branches.or(own.branches),
             filter_width: self.filter_width.unwrap_or(own.filter_width),
+            bounces: BounceLimits {
+                diffuse: self.diffuse_bounces.or(own.bounces.diffuse),
+                glossy: self.glossy_bounces.or(own.bounces.glossy),
+                transmission: self.transmission_bounces.or(own.bounces.transmission),
+            },
         };
         s.validate()
             .map_err(|(field, message)| RequestError::new(field, message))?;

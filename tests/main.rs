@@ -14,6 +14,7 @@ mod alpha_mask;
 mod analytic;
 mod aovs;
 mod batch;
+mod bounces;
 mod branches;
 mod bsdf;
 mod bvh;

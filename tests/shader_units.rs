@@ -777,10 +777,11 @@ fn bsdf_sample_matches() {
             weight: gweight,
             valid: gvalid,
             delta: gdelta,
+            lobe: globe,
         } = GpuBsdfSample::from_output(o);
         let show = || {
             format!(
-                "{:?} r {} wo {wo} u {u:?}: CPU {cpu:?}; GPU valid {gvalid} delta {gdelta} wi {gwi} weight {gweight} pdf {gpdf}",
+                "{:?} r {} wo {wo} u {u:?}: CPU {cpu:?}; GPU valid {gvalid} delta {gdelta} lobe {globe} wi {gwi} weight {gweight} pdf {gpdf}",
                 m.kind, m.roughness
             )
         };
@@ -803,7 +804,7 @@ fn bsdf_sample_matches() {
             }
             continue;
         }
-        if gdelta != s.delta {
+        if gdelta != s.delta || globe != s.lobe {
             fail.add(show);
             continue;
         }
@@ -1037,6 +1038,7 @@ fn replay_paths(
             ray,
             &rng,
             settings.max_depth,
+            settings.bounces.budget(),
             settings.branches(!rs.caustic_targets.is_empty()),
             &mut |pixel, value| {
                 splat += value;

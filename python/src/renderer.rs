@@ -193,7 +193,8 @@ impl Renderer {
     /// pass and raises KeyboardInterrupt.
     #[pyo3(signature = (
         scene, *, camera=None, width=None, height=None, spp=None, max_depth=None, seed=None,
-        caustics=None, branches=None, filter_width=None, aovs=None, transparent=None,
+        caustics=None, branches=None, filter_width=None, diffuse_bounces=None,
+        glossy_bounces=None, transmission_bounces=None, aovs=None, transparent=None,
         geometry_only=None, denoise=None, up=None, environment=None, lighting=None,
         max_texture_size=None
     ))]
@@ -211,6 +212,9 @@ impl Renderer {
         caustics: Option<bool>,
         branches: Option<u32>,
         filter_width: Option<f32>,
+        diffuse_bounces: Option<u32>,
+        glossy_bounces: Option<u32>,
+        transmission_bounces: Option<u32>,
         aovs: Option<Vec<String>>,
         transparent: Option<bool>,
         geometry_only: Option<bool>,
@@ -237,6 +241,9 @@ impl Renderer {
             caustics,
             branches,
             filter_width,
+            diffuse_bounces,
+            glossy_bounces,
+            transmission_bounces,
             aov,
             transparent,
             geometry_only,

@@ -13,7 +13,7 @@ use crate::scene::camera::Camera;
 use crate::scene::light::PunctualLight;
 use crate::scene::studio::Up;
 use crate::scene::texture::{ImageType, TextureError, TextureRef, TextureSource, Textures};
-use crate::scene::{Scene, SceneError, Sky};
+use crate::scene::{BounceLimits, Scene, SceneError, Sky};
 use glam::{DVec3, Vec3};
 
 use super::wonder3d;
@@ -172,9 +172,32 @@ pub struct Preset {
     /// The script's `cycles.filter_width`: 0.01 pixels (every sample through the pixel's
     /// centre, no anti-aliasing) in all but TRELLIS's, which keeps 1.
     pub filter_width: f32,
+    /// The script's longest path, from Cycles' `max_bounces` (segments: bounces + 2).
+    pub max_depth: u32,
+    /// The script's `diffuse_bounces`, `glossy_bounces` and `transmission_bounces`.
+    pub bounces: BounceLimits,
     pub lighting: Lighting,
     pub poses: Poses,
 }
+
+/// The light paths of the Zero123 script and those made from it (objaverse-rendering,
+/// Objaverse-XL, SyncDreamer, TRELLIS): `diffuse_bounces = 1`, `glossy_bounces = 1`,
+/// `transmission_bounces = 3` (and `transparent_max_bounces = 3`: meshtrace passes
+/// alpha-masked surfaces without counting them).
+const SCRIPT_BOUNCES: BounceLimits = BounceLimits {
+    diffuse: Some(1),
+    glossy: Some(1),
+    transmission: Some(3),
+};
+
+/// The `max_depth` of Cycles' `max_bounces` of `bounces`: its kernel lets a path scatter
+/// `bounces` + 1 times, and the segment after the last scattering still finds emission.
+const fn cycles_max_depth(bounces: u32) -> u32 {
+    bounces + 2
+}
+
+/// Blender's default `max_bounces`, which the scripts keep.
+const BLENDER_MAX_BOUNCES: u32 = 12;
 
 impl Preset {
     /// The preset named `name` with its script's parameters, or why there is none.
@@ -197,6 +220,8 @@ impl Preset {
                 size: 512,
                 spp: 64,
                 filter_width: 0.01,
+                max_depth: cycles_max_depth(BLENDER_MAX_BOUNCES),
+                bounces: SCRIPT_BOUNCES,
                 lighting: Lighting::AreaAbove,
                 poses: Poses::None,
             }),
@@ -218,6 +243,8 @@ impl Preset {
                 size: 256,
                 spp: 128,
                 filter_width: 0.01,
+                max_depth: cycles_max_depth(BLENDER_MAX_BOUNCES),
+                bounces: SCRIPT_BOUNCES,
                 lighting: Lighting::FactoryPoint { world: 0.5 },
                 poses: Poses::None,
             }),
@@ -243,6 +270,8 @@ impl Preset {
                 size: 512,
                 spp: 128,
                 filter_width: 0.01,
+                max_depth: cycles_max_depth(BLENDER_MAX_BOUNCES),
+                bounces: SCRIPT_BOUNCES,
                 lighting: Lighting::Zero123,
                 poses: Poses::Npy,
             }),
@@ -263,6 +292,8 @@ impl Preset {
                 size: 512,
                 spp: 128,
                 filter_width: 1.0,
+                max_depth: cycles_max_depth(BLENDER_MAX_BOUNCES),
+                bounces: SCRIPT_BOUNCES,
                 lighting: Lighting::Trellis,
                 poses: Poses::Transforms,
             }),
@@ -298,6 +329,15 @@ impl Preset {
                 size: 512,
                 spp: 1024,
                 filter_width: 1.0,
+                // BlenderProc 2.5's defaults (`bproc.init()`), which the script keeps:
+                // `max_bounces = 3`, `diffuse_bounces = 3`, `glossy_bounces = 0`,
+                // `transmission_bounces = 0`.
+                max_depth: cycles_max_depth(3),
+                bounces: BounceLimits {
+                    diffuse: Some(3),
+                    glossy: Some(0),
+                    transmission: Some(0),
+                },
                 lighting: Lighting::Wonder3d,
                 poses: Poses::RtTxt,
             }),
@@ -320,6 +360,10 @@ impl Preset {
             height: Some(self.size),
             spp: Some(self.spp),
             filter_width: Some(self.filter_width),
+            max_depth: Some(self.max_depth),
+            diffuse_bounces: self.bounces.diffuse,
+            glossy_bounces: self.bounces.glossy,
+            transmission_bounces: self.bounces.transmission,
             transparent: Some(!rig),
             without_studio: true,
             ..RenderRequest::default()
@@ -803,5 +847,41 @@ impl Normalisation {
     /// A normalised point back in the mesh's frame.
     pub fn to_scene(&self, n: Vec3) -> Vec3 {
         n / self.scale + self.centre
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The scripts' light paths reach each image's request, under a manifest's `[render]`.
+    #[test]
+    fn presets_ask_for_their_scripts_bounce_limits() {
+        let limits = |r: &RenderRequest| {
+            (
+                r.max_depth,
+                r.diffuse_bounces,
+                r.glossy_bounces,
+                r.transmission_bounces,
+            )
+        };
+        for name in [
+            "zero123",
+            "objaverse",
+            "objaverse-xl",
+            "syncdreamer",
+            "trellis",
+        ] {
+            let r = Preset::named(name).expect("preset").request();
+            assert_eq!(limits(&r), (Some(14), Some(1), Some(1), Some(3)), "{name}");
+        }
+        let wonder3d = Preset::named("wonder3d").expect("preset").request();
+        assert_eq!(limits(&wonder3d), (Some(5), Some(3), Some(0), Some(0)));
+        let manifest = RenderRequest {
+            diffuse_bounces: Some(4),
+            ..RenderRequest::default()
+        };
+        let r = manifest.over(&wonder3d);
+        assert_eq!(limits(&r), (Some(5), Some(4), Some(0), Some(0)));
     }
 }

@@ -60,6 +60,18 @@ pub struct RenderArgs {
     /// filter_width; else 1].
     #[arg(long, value_name = "PIXELS")]
     pub filter_width: Option<f32>,
+    /// The most indirect diffuse bounces of a path, as Cycles' `diffuse_bounces`: 0 lights
+    /// diffuse surfaces directly alone [scene's [render] diffuse_bounces; else no limit].
+    #[arg(long, value_name = "N")]
+    pub diffuse_bounces: Option<u32>,
+    /// The most glossy bounces, as Cycles' `glossy_bounces` [scene's [render]
+    /// glossy_bounces; else no limit].
+    #[arg(long, value_name = "N")]
+    pub glossy_bounces: Option<u32>,
+    /// The most transmission bounces, as Cycles' `transmission_bounces` [scene's [render]
+    /// transmission_bounces; else no limit].
+    #[arg(long, value_name = "N")]
+    pub transmission_bounces: Option<u32>,
     #[command(flatten)]
     pub on: DeviceArgs,
     /// Print nothing but warnings and errors.
@@ -177,6 +189,9 @@ impl RenderArgs {
             caustics: self.caustics,
             branches: self.branches,
             filter_width: self.filter_width,
+            diffuse_bounces: self.diffuse_bounces,
+            glossy_bounces: self.glossy_bounces,
+            transmission_bounces: self.transmission_bounces,
             aov,
             transparent: Some(self.transparent),
             bit_depth: self.bit_depth,

@@ -24,6 +24,30 @@ pub struct BsdfSample {
     pub delta: bool,
     /// Relative index of refraction crossed (1 for reflection), for Russian roulette.
     pub eta: f32,
+    /// The kind of scattering drawn ([`LOBE_DIFFUSE`], [`LOBE_GLOSSY`] or
+    /// [`LOBE_TRANSMISSION`]), which the path counts against its bounce limits.
+    pub lobe: u32,
+}
+
+/// [`BsdfSample::lobe`]: a diffuse reflection (the diffuse and sheen lobes), as Cycles
+/// labels them for its `diffuse_bounces`. The shaders get these from
+/// `render::gpu::shader::shared_constants`.
+pub const LOBE_DIFFUSE: u32 = 0;
+/// A glossy or mirror reflection (the specular lobes and the clear coat): `glossy_bounces`.
+pub const LOBE_GLOSSY: u32 = 1;
+/// A direction through the surface, rough or smooth: `transmission_bounces`.
+pub const LOBE_TRANSMISSION: u32 = 2;
+
+/// The lobe kind of a direction `wi` drawn for `wo` from a lobe that is diffuse or not:
+/// [`LOBE_TRANSMISSION`] where it crosses the surface. mirror: shaders/bsdf.wgsl `lobe_of`
+pub fn lobe_of(wo: Vec3, wi: Vec3, diffuse: bool) -> u32 {
+    if wo.z * wi.z < 0.0 {
+        LOBE_TRANSMISSION
+    } else if diffuse {
+        LOBE_DIFFUSE
+    } else {
+        LOBE_GLOSSY
+    }
 }
 
 /// Whether the material's BSDF is a Dirac delta (next event estimation cannot help). A
@@ -143,6 +167,7 @@ pub fn bsdf_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfS
                 pdf,
                 delta: false,
                 eta: 1.0,
+                lobe: LOBE_DIFFUSE,
             })
         }
         MaterialKind::CONDUCTOR => {
@@ -155,6 +180,7 @@ pub fn bsdf_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfS
                 pdf: 1.0,
                 delta: true,
                 eta: 1.0,
+                lobe: LOBE_GLOSSY,
             })
         }
         MaterialKind::ROUGH_CONDUCTOR => {
@@ -173,6 +199,7 @@ pub fn bsdf_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfS
                 pdf: ggx_g1(wo, alpha) * ggx_d(h, alpha) / (4.0 * wo.z),
                 delta: false,
                 eta: 1.0,
+                lobe: LOBE_GLOSSY,
             })
         }
         MaterialKind::DIELECTRIC => {
@@ -184,6 +211,7 @@ pub fn bsdf_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfS
                     pdf: f,
                     delta: true,
                     eta: 1.0,
+                    lobe: LOBE_GLOSSY,
                 })
             } else {
                 Some(BsdfSample {
@@ -194,6 +222,7 @@ pub fn bsdf_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfS
                     pdf: 1.0 - f,
                     delta: true,
                     eta: eta_it,
+                    lobe: LOBE_TRANSMISSION,
                 })
             }
         }
@@ -541,6 +570,11 @@ pub fn base_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfS
             pdf: p[lobe],
             delta: true,
             eta,
+            lobe: if lobe == 2 {
+                LOBE_TRANSMISSION
+            } else {
+                LOBE_GLOSSY
+            },
         });
     }
     let wi = if lobe == 3 {
@@ -596,6 +630,7 @@ pub fn base_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfS
         pdf,
         delta: false,
         eta,
+        lobe: lobe_of(wo, wi, lobe == 3),
     })
 }
 
@@ -738,7 +773,7 @@ pub fn pbr_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSa
         return base_sample(m, wo, u_lobe, u);
     }
     let p = layer_pdfs(m, wo);
-    let wi = if u_lobe < p[0] {
+    let (wi, lobe) = if u_lobe < p[0] {
         let (t, b) = onb_from_normal(m.coat_normal);
         let o = to_coat(m, wo);
         if m.clearcoat_roughness == 0.0 {
@@ -753,6 +788,7 @@ pub fn pbr_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSa
                 pdf: p[0],
                 delta: true,
                 eta: 1.0,
+                lobe: LOBE_GLOSSY,
             });
         }
         if o.z <= 0.0 {
@@ -760,9 +796,11 @@ pub fn pbr_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSa
         }
         let h = ggx_sample_visible(o, ggx_alpha(m.clearcoat_roughness), u);
         let i = 2.0 * o.dot(h) * h - o;
-        i.x * t + i.y * b + i.z * m.coat_normal
+        let wi = i.x * t + i.y * b + i.z * m.coat_normal;
+        (wi, lobe_of(wo, wi, false))
     } else if u_lobe < p[0] + p[1] {
-        sample_cosine_hemisphere(u)
+        let wi = sample_cosine_hemisphere(u);
+        (wi, lobe_of(wo, wi, true))
     } else {
         if p[2] <= 0.0 {
             return None;
@@ -779,7 +817,7 @@ pub fn pbr_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSa
                 ..bs
             });
         }
-        bs.wi
+        (bs.wi, bs.lobe)
     };
     let pdf = pbr_pdf(m, wo, wi);
     // (Also refuses a NaN pdf.)
@@ -797,5 +835,6 @@ pub fn pbr_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSa
         pdf,
         delta: false,
         eta,
+        lobe,
     })
 }

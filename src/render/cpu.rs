@@ -377,6 +377,7 @@ pub fn render_pixel(
             ray,
             &rng,
             s.max_depth,
+            s.bounces.budget(),
             s.branches(!scene.caustic_targets.is_empty()),
             &mut |pixel, value| splats.add(pixel, value),
         );

@@ -34,7 +34,7 @@ use crate::film::NO_ID;
 use crate::geometry::{T_INF, triangle_area};
 use crate::math::Ray;
 use crate::scene::{Material, MaterialKind};
-use glam::{Vec2, Vec3, Vec4};
+use glam::{UVec3, Vec2, Vec3, Vec4};
 use std::mem::MaybeUninit;
 
 /// Path depth (in bounces) from which Russian roulette may end a path.
@@ -70,12 +70,19 @@ pub struct PathState {
     pub caustic_pdf: f32,
     /// Specular chains completed since x(t).
     pub caustic_hops: u32,
+    /// The scatterings of each lobe kind (indexed by
+    /// [`BsdfSample::lobe`](super::bsdf::BsdfSample::lobe)) the path may still take: the
+    /// [`BounceLimits::budget`](crate::scene::BounceLimits::budget) less one per scattering
+    /// of that kind. Where one is 0, the next surface adds its emission and the path ends.
+    pub bounces_left: UVec3,
 }
 
 /// A path about to trace its camera ray, drawn with solid-angle density `camera_pdf`
-/// (kept in `prev_pdf` for the caustic weights; `prev_delta` keeps other weights off it).
+/// (kept in `prev_pdf` for the caustic weights; `prev_delta` keeps other weights off it),
+/// with the scatterings of each lobe kind in `bounces`
+/// ([`BounceLimits::budget`](crate::scene::BounceLimits::budget)).
 /// mirror: shaders/integrator.wgsl `path_start`
-pub fn path_start(ray: Ray, camera_pdf: f32) -> PathState {
+pub fn path_start(ray: Ray, camera_pdf: f32, bounces: UVec3) -> PathState {
     PathState {
         ray,
         radiance: Vec3::ZERO,
@@ -87,7 +94,16 @@ pub fn path_start(ray: Ray, camera_pdf: f32) -> PathState {
         depth: 0,
         caustic_pdf: 0.0,
         caustic_hops: 0,
+        bounces_left: bounces,
     }
+}
+
+/// Whether the vertex the path has just reached is its last: it adds its emission and
+/// nothing more, the path having traced `max_depth` segments or used up a lobe kind's
+/// bounces. mirror: shaders/integrator.wgsl `path_ends_at_vertex`
+#[inline(always)]
+pub fn path_ends_at_vertex(st: &PathState, max_depth: u32) -> bool {
+    st.depth + 1 >= max_depth || st.bounces_left.min_element() == 0
 }
 
 /// One bounce: [`path_vertex`], [`connect_light_path`] and [`path_continue`]. Returns
@@ -176,7 +192,7 @@ pub fn path_vertex<'a, const CAUSTICS: bool>(
     let wide = &scene.wide;
     // The light pair, drawn before the traversal so that its hashes run in the traversal's
     // latency (on a miss, a delta material or the last segment it goes unused).
-    let u_light = if scene.emitters.is_empty() || st.depth + 1 >= max_depth {
+    let u_light = if scene.emitters.is_empty() || path_ends_at_vertex(st, max_depth) {
         Vec2::ZERO
     } else {
         rng.rng_2d(st.depth, rng::DIM_LIGHT_U)
@@ -239,7 +255,7 @@ pub fn path_vertex<'a, const CAUSTICS: bool>(
         0.0
     };
     // Segments so far: depth + 1. Both light sampling and continuing add one more.
-    if st.depth + 1 >= max_depth {
+    if path_ends_at_vertex(st, max_depth) {
         return None;
     }
     let wo_world = -st.ray.dir;
@@ -424,6 +440,7 @@ pub fn path_continue<const CAUSTICS: bool>(st: &mut PathState, v: &PathVertex, r
     st.prev_pdf = bs.pdf;
     st.prev_delta = bs.delta;
     st.eta_scale *= bs.eta;
+    st.bounces_left[bs.lobe as usize] -= 1;
     st.depth += 1;
     if st.depth >= RR_DEPTH {
         let q = (st.beta.max_element() * st.eta_scale * st.eta_scale).min(0.95);
@@ -502,29 +519,33 @@ pub struct PathSample {
 /// first vertex's plus the mean of the branches'. (In a scene without caustic targets, the
 /// path's caustic bookkeeping is compiled out.)
 /// mirror: shaders/integrator.wgsl `trace_path`
+#[allow(clippy::too_many_arguments)]
 pub fn trace_path(
     scene: &RenderScene,
     cam: &CameraRays,
     ray: Ray,
     rng: &Rng,
     max_depth: u32,
+    bounces: UVec3,
     branches: u32,
     splat: &mut impl FnMut(u32, Vec3),
 ) -> PathSample {
     if scene.caustic_targets.is_empty() {
-        camera_sample::<false>(scene, cam, ray, rng, max_depth, branches, splat)
+        camera_sample::<false>(scene, cam, ray, rng, max_depth, bounces, branches, splat)
     } else {
-        camera_sample::<true>(scene, cam, ray, rng, max_depth, branches, splat)
+        camera_sample::<true>(scene, cam, ray, rng, max_depth, bounces, branches, splat)
     }
 }
 
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn camera_sample<const CAUSTICS: bool>(
     scene: &RenderScene,
     cam: &CameraRays,
     ray: Ray,
     rng: &Rng,
     max_depth: u32,
+    bounces: UVec3,
     branches: u32,
     splat: &mut impl FnMut(u32, Vec3),
 ) -> PathSample {
@@ -533,7 +554,7 @@ fn camera_sample<const CAUSTICS: bool>(
     } else {
         0.0
     };
-    let mut st = path_start(ray, camera_pdf);
+    let mut st = path_start(ray, camera_pdf, bounces);
     let mut textured = MaybeUninit::uninit();
     let mut v = path_vertex::<CAUSTICS>(scene, &mut st, rng, max_depth, branches, &mut textured);
     let mut out = PathSample {

@@ -19,7 +19,8 @@ use super::texture::{
     TextureError, TextureRef, TextureSource, Textures, Usage, UvTransform, Wrap, load_environment,
 };
 use super::{
-    Camera, Material, MaterialKind, NO_TANGENT, NO_TEXTURE, NO_UV, RenderSettings, SceneError, Sky,
+    BounceLimits, Camera, Material, MaterialKind, NO_TANGENT, NO_TEXTURE, NO_UV, RenderSettings,
+    SceneError, Sky,
 };
 use glam::{Mat3, Mat4, Vec3};
 use std::path::{Path, PathBuf};
@@ -174,6 +175,11 @@ impl Ctx<'_> {
             caustics: r.caustics.unwrap_or(d.caustics),
             branches: r.branches.or(d.branches),
             filter_width: r.filter_width.unwrap_or(d.filter_width),
+            bounces: BounceLimits {
+                diffuse: r.diffuse_bounces,
+                glossy: r.glossy_bounces,
+                transmission: r.transmission_bounces,
+            },
         };
         s.validate()
             .map_err(|(field, message)| self.invalid(format!("render.{field}"), message))?;

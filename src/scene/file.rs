@@ -99,6 +99,9 @@ pub struct RenderFile {
     pub caustics: Option<bool>,
     pub branches: Option<u32>,
     pub filter_width: Option<f32>,
+    pub diffuse_bounces: Option<u32>,
+    pub glossy_bounces: Option<u32>,
+    pub transmission_bounces: Option<u32>,
 }
 
 #[derive(Debug, Deserialize)]

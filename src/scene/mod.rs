@@ -32,7 +32,9 @@ pub use error::{SceneError, shown};
 pub use light::PunctualLight;
 pub use load::{load_scene, load_scene_from, parse_scene};
 pub use material::{Material, MaterialKind, NO_TEXTURE};
-pub use settings::{BRANCHES_DEFAULT, CAUSTICS_DEFAULT, MAX_BRANCHES, MAX_PIXELS, RenderSettings};
+pub use settings::{
+    BRANCHES_DEFAULT, BounceLimits, CAUSTICS_DEFAULT, MAX_BRANCHES, MAX_PIXELS, RenderSettings,
+};
 pub use texture::{Texture, TextureFormat, Textures, Wrap};
 
 use glam::{Vec2, Vec3, Vec4};

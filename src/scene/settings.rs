@@ -24,6 +24,38 @@ pub struct RenderSettings {
     /// every sample through the pixel's centre (the Zero123 script's `filter_width`
     /// 0.01); above 1 softer.
     pub filter_width: f32,
+    /// The most bounces of each kind of scattering a path may take, as Cycles limits them
+    /// (the dataset scripts set its `diffuse_bounces` and `glossy_bounces` to 1); none by
+    /// default, where `max_depth` alone ends paths.
+    pub bounces: BounceLimits,
+}
+
+/// Cycles' bounce limits by kind of scattering: its `diffuse_bounces`, `glossy_bounces`
+/// and `transmission_bounces`, with its meaning. A limit of n lets a path scatter n + 1
+/// times of that kind (the last scattering's ray still finds emission), so that 0 gives
+/// direct light alone and each step one more indirect bounce; the surface the path meets
+/// after its last allowed scattering adds only its emission. Diffuse counts the diffuse
+/// and sheen lobes' reflections, glossy the specular lobes', the clear coat's and the
+/// conductors', transmission every direction through a surface. `None`: no limit.
+/// Light subpaths (caustics) count towards `max_depth` alone.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BounceLimits {
+    pub diffuse: Option<u32>,
+    pub glossy: Option<u32>,
+    pub transmission: Option<u32>,
+}
+
+impl BounceLimits {
+    /// The scatterings of each kind (diffuse, glossy, transmission) a path may take: each
+    /// limit plus one, or `u32::MAX` for none. The path state counts them down.
+    pub fn budget(&self) -> glam::UVec3 {
+        let left = |limit: Option<u32>| limit.map_or(u32::MAX, |n| n.saturating_add(1));
+        glam::UVec3::new(
+            left(self.diffuse),
+            left(self.glossy),
+            left(self.transmission),
+        )
+    }
 }
 
 /// The widest [`RenderSettings::filter_width`], as Cycles' widest pixel filter.
@@ -54,6 +86,7 @@ impl Default for RenderSettings {
             caustics: CAUSTICS_DEFAULT,
             branches: None,
             filter_width: 1.0,
+            bounces: BounceLimits::default(),
         }
     }
 }

@@ -74,6 +74,8 @@ pub struct GpuBsdfSample {
     pub weight: Vec3,
     pub valid: bool,
     pub delta: bool,
+    /// The lobe kind (`LOBE_*`), for the bounce limits.
+    pub lobe: u32,
 }
 
 impl GpuBsdfSample {
@@ -84,6 +86,7 @@ impl GpuBsdfSample {
             weight: v3(o[1]),
             valid: o[1][3] & 1 != 0,
             delta: o[1][3] & 2 != 0,
+            lobe: o[1][3] >> 2,
         }
     }
 }

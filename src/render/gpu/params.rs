@@ -17,7 +17,7 @@ pub const SKY_CONSTANT: u32 = 0;
 pub const SKY_GRADIENT: u32 = 1;
 pub const SKY_ENVIRONMENT: u32 = 2;
 
-/// One dispatch's parameters (240 bytes). mirror: shaders/types.wgsl `Params`
+/// One dispatch's parameters (256 bytes). mirror: shaders/types.wgsl `Params`
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Params {
@@ -77,7 +77,12 @@ pub struct Params {
     /// The lights in the table, and [`RenderScene::first_rect_light`].
     pub num_lights: u32,
     pub first_rect_light: u32,
-    pub _pad: [u32; 2],
+    /// [`BounceLimits::budget`](crate::scene::BounceLimits::budget): the diffuse, glossy
+    /// and transmission scatterings a path may take.
+    pub diffuse_bounces: u32,
+    pub glossy_bounces: u32,
+    pub transmission_bounces: u32,
+    pub _pad: [u32; 3],
 }
 
 impl Params {
@@ -123,6 +128,9 @@ impl Params {
             window,
             num_lights,
             first_rect_light,
+            diffuse_bounces,
+            glossy_bounces,
+            transmission_bounces,
             _pad,
         })
     }
@@ -168,6 +176,7 @@ impl Params {
             .with_filter(settings.filter_width)
             .with_window(bounds);
         let branches = settings.branches(self.num_caustic_targets != 0);
+        let bounces = settings.bounces.budget();
         Self {
             cam_position: c.position.into(),
             width: settings.width,
@@ -175,6 +184,9 @@ impl Params {
             height: settings.height,
             cam_right: c.right.into(),
             max_depth: settings.max_depth,
+            diffuse_bounces: bounces.x,
+            glossy_bounces: bounces.y,
+            transmission_bounces: bounces.z,
             branches,
             branch_weight: branch_weight(branches),
             cam_up: c.up.into(),

@@ -13,7 +13,7 @@ use crate::bvh::STACK_SIZE;
 use crate::film::{Aov, NO_ID};
 use crate::fixed::{FIXED_LIMIT, FIXED_ONE};
 use crate::geometry::{GAMMA_2, GAMMA_3, SLAB_SLACK, T_INF};
-use crate::render::bsdf::COAT_FRESNEL_AVERAGE;
+use crate::render::bsdf::{COAT_FRESNEL_AVERAGE, LOBE_DIFFUSE, LOBE_GLOSSY, LOBE_TRANSMISSION};
 use crate::render::caustics::{LIGHT_SUBPATH_RATE, MAX_CAUSTIC_HOPS};
 use crate::render::integrator::RR_DEPTH;
 use crate::render::rng;
@@ -62,6 +62,9 @@ pub fn shared_constants() -> Vec<(String, Value)> {
         ("DIMS_PER_BOUNCE", U32(rng::DIMS_PER_BOUNCE)),
         ("STACK_SIZE", U32(STACK_SIZE as u32)),
         ("RR_DEPTH", U32(RR_DEPTH)),
+        ("LOBE_DIFFUSE", U32(LOBE_DIFFUSE)),
+        ("LOBE_GLOSSY", U32(LOBE_GLOSSY)),
+        ("LOBE_TRANSMISSION", U32(LOBE_TRANSMISSION)),
         ("TRI_SMOOTH", U32(TRI_SMOOTH)),
         ("TRI_UV", U32(TRI_UV)),
         ("TRI_TANGENT", U32(TRI_TANGENT)),
