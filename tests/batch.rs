@@ -1315,6 +1315,14 @@ fn the_objaverse_preset_renders_as_its_script_does_in_cycles() {
     preset_against_cycles("objaverse", 4, &[0, 7], 512, (0.13, 0.2));
 }
 
+/// The zero123 preset: its shell of cameras and, drawn for the file's uid, its area light
+/// (made before the object is normalised, and so scaled with it), with the factory point
+/// light and world.
+#[test]
+fn the_zero123_preset_renders_as_its_script_does_in_cycles() {
+    preset_against_cycles("zero123", 16, &[0, 1], 512, (0.12, 0.2));
+}
+
 /// A manifest's `render.lighting` lights each input in place of a dataset preset's script
 /// lighting: under a black uniform world the zero123 preset's object comes out black
 /// (its area and point lights gone) where the preset's own lights show it.

@@ -435,13 +435,15 @@ def materials_joined(path):
     export(path)
 
 
-def normalised_scene(glb):
-    """The factory scene with its Cube removed and `glb` imported and normalised as the
-    Zero123, objaverse-rendering and SyncDreamer scripts do (each root object scaled about
-    its own origin, then the box centred on the origin); the factory Camera and Light kept."""
+def normalised_scene(glb, factory=True):
+    """The factory scene (made anew unless `factory` is false, for a scene the caller has
+    begun) with its Cube removed and `glb` imported and normalised as the Zero123,
+    objaverse-rendering and SyncDreamer scripts do (each root object scaled about its own
+    origin, then the box centred on the origin); the cameras and lights kept."""
     from mathutils import Vector
 
-    bpy.ops.wm.read_factory_settings()
+    if factory:
+        bpy.ops.wm.read_factory_settings()
     scene = bpy.context.scene
     for o in list(scene.objects):
         if o.type not in ("CAMERA", "LIGHT"):
@@ -474,9 +476,23 @@ def normalised_scene(glb):
 
 
 def ring_cycles(scene, out_dir, views, count, size, distance):
+    """Renders `scene` by Cycles from views `views` of `count` on a ring at 30° and
+    `distance` (`cycles_views`)."""
+    cameras = {}
+    for i in views:
+        az, el = i / count * 2 * math.pi, math.radians(30)
+        cameras[i] = (
+            distance * math.cos(az) * math.cos(el),
+            distance * math.sin(az) * math.cos(el),
+            distance * math.sin(el),
+        )
+    cycles_views(scene, out_dir, cameras, size)
+
+
+def cycles_views(scene, out_dir, cameras, size):
     """Renders `scene` by Cycles on the CPU (256 samples, no denoising, the scripts'
-    bounces, linear EXR with alpha, `VIEW.exr`) from views `views` of `count` on a ring at
-    30° and `distance`, through the factory Camera with a 35 mm lens on 32 mm, tracking the
+    bounces, linear EXR with alpha, `VIEW.exr`) from each camera position of `cameras`
+    (view: position), through the factory Camera with a 35 mm lens on 32 mm, tracking the
     origin as the scripts' TRACK_TO constraint does."""
     camera = scene.objects["Camera"]
     camera.data.lens, camera.data.sensor_width = 35, 32
@@ -488,13 +504,8 @@ def ring_cycles(scene, out_dir, views, count, size, distance):
     scene.cycles.diffuse_bounces, scene.cycles.glossy_bounces = 1, 1
     scene.cycles.transparent_max_bounces, scene.cycles.transmission_bounces = 3, 3
     scene.cycles.filter_width = 0.01
-    for i in views:
-        az, el = i / count * 2 * math.pi, math.radians(30)
-        camera.location = (
-            distance * math.cos(az) * math.cos(el),
-            distance * math.sin(az) * math.cos(el),
-            distance * math.sin(el),
-        )
+    for i, position in cameras.items():
+        camera.location = position
         bpy.context.view_layer.update()
         scene.render.filepath = str(out_dir / f"{i:03d}.exr")
         bpy.ops.render.render(write_still=True)
@@ -524,6 +535,49 @@ def objaverse_cycles(glb, out_dir, views):
     light.location = (0, 0, 0.5)
     light.scale = (100, 100, 100)
     ring_cycles(scene, out_dir, views, 12, 512, 1.5)
+
+
+def uniform(uid, view, dim):
+    """meshtrace's `math::uniform`: the number in [0, 1) a preset draws for object `uid`,
+    view `view` and dimension `dim` (FNV-1a of the uid, mixed by SplitMix64's finaliser)."""
+    mask = (1 << 64) - 1
+    h = 0xCBF29CE484222325
+    for b in uid.encode():
+        h = ((h ^ b) * 0x100000001B3) & mask
+    x = h ^ ((((view << 32) | dim) * 0x9E3779B97F4A7C15) & mask)
+    x = ((x ^ (x >> 30)) * 0xBF58476D1CE4E5B9) & mask
+    x = ((x ^ (x >> 27)) * 0x94D049BB133111EB) & mask
+    x ^= x >> 31
+    return (x >> 11) / float(1 << 53)
+
+
+def zero123_cycles(glb, out_dir, views, uid="spheres"):
+    """cvlab-columbia/zero123's objaverse-rendering/scripts/blender_script.py on `glb`: its
+    area light made at the start (1 m, scale 100) and normalised with the object, the
+    factory Light and world kept; then the light's draws and the views' cameras on the
+    shell of radius 1.5-2.2, as meshtrace's zero123 preset draws them for `uid`
+    (`uniform(uid, 2^32 - 1, k)` for the light, `uniform(uid, view, k)` and `2^16` for a
+    camera), 512². The reference for meshtrace's zero123 preset: `tests/batch.rs` renders
+    the file as `spheres.glb`, whose uid is `spheres`."""
+    bpy.ops.wm.read_factory_settings()
+    bpy.ops.object.light_add(type="AREA")
+    bpy.context.active_object.scale = (100, 100, 100)
+    scene = normalised_scene(glb, factory=False)
+    light = scene.objects["Area"]
+    obj = (1 << 32) - 1
+    light.data.energy = 300 + 300 * uniform(uid, obj, 0)
+    light.location = (
+        2 * uniform(uid, obj, 1) - 1,
+        2 * uniform(uid, obj, 2) - 1,
+        0.5 + uniform(uid, obj, 3),
+    )
+    cameras = {}
+    for view in views:
+        d = [2 * uniform(uid, view, k) - 1 for k in range(3)]
+        norm = math.sqrt(sum(c * c for c in d))
+        radius = 1.5 + 0.7 * uniform(uid, view, 1 << 16)
+        cameras[view] = tuple(c / norm * radius for c in d)
+    cycles_views(scene, out_dir, cameras, 512)
 
 
 # Every file, by name; `python blender_corpus.py OUT NAME...` writes only those named.
@@ -558,6 +612,7 @@ def main():
             for preset, views, render in [
                 ("syncdreamer", [0, 5], syncdreamer_cycles),
                 ("objaverse", [0, 7], objaverse_cycles),
+                ("zero123", [0, 1], zero123_cycles),
             ]:
                 folder = out / f"{preset}.cycles"
                 folder.mkdir(exist_ok=True)
