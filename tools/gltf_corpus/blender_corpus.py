@@ -435,18 +435,21 @@ def materials_joined(path):
     export(path)
 
 
-def normalised_scene(glb, factory=True):
+def normalised_scene(glb, factory=True, as_one=False):
     """The factory scene (made anew unless `factory` is false, for a scene the caller has
     begun) with its Cube removed and `glb` imported and normalised as the Zero123,
     objaverse-rendering and SyncDreamer scripts do (each root object scaled about its own
-    origin, then the box centred on the origin); the cameras and lights kept."""
+    origin, then the box centred on the origin), or with `as_one` as Objaverse-XL's does
+    (every root object but the camera parented to one empty at the origin, which is
+    scaled and moved);
+    the cameras, lights and empties kept."""
     from mathutils import Vector
 
     if factory:
         bpy.ops.wm.read_factory_settings()
     scene = bpy.context.scene
     for o in list(scene.objects):
-        if o.type not in ("CAMERA", "LIGHT"):
+        if o.type not in ("CAMERA", "LIGHT", "EMPTY"):
             bpy.data.objects.remove(o, do_unlink=True)
     bpy.ops.import_scene.gltf(filepath=str(glb), merge_vertices=True)
 
@@ -460,6 +463,14 @@ def normalised_scene(glb, factory=True):
                     hi = Vector(map(max, hi, p))
         return lo, hi
 
+    if as_one:
+        parent = bpy.data.objects.new("ParentEmpty", None)
+        scene.collection.objects.link(parent)
+        # The script's camera keeps its world position (its `.npy` poses put it on the
+        # shell about the world origin, whatever the object's size): it is left out.
+        for o in scene.objects:
+            if o.parent is None and o != parent and o.type != "CAMERA":
+                o.parent = parent
     lo, hi = bbox()
     scale = 1 / max(hi - lo)
     for o in scene.objects:
@@ -489,15 +500,16 @@ def ring_cycles(scene, out_dir, views, count, size, distance):
     cycles_views(scene, out_dir, cameras, size)
 
 
-def cycles_views(scene, out_dir, cameras, size):
+def cycles_views(scene, out_dir, cameras, size, target=None):
     """Renders `scene` by Cycles on the CPU (256 samples, no denoising, the scripts'
     bounces, linear EXR with alpha, `VIEW.exr`) from each camera position of `cameras`
-    (view: position), through the factory Camera with a 35 mm lens on 32 mm, tracking the
-    origin as the scripts' TRACK_TO constraint does."""
+    (view: position), through the factory Camera with a 35 mm lens on 32 mm, tracking
+    `target` (an empty at the origin when None) as the scripts' TRACK_TO constraint does."""
     camera = scene.objects["Camera"]
     camera.data.lens, camera.data.sensor_width = 35, 32
-    target = bpy.data.objects.new("Empty", None)
-    scene.collection.objects.link(target)
+    if target is None:
+        target = bpy.data.objects.new("Empty", None)
+        scene.collection.objects.link(target)
     track = camera.constraints.new(type="TRACK_TO")
     track.track_axis, track.up_axis, track.target = "TRACK_NEGATIVE_Z", "UP_Y", target
     cycles_exr(scene, 256, size, size)
@@ -571,13 +583,49 @@ def zero123_cycles(glb, out_dir, views, uid="spheres"):
         2 * uniform(uid, obj, 2) - 1,
         0.5 + uniform(uid, obj, 3),
     )
+    cycles_views(scene, out_dir, shell_cameras(uid, views), 512)
+
+
+def shell_cameras(uid, views):
+    """The cameras of Zero123's shell (radius 1.5-2.2) that meshtrace's presets draw for
+    `uid`: view: position."""
     cameras = {}
     for view in views:
         d = [2 * uniform(uid, view, k) - 1 for k in range(3)]
         norm = math.sqrt(sum(c * c for c in d))
         radius = 1.5 + 0.7 * uniform(uid, view, 1 << 16)
         cameras[view] = tuple(c / norm * radius for c in d)
-    cycles_views(scene, out_dir, cameras, 512)
+    return cameras
+
+
+def objaverse_xl_cycles(glb, out_dir, views, uid="spheres"):
+    """allenai/objaverse-xl's scripts/rendering/blender_script.py on `glb`, run with Cycles:
+    its camera's tracking target made at the start and normalised with the object (the
+    script parents every root object to one empty and normalises that), the lights replaced
+    by its four suns without shadows at the script's rotations, their strengths picked as
+    meshtrace's objaverse-xl preset picks them for `uid` (the k-th of three by
+    `uniform(uid, 2^32 - 1, k)`), the factory world; the cameras of the same uid on the shell,
+    512². The reference for meshtrace's objaverse-xl preset."""
+    bpy.ops.wm.read_factory_settings()
+    target = bpy.data.objects.new("Target", None)
+    bpy.context.scene.collection.objects.link(target)
+    scene = normalised_scene(glb, factory=False, as_one=True)
+    for o in [o for o in scene.objects if o.type == "LIGHT"]:
+        bpy.data.objects.remove(o, do_unlink=True)
+    suns = [
+        ((0.785398, 0, -0.785398), [3, 4, 5]),
+        ((0.785398, 0, 2.35619), [2, 3, 4]),
+        ((-0.785398, 0, -3.92699), [3, 4, 5]),
+        ((3.14159, 0, 0), [1, 2, 3]),
+    ]
+    for k, (rotation, choices) in enumerate(suns):
+        data = bpy.data.lights.new(name=f"Sun{k}", type="SUN")
+        data.use_shadow = False
+        data.energy = choices[min(int(3 * uniform(uid, (1 << 32) - 1, k)), 2)]
+        sun = bpy.data.objects.new(f"Sun{k}", data)
+        scene.collection.objects.link(sun)
+        sun.rotation_euler = rotation
+    cycles_views(scene, out_dir, shell_cameras(uid, views), 512, target)
 
 
 # Every file, by name; `python blender_corpus.py OUT NAME...` writes only those named.
@@ -613,6 +661,7 @@ def main():
                 ("syncdreamer", [0, 5], syncdreamer_cycles),
                 ("objaverse", [0, 7], objaverse_cycles),
                 ("zero123", [0, 1], zero123_cycles),
+                ("objaverse-xl", [0, 1], objaverse_xl_cycles),
             ]:
                 folder = out / f"{preset}.cycles"
                 folder.mkdir(exist_ok=True)
