@@ -500,13 +500,14 @@ def ring_cycles(scene, out_dir, views, count, size, distance):
     cycles_views(scene, out_dir, cameras, size)
 
 
-def cycles_views(scene, out_dir, cameras, size, target=None):
+def cycles_views(scene, out_dir, cameras, size, target=None, lens=35, filter_width=0.01):
     """Renders `scene` by Cycles on the CPU (256 samples, no denoising, the scripts'
-    bounces, linear EXR with alpha, `VIEW.exr`) from each camera position of `cameras`
-    (view: position), through the factory Camera with a 35 mm lens on 32 mm, tracking
-    `target` (an empty at the origin when None) as the scripts' TRACK_TO constraint does."""
+    bounces and `filter_width`, linear EXR with alpha, `VIEW.exr`) from each camera
+    position of `cameras` (view: position), through the factory Camera with a `lens` mm
+    lens on 32 mm, tracking `target` (an empty at the origin when None) as the scripts'
+    TRACK_TO constraint does."""
     camera = scene.objects["Camera"]
-    camera.data.lens, camera.data.sensor_width = 35, 32
+    camera.data.lens, camera.data.sensor_width = lens, 32
     if target is None:
         target = bpy.data.objects.new("Empty", None)
         scene.collection.objects.link(target)
@@ -515,7 +516,7 @@ def cycles_views(scene, out_dir, cameras, size, target=None):
     cycles_exr(scene, 256, size, size)
     scene.cycles.diffuse_bounces, scene.cycles.glossy_bounces = 1, 1
     scene.cycles.transparent_max_bounces, scene.cycles.transmission_bounces = 3, 3
-    scene.cycles.filter_width = 0.01
+    scene.cycles.filter_width = filter_width
     for i, position in cameras.items():
         camera.location = position
         bpy.context.view_layer.update()
@@ -628,6 +629,44 @@ def objaverse_xl_cycles(glb, out_dir, views, uid="spheres"):
     cycles_views(scene, out_dir, shell_cameras(uid, views), 512, target)
 
 
+def trellis_cycles(glb, out_dir, views, uid="spheres", count=150):
+    """microsoft/TRELLIS's dataset_toolkits/blender_script/render.py on `glb`: the object
+    normalised first (its root objects under one empty), then the lights made in the
+    normalised frame (a point light of 1,000 W at (4, 1, 6), an area light of 10,000 W,
+    0.25 m scaled by 100, at (0, 0, 10) facing down, and the one of 1,000 W at (0, 0, -10)
+    that faces away), the factory world; views of `count` on the Hammersley sphere of
+    radius 2 with the offsets meshtrace's trellis preset draws for `uid`
+    (`uniform(uid, 2^32 - 1, 10)` and `11`), a 40° field of view, `filter_width` 1, 512².
+    The reference for meshtrace's trellis preset."""
+    bpy.ops.wm.read_factory_settings()
+    bpy.data.objects.remove(bpy.context.scene.objects["Light"], do_unlink=True)
+    scene = normalised_scene(glb, factory=False, as_one=True)
+    for name, kind, energy, location, scale in [
+        ("Default_Light", "POINT", 1000, (4, 1, 6), 1),
+        ("Top_Light", "AREA", 10000, (0, 0, 10), 100),
+        ("Bottom_Light", "AREA", 1000, (0, 0, -10), 1),
+    ]:
+        light = bpy.data.objects.new(name, bpy.data.lights.new(name, type=kind))
+        scene.collection.objects.link(light)
+        light.data.energy = energy
+        light.location = location
+        light.scale = (scale, scale, scale)
+    o0, o1 = uniform(uid, (1 << 32) - 1, 10), uniform(uid, (1 << 32) - 1, 11)
+    cameras = {}
+    for i in views:
+        u = i / count + o0 / count
+        v = int(f"{i:032b}"[::-1], 2) / 2**32 + o1
+        u = 2 * u if u < 0.25 else 2 / 3 * u + 1 / 3
+        pitch, yaw = math.acos(1 - 2 * u) - math.pi / 2, 2 * math.pi * v
+        cameras[i] = (
+            2 * math.cos(yaw) * math.cos(pitch),
+            2 * math.sin(yaw) * math.cos(pitch),
+            2 * math.sin(pitch),
+        )
+    lens = 16 / math.tan(math.radians(20))
+    cycles_views(scene, out_dir, cameras, 512, lens=lens, filter_width=1.0)
+
+
 # Every file, by name; `python blender_corpus.py OUT NAME...` writes only those named.
 FILES = [
     ("skinned_arm", skinned_arm),
@@ -662,6 +701,8 @@ def main():
                 ("objaverse", [0, 7], objaverse_cycles),
                 ("zero123", [0, 1], zero123_cycles),
                 ("objaverse-xl", [0, 1], objaverse_xl_cycles),
+                # Two views of two: the test renders the preset with `views = 2`.
+                ("trellis", [0, 1], lambda g, f, v: trellis_cycles(g, f, v, count=2)),
             ]:
                 folder = out / f"{preset}.cycles"
                 folder.mkdir(exist_ok=True)
