@@ -8,11 +8,11 @@
 
 use crate::common;
 
-use common::scenes::{add_box, emissive_enclosure, scene, square};
+use common::scenes::{add_box, emissive_enclosure, enclosure, square};
 use common::stats::{assert_mean, mean_and_stderr};
 use glam::Vec3;
 use meshtrace::render::RenderJob;
-use meshtrace::scene::{BounceLimits, Camera, Material, MaterialKind, Mesh, RenderSettings, Sky};
+use meshtrace::scene::{BounceLimits, Material, MaterialKind, Mesh, RenderSettings};
 
 /// Le (1 + ρ + … + ρ^(k+1)): the radiance of an emissive enclosure of albedo ρ when a
 /// path may take k bounces of the walls' kind.
@@ -76,22 +76,7 @@ fn glossy_bounces_stop_mirror_chains() {
     let mut mirror = Material::new(MaterialKind::CONDUCTOR);
     mirror.albedo = Vec3::new(0.8, 0.6, 0.4);
     mirror.emission = Vec3::new(0.25, 0.5, 0.75);
-    let camera = Camera::new(
-        Vec3::new(0.3, -0.2, 0.5),
-        Vec3::new(-0.6, 0.3, -1.0),
-        Vec3::Y,
-        70.0,
-        0.0,
-        None,
-    )
-    .expect("camera");
-    let s = scene(
-        mesh,
-        vec![mirror],
-        camera,
-        Sky::Constant(Vec3::ZERO),
-        square(32, 4, 64, 3),
-    );
+    let s = enclosure(mesh, mirror, square(32, 4, 64, 3));
     for k in [0, 2] {
         let job = with_bounces(
             s.settings,

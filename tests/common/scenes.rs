@@ -205,6 +205,12 @@ pub fn emissive_enclosure() -> (Scene, Vec3) {
     let mut wall = Material::diffuse(Vec3::new(0.5, 0.25, 0.75));
     wall.emission = Vec3::new(0.5, 0.75, 0.25);
     let expect = wall.emission / (Vec3::ONE - wall.albedo);
+    (enclosure(mesh, wall, square(48, 64, 64, 7)), expect)
+}
+
+/// `mesh` (an enclosure about the origin, within ±1) all of `material`, seen from inside
+/// by a 70° camera, under a black sky, rendered with `settings`.
+pub fn enclosure(mesh: Mesh, material: Material, settings: RenderSettings) -> Scene {
     let camera = Camera::new(
         Vec3::new(0.5, 0.5, 0.9),
         Vec3::new(-0.3, -0.4, -1.0),
@@ -214,12 +220,11 @@ pub fn emissive_enclosure() -> (Scene, Vec3) {
         None,
     )
     .expect("camera");
-    let s = scene(
+    scene(
         mesh,
-        vec![wall],
+        vec![material],
         camera,
         Sky::Constant(Vec3::ZERO),
-        square(48, 64, 64, 7),
-    );
-    (s, expect)
+        settings,
+    )
 }
