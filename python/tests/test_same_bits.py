@@ -63,3 +63,17 @@ def test_kept_tables_render_the_bits_of_fresh_ones(cpu, gpu, glb):
             assert list(kept.keys()) == list(fresh.keys())
             for name in kept.keys():
                 assert np.array_equal(kept[name], fresh[name]), (renderer.device, ask, name)
+
+
+def test_bounce_limits_are_the_flags(cpu, cli, tmp_path):
+    """The bounce limits' keywords give the bits of the flags of the same names, and a
+    diffuse limit of 0 (direct light alone) darkens the Cornell box."""
+    exr = tmp_path / "cli.exr"
+    limits = ["--diffuse-bounces", "0", "--transmission-bounces", "2"]
+    cli("render", "builtin:cornell", "--device", "cpu", *FLAGS, *limits, "-q", "-o", exr)
+    out = cpu.render("builtin:cornell", **SETTINGS, diffuse_bounces=0, transmission_bounces=2)
+    channels = exr_channels(exr)
+    color = np.stack([channels["R"], channels["G"], channels["B"]], axis=-1)
+    assert np.array_equal(out["color"], color)
+    full = cpu.render("builtin:cornell", **SETTINGS)
+    assert out["color"].mean() < 0.9 * full["color"].mean()
