@@ -367,9 +367,9 @@ pub fn preset(
 }
 
 /// The render settings of dataset preset `name`, as keyword arguments of
-/// `Renderer.render`: its image size, samples per pixel, pixel filter width and whether its
-/// film is transparent (all but Wonder3D's, whose mask and normals are the `object_id` and
-/// `normal` AOVs).
+/// `Renderer.render`: its image size, samples per pixel, pixel filter width, its script's
+/// light paths (`max_depth` and the bounce limits) and whether its film is transparent (all
+/// but Wonder3D's, whose mask and normals are the `object_id` and `normal` AOVs).
 #[pyfunction]
 pub fn preset_settings<'py>(
     py: Python<'py>,
@@ -381,6 +381,16 @@ pub fn preset_settings<'py>(
     d.set_item("height", p.size)?;
     d.set_item("spp", p.spp)?;
     d.set_item("filter_width", p.filter_width)?;
+    d.set_item("max_depth", p.max_depth)?;
+    for (key, limit) in [
+        ("diffuse_bounces", p.bounces.diffuse),
+        ("glossy_bounces", p.bounces.glossy),
+        ("transmission_bounces", p.bounces.transmission),
+    ] {
+        if let Some(n) = limit {
+            d.set_item(key, n)?;
+        }
+    }
     d.set_item("transparent", p.request().transparent())?;
     Ok(d)
 }

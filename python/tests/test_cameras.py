@@ -92,7 +92,15 @@ def test_zero123_cameras_stand_on_its_shell(glb):
     other = mt.cameras.preset(scene, "zero123", uid="another")
     assert other[0].position != cams[0].position
     assert mt.cameras.preset_settings("zero123") == dict(
-        width=512, height=512, spp=128, filter_width=pytest.approx(0.01), transparent=True
+        width=512,
+        height=512,
+        spp=128,
+        filter_width=pytest.approx(0.01),
+        max_depth=14,
+        diffuse_bounces=1,
+        glossy_bounces=1,
+        transmission_bounces=3,
+        transparent=True,
     )
     with pytest.raises(mt.MeshtraceError, match="preset: "):
         mt.cameras.preset(scene, "blender")
