@@ -7,8 +7,10 @@ use common::stats::{fraction_close, mean_and_sd, pixel_channels as channels, sam
 use common::{cpu_render, gpu_render};
 use meshtrace::film::{Aov, Film};
 use meshtrace::render::RenderJob;
-use meshtrace::render::gpu::GpuRenderer;
+use meshtrace::render::gpu::shader::{self, Features, ShaderChecks};
+use meshtrace::render::gpu::{GpuContext, GpuRenderer};
 use meshtrace::scene::RenderSettings;
+use std::sync::Arc;
 
 /// The film's exact sums, for comparisons bit for bit.
 fn bits(film: &Film) -> Vec<i64> {
@@ -162,6 +164,41 @@ fn gpu_renders_are_deterministic() {
     let job = RenderJob::new(RenderSettings { spp: 8, ..settings });
     let (a, b) = (gpu_render(&ctx, &rs, &job), gpu_render(&ctx, &rs, &job));
     assert_eq!(bits(&a), bits(&b), "renders with caustics");
+}
+
+/// A device compiles each kernel once, for all its sessions and clones: the same entry
+/// point, checks and features give the same pipeline; another entry point, checks or
+/// features give another.
+#[test]
+fn a_device_compiles_each_kernel_once() {
+    let Some(ctx) = common::gpu("a_device_compiles_each_kernel_once") else {
+        return;
+    };
+    let plain = Features {
+        textures: false,
+        alpha_masks: false,
+    };
+    let textured = Features {
+        textures: true,
+        ..plain
+    };
+    let kernel = |ctx: &GpuContext, entry: &str, checks: ShaderChecks, features: Features| {
+        ctx.pipeline(shader::test_source, entry, (1, 1), checks, features)
+            .unwrap_or_else(|e| panic!("{entry}: {e}"))
+    };
+    let (rng, checked) = ("test_rng", ShaderChecks::Checked);
+    let first = kernel(&ctx, rng, checked, plain);
+    assert!(Arc::ptr_eq(
+        &first,
+        &kernel(&ctx.clone(), rng, checked, plain)
+    ));
+    for other in [
+        kernel(&ctx, "test_intersect_triangle", checked, plain),
+        kernel(&ctx, rng, ShaderChecks::Trusted, plain),
+        kernel(&ctx, rng, checked, textured),
+    ] {
+        assert!(!Arc::ptr_eq(&first, &other));
+    }
 }
 
 /// One renderer session renders job after job without uploading or compiling again: a

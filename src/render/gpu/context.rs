@@ -1,17 +1,24 @@
-//! A device with its render kernels: the [`GpuDevice`] that every GPU stage uses, plus the
-//! render kernels compiled on it, kept for every later scene (a batch's meshes).
+//! A device with its kernels: the [`GpuDevice`] that every GPU stage uses, plus the
+//! kernels compiled on it, kept for every later scene (a batch's meshes, a test's scenes).
 
 use super::device::{Accel, GpuDevice};
 use super::error::GpuError;
 use super::pipelines::Pipeline;
-use super::shader::{self, Features, ShaderChecks};
+use super::shader::{self, Features, Module, ShaderChecks};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-/// A device's render kernels by (caustics, geometry-only, [`Features`]).
-type RenderKernels = HashMap<(bool, bool, Features), Arc<Pipeline>>;
+/// What makes a compiled kernel: its WGSL source (the traversal and the checks' constant
+/// in it), its entry point, its storage group's (read-only, read-write) buffers, how it was
+/// compiled ([`ShaderChecks`]) and the [`Features`] it was specialised for.
+type KernelKey = (String, String, (u32, u32), ShaderChecks, Features);
 
-/// An open device and its render kernels. Cloning is cheap and shares both. It reads as
+/// One key's kernel once compiled. Its own lock, held while it compiles, makes the
+/// callers that want the same kernel wait for that one compile, and no others: the
+/// cache's lock is held only to find or add the slot.
+type KernelSlot = Mutex<Option<Arc<Pipeline>>>;
+
+/// An open device and its kernels. Cloning is cheap and shares both. It reads as
 /// the [`GpuDevice`] it holds (`ctx.device`, `ctx.check()`), which is all the stages below
 /// the renderer (uploads, pipelines, acceleration structures) take.
 #[derive(Clone)]
@@ -19,10 +26,12 @@ pub struct GpuContext {
     gpu: GpuDevice,
     /// How the render kernel is compiled: trusted unless [`GpuContext::with_shader_checks`].
     checks: ShaderChecks,
-    /// The render kernels, each compiled by the first render on this device that needs it:
-    /// without and with the caustics code (`CAUSTICS`), and the geometry-only kernel, for
-    /// each set of [`Features`].
-    render: Arc<Mutex<RenderKernels>>,
+    /// The kernels, each compiled by the first render or run on this device that needs it:
+    /// the render kernel without and with the caustics code (`CAUSTICS`), the
+    /// geometry-only kernel, and the test and bench entry points, for each set of
+    /// [`Features`]. On lavapipe a kernel takes 2–30 s to compile, far longer than most
+    /// renders of tests, and on any device a batch's assets share it.
+    kernels: Arc<Mutex<HashMap<KernelKey, Arc<KernelSlot>>>>,
 }
 
 impl std::ops::Deref for GpuContext {
@@ -45,17 +54,16 @@ impl GpuContext {
         Ok(Self {
             gpu: GpuDevice::new(spec, accel)?,
             checks: ShaderChecks::Trusted,
-            render: Default::default(),
+            kernels: Default::default(),
         })
     }
 
-    /// This device with a render kernel of its own that is compiled checked
-    /// ([`ShaderChecks::Checked`]): every render on it then fails with
-    /// [`GpuError::Fault`] where the kernel indexed out of range or divided by zero.
-    /// For tests, and for telling a kernel's fault from a driver's.
+    /// This device with its render kernel compiled checked ([`ShaderChecks::Checked`]):
+    /// every render on it then fails with [`GpuError::Fault`] where the kernel indexed out
+    /// of range or divided by zero. For tests, and for telling a kernel's fault from a
+    /// driver's.
     pub fn with_shader_checks(mut self) -> Self {
         self.checks = ShaderChecks::Checked;
-        self.render = Default::default();
         self
     }
 
@@ -85,24 +93,51 @@ impl GpuContext {
         geometry: bool,
         features: Features,
     ) -> Result<Arc<Pipeline>, GpuError> {
-        let mut kernels = self.render.lock().unwrap_or_else(|p| p.into_inner());
-        if let Some(p) = kernels.get(&(caustics, geometry, features)) {
+        let module = if caustics {
+            shader::render_source
+        } else {
+            shader::render_source_without_caustics
+        };
+        let entry = if geometry { "geometry" } else { "render" };
+        self.pipeline(module, entry, (0, 3), self.checks, features)
+    }
+
+    /// Entry point `entry` of `module` (a function of [`shader`]) over the scene group
+    /// and `io` storage buffers (read-only, read-write), compiled as `checks` says with
+    /// `features`: from the cache, or compiled now and kept.
+    pub fn pipeline(
+        &self,
+        module: Module,
+        entry: &str,
+        io: (u32, u32),
+        checks: ShaderChecks,
+        features: Features,
+    ) -> Result<Arc<Pipeline>, GpuError> {
+        let key = (
+            module(self.ray_query, checks),
+            entry.to_string(),
+            io,
+            checks,
+            features,
+        );
+        let slot = {
+            let mut kernels = self.kernels.lock().unwrap_or_else(|p| p.into_inner());
+            kernels.entry(key.clone()).or_default().clone()
+        };
+        let mut slot = slot.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(p) = &*slot {
             return Ok(p.clone());
         }
         let p = Arc::new(Pipeline::new(
             &self.gpu,
             &self.scene_layout,
-            if caustics {
-                shader::render_source
-            } else {
-                shader::render_source_without_caustics
-            },
-            if geometry { "geometry" } else { "render" },
-            (0, 3),
-            self.checks,
+            &key.0,
+            entry,
+            io,
+            checks,
             features,
         )?);
-        kernels.insert((caustics, geometry, features), p.clone());
+        *slot = Some(p.clone());
         Ok(p)
     }
 }

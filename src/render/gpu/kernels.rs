@@ -8,20 +8,22 @@ use super::upload::params_buffer;
 use super::{GpuContext, GpuError, GpuRenderer, shader};
 use crate::render::tables::RenderScene;
 use crate::scene::RenderSettings;
+use std::sync::Arc;
 use std::time::Instant;
 use wgpu::util::DeviceExt;
 
 /// A compiled entry point bound to a renderer's scene, ready to run on many inputs.
 pub struct Kernel<'a> {
     renderer: &'a GpuRenderer,
-    pipeline: Pipeline,
+    pipeline: Arc<Pipeline>,
     scene_group: wgpu::BindGroup,
     _params: wgpu::Buffer,
 }
 
 impl<'a> Kernel<'a> {
-    /// Compiles `entry` of `module` (a function of [`shader`]), as `checks` says, over the
-    /// renderer's scene, with the parameters of a render of `settings` (all its samples).
+    /// `entry` of `module` (a function of [`shader`]), compiled as `checks` says (or
+    /// taken from the device's cache), over the renderer's scene, with the parameters of
+    /// a render of `settings` (all its samples).
     pub fn new(
         renderer: &'a GpuRenderer,
         settings: &RenderSettings,
@@ -36,15 +38,7 @@ impl<'a> Kernel<'a> {
         let params = params_buffer(ctx);
         ctx.queue.write_buffer(&params, 0, bytemuck::bytes_of(&p));
         let scene_group = tables.bind_group(ctx, &params);
-        let pipeline = Pipeline::new(
-            ctx,
-            &tables.layout,
-            module,
-            entry,
-            (1, 1),
-            checks,
-            renderer.features(),
-        )?;
+        let pipeline = ctx.pipeline(module, entry, (1, 1), checks, renderer.features())?;
         Ok(Self {
             renderer,
             pipeline,

@@ -3,7 +3,7 @@
 
 use super::device::GpuDevice;
 use super::error::GpuError;
-use super::shader::{Features, Module, ShaderChecks};
+use super::shader::{Features, ShaderChecks};
 
 /// A compiled entry point and the layout of its storage group.
 pub struct Pipeline {
@@ -12,14 +12,14 @@ pub struct Pipeline {
 }
 
 impl Pipeline {
-    /// Compiles `entry` of `module` (a function of [`super::shader`]), generated for the
-    /// device's traversal, compiled as `checks` says and with the scene's `features`, over
-    /// `scene_layout` plus one group of storage buffers: `inputs` read-only ones, then
-    /// `outputs` read-write ones.
+    /// Compiles `entry` of the WGSL `source` (a module of [`super::shader`], generated for
+    /// the device's traversal and `checks`), as `checks` says and with the scene's
+    /// `features`, over `scene_layout` plus one group of storage buffers: `inputs`
+    /// read-only ones, then `outputs` read-write ones.
     pub fn new(
         ctx: &GpuDevice,
         scene_layout: &wgpu::BindGroupLayout,
-        module: Module,
+        source: &str,
         entry: &str,
         (inputs, outputs): (u32, u32),
         checks: ShaderChecks,
@@ -47,7 +47,7 @@ impl Pipeline {
             });
         let desc = wgpu::ShaderModuleDescriptor {
             label: Some("meshtrace"),
-            source: wgpu::ShaderSource::Wgsl(module(ctx.ray_query, checks).into()),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
         };
         let module = match checks {
             ShaderChecks::Checked => ctx.device.create_shader_module(desc),

@@ -211,7 +211,7 @@ const BENCH: Source = shader!("bench.wgsl");
 /// it relies on them (`check` in shaders/bindings.wgsl), counting the failures, which the
 /// render kernel reports: tests/shader_checks.rs renders the test scenes checked, and
 /// requires no failure and the trusted kernel's bits.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum ShaderChecks {
     /// No runtime checks (but ray-query tracking): what renders and benchmarks run.
     #[default]
