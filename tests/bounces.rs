@@ -9,7 +9,7 @@
 use crate::common;
 
 use common::scenes::{add_box, emissive_enclosure, enclosure, square};
-use common::stats::{assert_mean, mean_and_stderr};
+use common::stats::{assert_mean, assert_mean_within};
 use glam::Vec3;
 use meshtrace::render::RenderJob;
 use meshtrace::scene::{BounceLimits, Material, MaterialKind, Mesh, RenderSettings};
@@ -88,17 +88,7 @@ fn glossy_bounces_stop_mirror_chains() {
         );
         let expect = partial_sum(mirror.emission, mirror.albedo, k);
         for (device, film) in common::render_both_job("bounces_glossy", &s, &job) {
-            let mean = film.mean();
-            for c in 0..3 {
-                let values: Vec<f32> = mean.iter().map(|p| p[c]).collect();
-                let (m, se) = mean_and_stderr(&values);
-                let e = expect[c] as f64;
-                eprintln!("glossy_bounces {k}/{device}: channel {c}: mean {m:.6}, expected {e:.6}");
-                assert!(
-                    (m - e).abs() <= 5.0 * se + 1e-4 * e,
-                    "glossy_bounces {k}/{device}: channel {c}: mean {m}, expected {e} (se {se})"
-                );
-            }
+            assert_mean_within(&format!("glossy_bounces {k}"), device, &film, expect, 1e-4);
         }
     }
 }
