@@ -498,10 +498,7 @@ impl Film {
         radiance: bool,
         part: Option<&PartHeader>,
     ) -> Result<(), String> {
-        use exr::prelude::{
-            AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes,
-            WritableImage,
-        };
+        use exr::prelude::{AnyChannel, FlatSamples, LayerAttributes};
         let pixels = self.width as usize * self.height as usize;
         if self.sum.len() != pixels {
             return Err("film size mismatch".into());
@@ -540,20 +537,7 @@ impl Film {
             exr::meta::attribute::Text::from(SAMPLES_ATTRIBUTE),
             exr::meta::attribute::AttributeValue::I32(self.samples.min(i32::MAX as u32) as i32),
         );
-        // ZIP over blocks of 16 rows, written in increasing order: lossless, compact, and
-        // the same bytes for the same film (a merge of parts is `cmp`-equal to one render).
-        let layer = Layer::new(
-            size,
-            attributes,
-            Encoding::SMALL_LOSSLESS,
-            AnyChannels::sort(channels.into()),
-        );
-        let mut bytes = std::io::Cursor::new(Vec::new());
-        Image::from_layer(layer)
-            .write()
-            .to_buffered(&mut bytes)
-            .map_err(|e| e.to_string())?;
-        let mut bytes = bytes.into_inner();
+        let mut bytes = exr_bytes(size, attributes, channels)?;
         sort_exr_attributes(&mut bytes)?;
         let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
         let mut out = std::io::BufWriter::new(file);
@@ -639,6 +623,29 @@ impl Film {
             })
             .collect())
     }
+}
+
+/// One single-part EXR of `channels` with `attributes`, in memory: ZIP over blocks of 16
+/// rows, written in increasing order, so lossless, compact, and the same bytes for the same
+/// pixels (a merge of parts is `cmp`-equal to one render).
+pub fn exr_bytes(
+    size: (usize, usize),
+    attributes: exr::prelude::LayerAttributes,
+    channels: Vec<exr::prelude::AnyChannel<exr::prelude::FlatSamples>>,
+) -> Result<Vec<u8>, String> {
+    use exr::prelude::{AnyChannels, Encoding, Image, Layer, WritableImage};
+    let layer = Layer::new(
+        size,
+        attributes,
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(channels.into()),
+    );
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    Image::from_layer(layer)
+        .write()
+        .to_buffered(&mut bytes)
+        .map_err(|e| e.to_string())?;
+    Ok(bytes.into_inner())
 }
 
 /// Writes `bytes` to `path` as [`Film`]'s images are written: complete or not at all.

@@ -3,7 +3,7 @@
 //! error names the manifest and the field (`jobs[1].output`) or line.
 
 use super::BatchError;
-use super::preset::{Layout, Preset};
+use super::preset::{Layout, Poses, Preset};
 use crate::request::RenderRequest;
 use crate::scene::studio::Up;
 use serde::Deserialize;
@@ -36,6 +36,8 @@ struct JobFile {
     random_pose: Option<bool>,
     /// An orthographic preset's view width in normalised units (Blender's `ortho_scale`).
     ortho_scale: Option<f32>,
+    /// TRELLIS's `--save_normal`: each view's normal pass beside its image.
+    save_normal: Option<bool>,
     fov: Option<f32>,
     up: Option<String>,
     output: Option<String>,
@@ -223,6 +225,17 @@ impl Manifest {
                     if let (Layout::Rig { random }, Some(given)) = (&mut p.layout, j.random_pose) {
                         *random = given;
                     }
+                    if let Some(save) = j.save_normal {
+                        if p.poses != Poses::Transforms {
+                            return Err(invalid(
+                                field("save_normal"),
+                                format!(
+                                    "is TRELLIS's `--save_normal`, which the `{name}` script does not take"
+                                ),
+                            ));
+                        }
+                        p.save_normal = save;
+                    }
                     if let Some(e) = j.elevation {
                         p.elevation = e;
                     }
@@ -253,6 +266,12 @@ impl Manifest {
                     Some(p)
                 }
             };
+            if preset.is_none() && j.save_normal.is_some() {
+                return Err(invalid(
+                    field("save_normal"),
+                    "is TRELLIS's `--save_normal`; add preset = \"trellis\"".into(),
+                ));
+            }
             if preset.is_none() {
                 for (key, given) in [
                     ("distance", j.distance.is_some()),

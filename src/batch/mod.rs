@@ -7,6 +7,7 @@ pub mod failures;
 pub mod manifest;
 pub mod preset;
 pub mod transforms;
+pub mod trellis;
 pub mod wonder3d;
 
 pub use manifest::{Job, Manifest, Source};

@@ -178,6 +178,9 @@ pub struct Preset {
     pub bounces: BounceLimits,
     pub lighting: Lighting,
     pub poses: Poses,
+    /// TRELLIS's `--save_normal`: each view's normal pass beside its image
+    /// ([`super::trellis`]). Off, as `dataset_toolkits/render.py` runs the script.
+    pub save_normal: bool,
 }
 
 /// The light paths of the Zero123 script and those made from it (objaverse-rendering,
@@ -224,6 +227,7 @@ impl Preset {
                 bounces: SCRIPT_BOUNCES,
                 lighting: Lighting::AreaAbove,
                 poses: Poses::None,
+                save_normal: false,
             }),
             // liuyuan-pal/SyncDreamer blender_script.py, --camera_type fixed (its target
             // views): 16 views on a ring at 30° elevation, distance 1.5, the same lens,
@@ -247,6 +251,7 @@ impl Preset {
                 bounces: SCRIPT_BOUNCES,
                 lighting: Lighting::FactoryPoint { world: 0.5 },
                 poses: Poses::None,
+                save_normal: false,
             }),
             // cvlab-columbia/zero123 objaverse-rendering/scripts/blender_script.py: views
             // at random on a shell of radius 1.5–2.2, the same lens, 512², 128 samples,
@@ -274,6 +279,7 @@ impl Preset {
                 bounces: SCRIPT_BOUNCES,
                 lighting: Lighting::Zero123,
                 poses: Poses::Npy,
+                save_normal: false,
             }),
             // microsoft/TRELLIS dataset_toolkits/render.py and blender_script/render.py: 150
             // views on a Hammersley sphere of radius 2, a 40° field of view, 512², 128
@@ -296,6 +302,7 @@ impl Preset {
                 bounces: SCRIPT_BOUNCES,
                 lighting: Lighting::Trellis,
                 poses: Poses::Transforms,
+                save_normal: false,
             }),
             // allenai/objaverse-xl scripts/rendering/blender_script.py: Zero123's shell of
             // cameras (looking at the file's origin), four shadowless suns, 512², a `.npy`
@@ -340,6 +347,7 @@ impl Preset {
                 },
                 lighting: Lighting::Wonder3d,
                 poses: Poses::RtTxt,
+                save_normal: false,
             }),
             _ => Err(format!(
                 "`{name}` is not a preset; there are {}",
@@ -374,6 +382,8 @@ impl Preset {
     pub fn aovs(&self) -> &'static [crate::film::Aov] {
         if self.rig() {
             &[crate::film::Aov::Normal, crate::film::Aov::ObjectId]
+        } else if self.save_normal {
+            &[crate::film::Aov::Normal]
         } else {
             &[]
         }

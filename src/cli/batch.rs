@@ -7,9 +7,9 @@ use anyhow::{Context, Result, bail};
 use meshtrace::batch::preset::Normalisation;
 use meshtrace::batch::preset::{Poses, Preset, metadata, write_npy};
 use meshtrace::batch::transforms::{self, Frame, Intrinsics};
-use meshtrace::batch::wonder3d;
 use meshtrace::batch::{self, Manifest, Task};
-use meshtrace::film::{BitDepth, Film, Format};
+use meshtrace::batch::{trellis, wonder3d};
+use meshtrace::film::{Aov, BitDepth, Film, Format};
 use meshtrace::pipeline::Prepared;
 use meshtrace::render::backend::Backend;
 use meshtrace::request::RenderRequest;
@@ -494,7 +494,13 @@ fn load_input(
     // Wonder3D's preset writes its AOVs into its own images, not beside them.
     let named = job.preset.as_ref().is_some_and(Preset::rig);
     let aovs = request.aov_mask() != 0 && !named;
-    let done: Vec<bool> = group.iter().map(|t| complete(t, aovs)).collect();
+    // TRELLIS's normal pass goes before the image, which marks a view done; a rerun that
+    // asks for it renders the views that lack it.
+    let normals = job.preset.as_ref().is_some_and(|p| p.save_normal);
+    let done: Vec<bool> = group
+        .iter()
+        .map(|t| complete(t, aovs) && (!normals || trellis::normal_path(&t.output).is_file()))
+        .collect();
     // A preset writes its script's files alone: no transforms.json.
     let recorded = job.preset.is_some() || all_recorded(group);
     if done.iter().all(|&d| d) && recorded {
@@ -741,9 +747,10 @@ impl Encoder<'_> {
         for view in receive {
             let t = Instant::now();
             let mut own = std::mem::take(&mut files).into_iter();
+            let (output, began) = (view.task.output.clone(), view.began);
             if let Err(e) = own
                 .try_for_each(|(path, text)| write_file(&path, &text))
-                .and_then(|()| self.write(&view))
+                .and_then(|()| self.write(view))
             {
                 return (written, spent, Err(e));
             }
@@ -752,19 +759,24 @@ impl Encoder<'_> {
             if !self.quiet {
                 eprintln!(
                     "{} ({:.2} s)",
-                    view.task.output.display(),
-                    view.began.elapsed().as_secs_f64()
+                    output.display(),
+                    began.elapsed().as_secs_f64()
                 );
             }
         }
         (written, spent, Ok(()))
     }
 
-    /// A view's files: its pose first, as the image marks the view complete.
-    fn write(&self, view: &Rendered) -> Result<()> {
+    /// A view's files: its pose (and TRELLIS's normal pass) first, as the image marks the
+    /// view complete.
+    fn write(&self, view: Rendered) -> Result<()> {
         let Rendered {
-            task, film, camera, ..
+            task,
+            mut film,
+            camera,
+            ..
         } = view;
+        let (task, camera) = (&task, &camera);
         if let Some(dir) = task.output.parent() {
             std::fs::create_dir_all(dir)
                 .with_context(|| format!("cannot create {}", dir.display()))?;
@@ -777,7 +789,16 @@ impl Encoder<'_> {
                 film.save_as(&task.output, self.bit_depth)?;
             }
             (Some(preset), Some(norm)) if preset.poses == Poses::RtTxt => {
-                write_wonder3d(preset, norm, self.uid, task, film, camera)?;
+                write_wonder3d(preset, norm, self.uid, task, &film, camera)?;
+            }
+            (Some(preset), Some(_)) if preset.save_normal => {
+                let path = trellis::normal_path(&task.output);
+                let pass = trellis::normal_pass(&film)
+                    .map_err(|m| anyhow::anyhow!("{}: {m}", task.output.display()))?;
+                trellis::write_normal_exr(&path, film.width, film.height, pass)?;
+                // The pass is the normal AOV's file: none goes beside the image too.
+                film.saved_aovs &= !Aov::Normal.bit();
+                film.save_as(&task.output, self.bit_depth)?;
             }
             _ => film.save_as(&task.output, self.bit_depth)?,
         }

@@ -500,12 +500,15 @@ def ring_cycles(scene, out_dir, views, count, size, distance):
     cycles_views(scene, out_dir, cameras, size)
 
 
-def cycles_views(scene, out_dir, cameras, size, target=None, lens=35, filter_width=0.01):
+def cycles_views(
+    scene, out_dir, cameras, size, target=None, lens=35, filter_width=0.01, normals=False
+):
     """Renders `scene` by Cycles on the CPU (256 samples, no denoising, the scripts'
     bounces and `filter_width`, linear EXR with alpha, `VIEW.exr`) from each camera
     position of `cameras` (view: position), through the factory Camera with a `lens` mm
     lens on 32 mm, tracking `target` (an empty at the origin when None) as the scripts'
-    TRACK_TO constraint does."""
+    TRACK_TO constraint does. With `normals`, the Normal pass too, in a multilayer EXR
+    (`ViewLayer.Normal.X`, ...; Blender 5's `MULTI_LAYER_IMAGE`), at 64 samples."""
     camera = scene.objects["Camera"]
     camera.data.lens, camera.data.sensor_width = lens, 32
     if target is None:
@@ -513,10 +516,14 @@ def cycles_views(scene, out_dir, cameras, size, target=None, lens=35, filter_wid
         scene.collection.objects.link(target)
     track = camera.constraints.new(type="TRACK_TO")
     track.track_axis, track.up_axis, track.target = "TRACK_NEGATIVE_Z", "UP_Y", target
-    cycles_exr(scene, 256, size, size)
+    cycles_exr(scene, 64 if normals else 256, size, size)
     scene.cycles.diffuse_bounces, scene.cycles.glossy_bounces = 1, 1
     scene.cycles.transparent_max_bounces, scene.cycles.transmission_bounces = 3, 3
     scene.cycles.filter_width = filter_width
+    if normals:
+        for layer in scene.view_layers:
+            layer.use_pass_normal = True
+        scene.render.image_settings.media_type = "MULTI_LAYER_IMAGE"
     for i, position in cameras.items():
         camera.location = position
         bpy.context.view_layer.update()
@@ -629,15 +636,16 @@ def objaverse_xl_cycles(glb, out_dir, views, uid="spheres"):
     cycles_views(scene, out_dir, shell_cameras(uid, views), 512, target)
 
 
-def trellis_cycles(glb, out_dir, views, uid="spheres", count=150):
+def trellis_cycles(glb, out_dir, views, uid="spheres", count=150, size=512, normals=False):
     """microsoft/TRELLIS's dataset_toolkits/blender_script/render.py on `glb`: the object
     normalised first (its root objects under one empty), then the lights made in the
     normalised frame (a point light of 1,000 W at (4, 1, 6), an area light of 10,000 W,
     0.25 m scaled by 100, at (0, 0, 10) facing down, and the one of 1,000 W at (0, 0, -10)
     that faces away), the factory world; views of `count` on the Hammersley sphere of
     radius 2 with the offsets meshtrace's trellis preset draws for `uid`
-    (`uniform(uid, 2^32 - 1, 10)` and `11`), a 40° field of view, `filter_width` 1, 512².
-    The reference for meshtrace's trellis preset."""
+    (`uniform(uid, 2^32 - 1, 10)` and `11`), a 40° field of view, `filter_width` 1,
+    `size`². The reference for meshtrace's trellis preset; with `normals`, for its
+    `save_normal` (cycles_views)."""
     bpy.ops.wm.read_factory_settings()
     bpy.data.objects.remove(bpy.context.scene.objects["Light"], do_unlink=True)
     scene = normalised_scene(glb, factory=False, as_one=True)
@@ -664,7 +672,7 @@ def trellis_cycles(glb, out_dir, views, uid="spheres", count=150):
             2 * math.sin(pitch),
         )
     lens = 16 / math.tan(math.radians(20))
-    cycles_views(scene, out_dir, cameras, 512, lens=lens, filter_width=1.0)
+    cycles_views(scene, out_dir, cameras, size, lens=lens, filter_width=1.0, normals=normals)
 
 
 # Every file, by name; `python blender_corpus.py OUT NAME...` writes only those named.
@@ -703,6 +711,12 @@ def main():
                 ("objaverse-xl", [0, 1], objaverse_xl_cycles),
                 # Two views of two: the test renders the preset with `views = 2`.
                 ("trellis", [0, 1], lambda g, f, v: trellis_cycles(g, f, v, count=2)),
+                # TRELLIS's --save_normal: the Normal pass of the same two views, 128².
+                (
+                    "trellis-normal",
+                    [0, 1],
+                    lambda g, f, v: trellis_cycles(g, f, v, count=2, size=128, normals=True),
+                ),
             ]:
                 folder = out / f"{preset}.cycles"
                 folder.mkdir(exist_ok=True)
