@@ -374,7 +374,7 @@ fn bvh_cost_is_the_same_count_on_both_devices() {
 
 #[test]
 fn exr_holds_dotted_channels_with_unsigned_ids() {
-    use exr::prelude::{FlatSamples, ReadChannels, ReadLayers, read};
+    use exr::prelude::{FlatSamples, read_all_flat_layers_from_file};
     let (rs, mut settings) = common::scenes::cornell();
     settings.width = 12;
     settings.height = 8;
@@ -383,13 +383,7 @@ fn exr_holds_dotted_channels_with_unsigned_ids() {
     let film = common::cpu_render(&rs, &job);
     let dir = TempDir::new("aov-exr");
     let read_back = |path: &std::path::Path| {
-        let image = read()
-            .no_deep_data()
-            .largest_resolution_level()
-            .all_channels()
-            .all_layers()
-            .all_attributes()
-            .from_file(path)
+        let image = read_all_flat_layers_from_file(path)
             .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         assert_eq!(image.layer_data.len(), 1, "one part");
         let layer = &image.layer_data[0];

@@ -1396,14 +1396,7 @@ fn the_trellis_normal_pass_is_cycles_normal_pass() {
 /// layers holds them (Blender's multilayer EXR puts each pass in a part of its own, its
 /// channels named in full: `ViewLayer.Normal.X`).
 fn exr_channels(path: &Path, names: [&str; 3]) -> Vec<glam::DVec3> {
-    use exr::prelude::{ReadChannels, ReadLayers, read};
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .all_layers()
-        .all_attributes()
-        .from_file(path)
+    let image = exr::prelude::read_all_flat_layers_from_file(path)
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let channel = |name: &str| -> Vec<f64> {
         let c = image

@@ -31,7 +31,8 @@ pub fn normal_pass(film: &Film) -> Result<[Vec<f32>; 3], String> {
     for texel in &channel.data {
         let [x, y, z] = [0, 1, 2].map(|k| (from_fixed(texel[k]) / samples) as f32);
         for (c, v) in out.iter_mut().zip([x, -z, y]) {
-            // -0.0 where a pixel's normals sum to 0 along the file's z: Cycles writes +0.
+            // −z is −0.0 where the file's z sums to 0, as in every pixel the object misses:
+            // +0 there, as Cycles' pass holds in pixels with no hit.
             c.push(v + 0.0);
         }
     }

@@ -119,12 +119,13 @@ fn peak_kib() -> Option<u64> {
 
 /// Whether `task`'s output is complete: the image (written last, by rename) and, beside a
 /// non-EXR image with AOVs, their `.aovs.exr`.
-fn complete(task: &Task, aovs: bool) -> bool {
+fn complete(task: &Task, aovs: bool, normals: bool) -> bool {
     let image = task.output.is_file();
     let beside = !aovs
         || Format::from_path(&task.output).is_ok_and(|f| f == Format::Exr)
         || Film::aov_path(&task.output).is_file();
-    image && beside
+    let normal_pass = !normals || trellis::normal_path(&task.output).is_file();
+    image && beside && normal_pass
 }
 
 /// The `transforms.json` entry of `task` seen through `camera`.
@@ -494,13 +495,9 @@ fn load_input(
     // Wonder3D's preset writes its AOVs into its own images, not beside them.
     let named = job.preset.as_ref().is_some_and(Preset::rig);
     let aovs = request.aov_mask() != 0 && !named;
-    // TRELLIS's normal pass goes before the image, which marks a view done; a rerun that
-    // asks for it renders the views that lack it.
+    // A rerun that asks for TRELLIS's normal pass renders the views that lack it.
     let normals = job.preset.as_ref().is_some_and(|p| p.save_normal);
-    let done: Vec<bool> = group
-        .iter()
-        .map(|t| complete(t, aovs) && (!normals || trellis::normal_path(&t.output).is_file()))
-        .collect();
+    let done: Vec<bool> = group.iter().map(|t| complete(t, aovs, normals)).collect();
     // A preset writes its script's files alone: no transforms.json.
     let recorded = job.preset.is_some() || all_recorded(group);
     if done.iter().all(|&d| d) && recorded {

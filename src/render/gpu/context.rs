@@ -122,16 +122,18 @@ impl GpuContext {
         );
         let slot = {
             let mut kernels = self.kernels.lock().unwrap_or_else(|p| p.into_inner());
-            kernels.entry(key.clone()).or_default().clone()
+            kernels.entry(key).or_default().clone()
         };
         let mut slot = slot.lock().unwrap_or_else(|p| p.into_inner());
         if let Some(p) = &*slot {
             return Ok(p.clone());
         }
+        // The key holds the source: made again for the compile (seconds) rather than
+        // copied on every call.
         let p = Arc::new(Pipeline::new(
             &self.gpu,
             &self.scene_layout,
-            &key.0,
+            &module(self.ray_query, checks),
             entry,
             io,
             checks,
