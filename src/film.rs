@@ -15,7 +15,9 @@ use glam::Vec3;
 use std::path::{Path, PathBuf};
 
 mod part;
+mod view;
 pub use part::PartHeader;
+pub use view::{DisplayTransform, LUT_FOLDER_VAR, ViewTransform, lut_folder};
 
 /// How a channel combines the samples of a pixel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -239,6 +241,25 @@ pub enum FilmError {
     )]
     TransparentNotPng { path: String },
     #[error(
+        "{file} not found ({from}): the view transform reads Blender's LUTs, which \
+         meshtrace does not ship; set {var} to the datafiles/colormanagement folder of a \
+         Blender 4.0 or later (`pip install bpy`, or Debian's blender-data), or use the \
+         standard view transform",
+        var = LUT_FOLDER_VAR
+    )]
+    MissingLut { file: String, from: String },
+    #[error("{path}:{line}: {message}")]
+    BadLut {
+        path: String,
+        line: usize,
+        message: String,
+    },
+    #[error(
+        "{path}: a view transform forms an 8- or 16-bit image (PNG, WebP, JPEG, BMP); EXR and \
+         HDR outputs hold the linear radiance"
+    )]
+    ViewOfFloats { path: String },
+    #[error(
         "{path}: 16-bit output is a PNG's (EXR and HDR hold floats; JPEG and BMP 8 bits); give a .png output"
     )]
     DeepNotPng { path: String },
@@ -433,7 +454,7 @@ impl Film {
                 path: path.display().to_string(),
             });
         }
-        Self::check_depth(path, format, BitDepth::Eight)?;
+        Self::check_encoding(path, format, BitDepth::Eight, ViewTransform::Standard)?;
         let tmp = temp_sibling(path);
         std::fs::File::create(&tmp).map_err(|e| FilmError::Io {
             path: path.display().to_string(),
@@ -453,10 +474,21 @@ impl Film {
         path.with_file_name(format!("{stem}.aovs.exr"))
     }
 
-    /// Refuses a `depth` that `path`'s `format` cannot hold: 16 bits are a PNG's.
-    pub fn check_depth(path: &Path, format: Format, depth: BitDepth) -> Result<(), FilmError> {
+    /// Refuses a `depth` or a `view` transform that `path`'s `format` cannot hold: 16 bits
+    /// are a PNG's, and EXR and HDR files keep the linear radiance.
+    pub fn check_encoding(
+        path: &Path,
+        format: Format,
+        depth: BitDepth,
+        view: ViewTransform,
+    ) -> Result<(), FilmError> {
         if depth == BitDepth::Sixteen && format != Format::Png {
             return Err(FilmError::DeepNotPng {
+                path: path.display().to_string(),
+            });
+        }
+        if view != ViewTransform::Standard && matches!(format, Format::Exr | Format::Hdr) {
+            return Err(FilmError::ViewOfFloats {
                 path: path.display().to_string(),
             });
         }
@@ -465,28 +497,35 @@ impl Film {
 
     /// Writes the mean radiance in the format the extension names, with the AOVs the film
     /// holds: extra channels of an EXR, or else [`Film::aov_path`] beside the image. A
-    /// transparent film is written as an RGBA PNG. PNGs have 8 bits a channel.
+    /// transparent film is written as an RGBA PNG. PNGs have 8 bits a channel, and 8- and
+    /// 16-bit images the sRGB curve ([`ViewTransform::Standard`]).
     pub fn save(&self, path: &Path) -> Result<(), FilmError> {
-        self.save_as(path, BitDepth::Eight)
+        self.save_as(path, BitDepth::Eight, &DisplayTransform::default())
     }
 
-    /// [`Film::save`], with a PNG's channels of `depth` bits.
-    pub fn save_as(&self, path: &Path, depth: BitDepth) -> Result<(), FilmError> {
+    /// [`Film::save`], with a PNG's channels of `depth` bits, and 8- and 16-bit images
+    /// formed by `view`.
+    pub fn save_as(
+        &self,
+        path: &Path,
+        depth: BitDepth,
+        view: &DisplayTransform,
+    ) -> Result<(), FilmError> {
         let format = Format::from_path(path)?;
         if self.transparent && !format.has_alpha() {
             return Err(FilmError::TransparentNotPng {
                 path: path.display().to_string(),
             });
         }
-        Self::check_depth(path, format, depth)?;
+        Self::check_encoding(path, format, depth, view.view())?;
         // An EXR holds the AOVs itself; another format's go beside it.
         if format == Format::Exr || self.saved_aovs == 0 {
-            return write_atomically(path, |tmp| self.encode(tmp, format, depth));
+            return write_atomically(path, |tmp| self.encode(tmp, format, depth, view));
         }
         write_atomically(&Self::aov_path(path), |tmp| {
             self.encode_exr(tmp, false, None)
         })?;
-        write_atomically(path, |tmp| self.encode(tmp, format, depth))
+        write_atomically(path, |tmp| self.encode(tmp, format, depth, view))
     }
 
     /// One single-part EXR: the mean radiance as `R`, `G`, `B` if `radiance`, then every
@@ -546,8 +585,14 @@ impl Film {
     }
 
     /// The image in `format`: an EXR through [`Film::encode_exr`] (with the AOVs and the
-    /// sample count), the others through the `image` crate.
-    fn encode(&self, tmp: &Path, format: Format, depth: BitDepth) -> Result<(), String> {
+    /// sample count), HDR as floats, the others through the `image` crate, formed by `view`.
+    fn encode(
+        &self,
+        tmp: &Path,
+        format: Format,
+        depth: BitDepth,
+        view: &DisplayTransform,
+    ) -> Result<(), String> {
         let (w, h) = (self.width, self.height);
         let image_format = match format {
             Format::Exr => return self.encode_exr(tmp, true, None),
@@ -558,55 +603,46 @@ impl Film {
             Format::Webp => image::ImageFormat::WebP,
         };
         let mean = self.mean();
-        let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
-        let mut out = std::io::BufWriter::new(file);
-        let result = match format {
+        let size = "film size mismatch";
+        let image = match format {
             Format::Exr | Format::Hdr => {
                 let data: Vec<f32> = mean.iter().flat_map(|c| c.to_array()).collect();
-                let img = image::Rgb32FImage::from_raw(w, h, data).ok_or("film size mismatch")?;
-                image::DynamicImage::ImageRgb32F(img).write_to(&mut out, image_format)
+                image::Rgb32FImage::from_raw(w, h, data).ok_or(size)?.into()
             }
             Format::Png if self.transparent && depth == BitDepth::Sixteen => {
-                let data = self.straight_rgba(&mean, linear_to_srgb16)?;
-                let img: image::ImageBuffer<image::Rgba<u16>, _> =
-                    image::ImageBuffer::from_raw(w, h, data).ok_or("film size mismatch")?;
-                image::DynamicImage::ImageRgba16(img).write_to(&mut out, image_format)
+                let data = self.display_rgba::<u16>(&mean, view)?;
+                image::ImageBuffer::<image::Rgba<u16>, _>::from_raw(w, h, data)
+                    .ok_or(size)?
+                    .into()
             }
             Format::Png | Format::Webp if self.transparent => {
-                let img =
-                    image::RgbaImage::from_raw(w, h, self.straight_rgba(&mean, linear_to_srgb8)?)
-                        .ok_or("film size mismatch")?;
-                image::DynamicImage::ImageRgba8(img).write_to(&mut out, image_format)
+                let data = self.display_rgba::<u8>(&mean, view)?;
+                image::RgbaImage::from_raw(w, h, data).ok_or(size)?.into()
             }
             Format::Png if depth == BitDepth::Sixteen => {
-                let data: Vec<u16> = mean
-                    .iter()
-                    .flat_map(|c| c.to_array().map(linear_to_srgb16))
-                    .collect();
-                let img: image::ImageBuffer<image::Rgb<u16>, _> =
-                    image::ImageBuffer::from_raw(w, h, data).ok_or("film size mismatch")?;
-                image::DynamicImage::ImageRgb16(img).write_to(&mut out, image_format)
+                let data = display_rgb::<u16>(&mean, view);
+                image::ImageBuffer::<image::Rgb<u16>, _>::from_raw(w, h, data)
+                    .ok_or(size)?
+                    .into()
             }
             Format::Png | Format::Jpeg | Format::Bmp | Format::Webp => {
-                let data: Vec<u8> = mean
-                    .iter()
-                    .flat_map(|c| c.to_array().map(linear_to_srgb8))
-                    .collect();
-                let img = image::RgbImage::from_raw(w, h, data).ok_or("film size mismatch")?;
-                image::DynamicImage::ImageRgb8(img).write_to(&mut out, image_format)
+                let data = display_rgb::<u8>(&mean, view);
+                image::RgbImage::from_raw(w, h, data).ok_or(size)?.into()
             }
         };
-        result.map_err(|e| e.to_string())?;
+        let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+        let mut out = std::io::BufWriter::new(file);
+        image::DynamicImage::write_to(&image, &mut out, image_format).map_err(|e| e.to_string())?;
         finish_file(out)
     }
 
-    /// A transparent film's RGBA, each channel encoded by `encode` (8 or 16 bits): alpha
-    /// the coverage, colour the premultiplied mean divided by it (PNG stores straight
-    /// alpha), sRGB-encoded; 0 where nothing was hit.
-    fn straight_rgba<T: Quantum>(
+    /// A transparent film's RGBA in `T`'s 8 or 16 bits: alpha the coverage, colour the
+    /// premultiplied mean divided by it (PNG stores straight alpha, and Blender forms the
+    /// straight colour too), formed by `view`; 0 where nothing was hit.
+    fn display_rgba<T: Quantum>(
         &self,
         mean: &[Vec3],
-        encode: fn(f32) -> T,
+        view: &DisplayTransform,
     ) -> Result<Vec<T>, String> {
         let alpha = self
             .channel(Aov::Alpha.name())
@@ -618,11 +654,18 @@ impl Film {
             .flat_map(|(&c, a)| {
                 let a = a.map_or(0.0, |a| a[0]);
                 let c = if a > 0.0 { c / a } else { Vec3::ZERO };
-                let [r, g, b] = c.to_array().map(encode);
-                [r, g, b, T::linear(a)]
+                let [r, g, b] = view.encode(c).map(T::quantise);
+                [r, g, b, T::quantise(a)]
             })
             .collect())
     }
+}
+
+/// An opaque film's RGB in `T`'s 8 or 16 bits, formed by `view`.
+fn display_rgb<T: Quantum>(mean: &[Vec3], view: &DisplayTransform) -> Vec<T> {
+    mean.iter()
+        .flat_map(|&c| view.encode(c).map(T::quantise))
+        .collect()
 }
 
 /// One single-part EXR of `channels` with `attributes`, in memory: ZIP over blocks of 16
@@ -766,7 +809,12 @@ fn temp_sibling(path: &Path) -> PathBuf {
 
 /// The sRGB transfer function, clamped and rounded to 8 bits.
 pub fn linear_to_srgb8(x: f32) -> u8 {
-    (srgb(x) * 255.0 + 0.5) as u8
+    quantise8(srgb(x))
+}
+
+/// `x` in [0, 1] (clamped) rounded to the nearest of 256 levels.
+pub fn quantise8(x: f32) -> u8 {
+    (x.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
 }
 
 /// The sRGB transfer function, clamped and rounded to 16 bits.
@@ -786,18 +834,18 @@ fn srgb(x: f32) -> f32 {
 
 /// An integer channel of a PNG, 8 or 16 bits.
 trait Quantum: Copy {
-    /// `x` in [0, 1] (clamped) stored linearly, rounded: an alpha channel.
-    fn linear(x: f32) -> Self;
+    /// `x` in [0, 1] (clamped), rounded to the nearest level.
+    fn quantise(x: f32) -> Self;
 }
 
 impl Quantum for u8 {
-    fn linear(x: f32) -> Self {
-        (x.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
+    fn quantise(x: f32) -> Self {
+        quantise8(x)
     }
 }
 
 impl Quantum for u16 {
-    fn linear(x: f32) -> Self {
+    fn quantise(x: f32) -> Self {
         (x.clamp(0.0, 1.0) * 65535.0 + 0.5) as u16
     }
 }

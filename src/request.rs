@@ -1,7 +1,8 @@
 //! A render request: everything that decides an image beyond the input itself — size,
 //! samples, depth, seed, branches, caustics, the device, adapter and accel, the AOVs,
 //! transparency, a bare mesh's up axis, an environment or a lighting preset that replaces the
-//! sky, the largest texture size, the part of a split render and denoising. Every source
+//! sky, the largest texture size, the part of a split render, denoising and the view
+//! transform. Every source
 //! fills the same type: command-line flags, a batch manifest's `[render]` table
 //! (deserialised straight into it) and library callers.
 //! A field left `None` keeps what the input says (a scene file's own `[render]` table), or
@@ -9,7 +10,7 @@
 //! as the manifest spells it (`max_depth`), for the caller to place (`--max-depth`,
 //! `render.max_depth`).
 
-use crate::film::{Aov, BitDepth};
+use crate::film::{Aov, BitDepth, ViewTransform};
 use crate::render::backend::{Backend, DeviceChoice};
 use crate::render::gpu::{Accel, GpuError};
 use crate::scene::lighting::Lighting;
@@ -73,6 +74,10 @@ pub struct RenderRequest {
     pub denoise: Option<bool>,
     /// Bits per channel of PNG outputs: 8 (the default) or 16.
     pub bit_depth: Option<u32>,
+    /// How 8- and 16-bit outputs are formed from the radiance: `standard` (the sRGB
+    /// curve, the default), or Blender's `filmic` or `agx`.
+    #[serde(default, deserialize_with = "view_transform")]
+    pub view_transform: Option<ViewTransform>,
     /// Whether to trace camera rays alone, for the AOVs (depth, normal, masks) without
     /// path tracing: the image is then the first surface's base colour, unlit.
     pub geometry_only: Option<bool>,
@@ -142,6 +147,7 @@ impl RenderRequest {
             part: r.part.or(u.part),
             denoise: r.denoise.or(u.denoise),
             bit_depth: r.bit_depth.or(u.bit_depth),
+            view_transform: r.view_transform.or(u.view_transform),
             geometry_only: r.geometry_only.or(u.geometry_only),
             without_studio: r.without_studio || u.without_studio,
         }
@@ -230,6 +236,12 @@ impl RenderRequest {
                 "applies to a whole image: denoise when merging the parts, not in a part",
             ));
         }
+        if self.part.is_some() && self.view_transform() != ViewTransform::Standard {
+            return Err(RequestError::new(
+                "view_transform",
+                "forms an image, and a part holds sums: give it to `meshtrace merge`",
+            ));
+        }
         if self.geometry_only() && self.denoise() {
             return Err(RequestError::new(
                 "denoise",
@@ -264,6 +276,10 @@ impl RenderRequest {
             Some(16) => BitDepth::Sixteen,
             _ => BitDepth::Eight,
         }
+    }
+
+    pub fn view_transform(&self) -> ViewTransform {
+        self.view_transform.unwrap_or_default()
     }
 
     pub fn denoise(&self) -> bool {
@@ -340,6 +356,10 @@ fn accel<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Accel>, D::Error> {
 
 fn up<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Up>, D::Error> {
     named(d, &[("x", Up::X), ("y", Up::Y), ("z", Up::Z)])
+}
+
+fn view_transform<'de, D: Deserializer<'de>>(d: D) -> Result<Option<ViewTransform>, D::Error> {
+    named(d, &ViewTransform::NAMES)
 }
 
 fn aovs<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Vec<Aov>>, D::Error> {

@@ -455,8 +455,12 @@ fn transparent_png_has_coverage_alpha_and_no_sky_in_its_colour() {
         film.save(&png).unwrap();
         // The 16-bit PNG has the same pixels to within half an 8-bit step, alpha included.
         let deep = dir.join(format!("{device}16.png"));
-        film.save_as(&deep, meshtrace::film::BitDepth::Sixteen)
-            .unwrap();
+        film.save_as(
+            &deep,
+            meshtrace::film::BitDepth::Sixteen,
+            &Default::default(),
+        )
+        .unwrap();
         let deep = image::open(&deep).unwrap();
         assert_eq!(deep.color(), image::ColorType::Rgba16);
         let eight = image::open(&png).unwrap().into_rgba8();

@@ -402,7 +402,7 @@ fn png_of_16_bits_rounds_the_srgb_curve_to_16_bits() {
     let dir = TempDir::new("png16");
     let film = test_film();
     let deep = dir.path().join("deep.png");
-    film.save_as(&deep, BitDepth::Sixteen)
+    film.save_as(&deep, BitDepth::Sixteen, &Default::default())
         .unwrap_or_else(|e| panic!("{e}"));
     let img = image::open(&deep).expect("a PNG");
     assert_eq!(img.color(), image::ColorType::Rgb16);
@@ -427,7 +427,11 @@ fn png_of_16_bits_rounds_the_srgb_curve_to_16_bits() {
     assert_ne!(linear_to_srgb16(0.18), linear_to_srgb16(0.1805));
     for name in ["deep.exr", "deep.hdr", "deep.jpg", "deep.bmp", "deep.webp"] {
         let err = film
-            .save_as(&dir.path().join(name), BitDepth::Sixteen)
+            .save_as(
+                &dir.path().join(name),
+                BitDepth::Sixteen,
+                &Default::default(),
+            )
             .unwrap_err();
         assert!(matches!(err, FilmError::DeepNotPng { .. }), "{name}: {err}");
         assert!(err.to_string().contains(name), "{err}");

@@ -48,3 +48,4 @@ mod shader_checks;
 mod shader_units;
 mod slurm;
 mod textures;
+mod view_transforms;

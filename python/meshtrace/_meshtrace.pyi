@@ -91,8 +91,15 @@ class Output:
     def samples(self) -> int: ...
     @property
     def rays(self) -> int: ...
-    def save(self, path: _Path, *, bit_depth: Optional[Literal[8, 16]] = None) -> None: ...
+    def save(
+        self,
+        path: _Path,
+        *,
+        bit_depth: Optional[Literal[8, 16]] = None,
+        view_transform: Optional[_View] = None,
+    ) -> None: ...
 
+_View = Literal["standard", "filmic", "agx"]
 _Aov = Literal["depth", "normal", "albedo", "alpha", "object_id", "material_id", "bvh_cost"]
 
 class Renderer:
@@ -147,7 +154,13 @@ def load(
     max_texture_size: Optional[int] = None,
     studio: bool = True,
 ) -> Scene: ...
-def save(output: Output, path: _Path, *, bit_depth: Optional[Literal[8, 16]] = None) -> None: ...
+def save(
+    output: Output,
+    path: _Path,
+    *,
+    bit_depth: Optional[Literal[8, 16]] = None,
+    view_transform: Optional[_View] = None,
+) -> None: ...
 def orbit(
     scene: Scene, views: int = 12, elevation: Optional[float] = None, azimuth: Optional[float] = None
 ) -> list[Camera]: ...

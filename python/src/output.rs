@@ -3,7 +3,8 @@
 //! `meshtrace render` writes it, to the bit.
 
 use crate::errors;
-use meshtrace::film::{Aov, AovValues, BitDepth, Film};
+use meshtrace::film::{Aov, AovValues, BitDepth, DisplayTransform, Film, ViewTransform};
+use meshtrace::request::parse_name;
 use numpy::IntoPyArray;
 use numpy::ndarray::{Array2, Array3};
 use pyo3::prelude::*;
@@ -134,10 +135,17 @@ impl Output {
     /// Writes the render to `path` as `meshtrace render -o path` does: the extension picks
     /// the format (.exr with the AOVs as channels; .png, .jpg, .bmp, .hdr with the AOVs in
     /// `<stem>.aovs.exr` beside it; a transparent render as an RGBA PNG), `bit_depth` 8 or
-    /// 16 for a PNG. Complete or not at all. It writes the render as rendered: changes made
-    /// to the arrays are not saved.
-    #[pyo3(signature = (path, *, bit_depth=None))]
-    fn save(&self, py: Python<'_>, path: PathBuf, bit_depth: Option<u32>) -> PyResult<()> {
+    /// 16 for a PNG, `view_transform` `"standard"`, `"filmic"` or `"agx"` for an 8- or 16-bit
+    /// image. Complete or not at all. It writes the render as rendered: changes made to the
+    /// arrays are not saved.
+    #[pyo3(signature = (path, *, bit_depth=None, view_transform=None))]
+    fn save(
+        &self,
+        py: Python<'_>,
+        path: PathBuf,
+        bit_depth: Option<u32>,
+        view_transform: Option<&str>,
+    ) -> PyResult<()> {
         let depth = match bit_depth {
             None | Some(8) => BitDepth::Eight,
             Some(16) => BitDepth::Sixteen,
@@ -147,8 +155,16 @@ impl Output {
                 )));
             }
         };
-        py.detach(|| self.film.save_as(&path, depth))
-            .map_err(|e| errors::error(&e))
+        let view = view_transform
+            .map(|name| parse_name(name, &ViewTransform::NAMES))
+            .transpose()
+            .map_err(|e| errors::message(format!("view_transform: {e}")))?
+            .unwrap_or_default();
+        py.detach(|| {
+            let display = DisplayTransform::load(view)?;
+            self.film.save_as(&path, depth, &display)
+        })
+        .map_err(|e| errors::error(&e))
     }
 
     fn __repr__(&self) -> String {
@@ -164,12 +180,13 @@ impl Output {
 
 /// Writes `output` to `path` ([`Output::save`]).
 #[pyfunction]
-#[pyo3(signature = (output, path, *, bit_depth=None))]
+#[pyo3(signature = (output, path, *, bit_depth=None, view_transform=None))]
 pub fn save(
     py: Python<'_>,
     output: &Output,
     path: PathBuf,
     bit_depth: Option<u32>,
+    view_transform: Option<&str>,
 ) -> PyResult<()> {
-    output.save(py, path, bit_depth)
+    output.save(py, path, bit_depth, view_transform)
 }

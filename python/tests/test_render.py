@@ -1,5 +1,7 @@
 """Loading every kind of input, the arrays a render returns, and their conventions."""
 
+import os
+
 import numpy as np
 import pytest
 
@@ -113,6 +115,22 @@ def test_save_writes_what_the_command_line_writes(cpu, tmp_path):
     out.save(tmp_path / "b.png", bit_depth=16)
     with pytest.raises(mt.MeshtraceError, match="bit_depth"):
         out.save(tmp_path / "c.png", bit_depth=12)
+
+
+def test_save_forms_the_image_by_the_view_transform(cpu, tmp_path, monkeypatch):
+    out = cpu.render("builtin:cornell", **SMALL)
+    with pytest.raises(mt.MeshtraceError, match="view_transform: `aces` is not one of"):
+        out.save(tmp_path / "a.png", view_transform="aces")
+    with pytest.raises(mt.MeshtraceError, match="hold the linear radiance"):
+        out.save(tmp_path / "a.exr", view_transform="agx")
+    if os.environ.get("MESHTRACE_BLENDER_LUTS"):
+        out.save(tmp_path / "standard.png")
+        out.save(tmp_path / "agx.png", view_transform="agx")
+        assert (tmp_path / "agx.png").read_bytes() != (tmp_path / "standard.png").read_bytes()
+    monkeypatch.setenv("MESHTRACE_BLENDER_LUTS", str(tmp_path))
+    with pytest.raises(mt.MeshtraceError, match="filmic_desat_33.cube not found"):
+        out.save(tmp_path / "b.png", view_transform="filmic")
+    assert not (tmp_path / "b.png").exists()
 
 
 def test_without_the_studio_the_mask_holds_the_mesh_alone(cpu, glb, repo):

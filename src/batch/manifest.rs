@@ -346,6 +346,14 @@ impl Manifest {
                     "render.bit_depth = 16 writes 16-bit PNGs; give a .png pattern".into(),
                 ));
             }
+            if request.view_transform() != crate::film::ViewTransform::Standard
+                && matches!(format, crate::film::Format::Exr | crate::film::Format::Hdr)
+            {
+                return Err(invalid(
+                    field("output"),
+                    "render.view_transform forms 8- and 16-bit images; give a .png or .webp pattern".into(),
+                ));
+            }
             out.push(Job {
                 source,
                 views,

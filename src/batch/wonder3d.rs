@@ -4,7 +4,7 @@
 //! alpha is the object's mask, its camera-space normals with the same mask, and a
 //! world→camera pose as text.
 
-use crate::film::{Aov, AovValues, Film, NO_ID, linear_to_srgb8};
+use crate::film::{Aov, AovValues, DisplayTransform, Film, NO_ID, quantise8};
 use crate::scene::camera::Camera;
 use glam::{DMat3, DVec3};
 
@@ -100,12 +100,16 @@ fn percent_e(x: f64) -> String {
 
 /// The two images the script writes of a view, 8-bit RGBA, from `film` (rendered through
 /// `camera` with the [`Aov::Normal`] and [`Aov::ObjectId`] AOVs):
-/// - the colour, sRGB-encoded, with alpha 255 where the pixel's centre ray hits the object
+/// - the colour, formed by `view`, with alpha 255 where the pixel's centre ray hits the object
 ///   and 0 elsewhere (the script's mask: its unfiltered depth short of the background's);
 /// - the normals in the camera's frame, Blender's convention (+X right, +Y up, +Z towards
 ///   the viewer), as Wonder3D stores them: ⌊255 (n + 1) / 2⌋, a miss counting n = 0
 ///   (127), with the same alpha.
-pub fn images(film: &Film, camera: &Camera) -> Result<(Vec<u8>, Vec<u8>), String> {
+pub fn images(
+    film: &Film,
+    camera: &Camera,
+    view: &DisplayTransform,
+) -> Result<(Vec<u8>, Vec<u8>), String> {
     let mask = match film.aov_values(Aov::ObjectId).as_deref() {
         Some([AovValues::U32(ids)]) => ids.iter().map(|&id| id != NO_ID).collect::<Vec<_>>(),
         _ => return Err("the render has no object_id AOV for the mask".into()),
@@ -121,7 +125,7 @@ pub fn images(film: &Film, camera: &Camera) -> Result<(Vec<u8>, Vec<u8>), String
         .iter()
         .zip(&mask)
         .flat_map(|(c, &hit)| {
-            let [r, g, b] = c.to_array().map(linear_to_srgb8);
+            let [r, g, b] = view.encode(*c).map(quantise8);
             [r, g, b, alpha(hit)]
         })
         .collect();

@@ -9,7 +9,7 @@ use meshtrace::batch::preset::{Poses, Preset, metadata, write_npy};
 use meshtrace::batch::transforms::{self, Frame, Intrinsics};
 use meshtrace::batch::{self, Manifest, Task};
 use meshtrace::batch::{trellis, wonder3d};
-use meshtrace::film::{Aov, BitDepth, Film, Format};
+use meshtrace::film::{Aov, BitDepth, DisplayTransform, Film, Format};
 use meshtrace::pipeline::Prepared;
 use meshtrace::render::backend::Backend;
 use meshtrace::request::RenderRequest;
@@ -212,6 +212,8 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
     };
     // The command line's device options win over the manifest's.
     let request = args.on.request().over(&manifest.request);
+    let view = DisplayTransform::load(request.view_transform())
+        .with_context(|| format!("{}: render.view_transform", manifest.path.display()))?;
     let backend = backend(&request, args.quiet)?;
     if !args.quiet {
         eprintln!(
@@ -297,9 +299,13 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
                 }
                 Ok(Loaded::Ready(input)) => {
                     let watchdog = Watchdog::start(cancel.clone(), limit, input.load + input.build);
-                    render_input(
-                        &manifest, *input, group, &backend, &watchdog, args.quiet, &mut tally,
-                    )
+                    let run = Run {
+                        manifest: &manifest,
+                        backend: &backend,
+                        view: &view,
+                        quiet: args.quiet,
+                    };
+                    render_input(&run, *input, group, &watchdog, &mut tally)
                 }
                 Err(e) => Err(e),
             };
@@ -614,18 +620,32 @@ fn request_error(manifest: &Manifest, e: meshtrace::pipeline::PipelineError) -> 
     }
 }
 
+/// What every input of a batch renders with: the manifest, the device, the view transform
+/// of its images, and whether to print each image.
+#[derive(Clone, Copy)]
+struct Run<'a> {
+    manifest: &'a Manifest,
+    backend: &'a Backend,
+    view: &'a DisplayTransform,
+    quiet: bool,
+}
+
 /// Renders the views of `input` (the input of `group`) that are not complete yet and
 /// records every view's camera. The images are encoded and written on a thread of their
 /// own while the next view renders; the input's result waits for them.
 fn render_input(
-    manifest: &Manifest,
+    run: &Run,
     input: Input,
     group: &[Task],
-    backend: &Backend,
     watchdog: &Watchdog,
-    quiet: bool,
     tally: &mut Tally,
 ) -> Result<()> {
+    let Run {
+        manifest,
+        backend,
+        view,
+        quiet,
+    } = *run;
     let job = &manifest.jobs[group[0].job];
     let Input {
         request,
@@ -651,6 +671,7 @@ fn render_input(
         norm: norm.as_ref(),
         uid: &uid,
         bit_depth: request.bit_depth(),
+        view,
         quiet,
     };
     std::thread::scope(|s| {
@@ -727,6 +748,7 @@ struct Encoder<'a> {
     norm: Option<&'a Normalisation>,
     uid: &'a str,
     bit_depth: BitDepth,
+    view: &'a DisplayTransform,
     quiet: bool,
 }
 
@@ -783,10 +805,10 @@ impl Encoder<'_> {
                 let path = task.output.with_extension("npy");
                 write_npy(&path, &preset.pose(self.uid, task.view, norm))
                     .with_context(|| format!("cannot write {}", path.display()))?;
-                film.save_as(&task.output, self.bit_depth)?;
+                film.save_as(&task.output, self.bit_depth, self.view)?;
             }
             (Some(preset), Some(norm)) if preset.poses == Poses::RtTxt => {
-                write_wonder3d(preset, norm, self.uid, task, &film, camera)?;
+                write_wonder3d(preset, norm, self.uid, task, &film, camera, self.view)?;
             }
             (Some(preset), Some(_)) if preset.save_normal => {
                 let path = trellis::normal_path(&task.output);
@@ -795,9 +817,9 @@ impl Encoder<'_> {
                 trellis::write_normal_exr(&path, film.width, film.height, pass)?;
                 // The pass is the normal AOV's file: none goes beside the image too.
                 film.saved_aovs &= !Aov::Normal.bit();
-                film.save_as(&task.output, self.bit_depth)?;
+                film.save_as(&task.output, self.bit_depth, self.view)?;
             }
-            _ => film.save_as(&task.output, self.bit_depth)?,
+            _ => film.save_as(&task.output, self.bit_depth, self.view)?,
         }
         Ok(())
     }
@@ -829,6 +851,7 @@ fn write_wonder3d(
     task: &Task,
     film: &Film,
     camera: &Camera,
+    view: &DisplayTransform,
 ) -> Result<()> {
     let dir = task.output.parent().unwrap_or(Path::new(""));
     let name = preset.view_name(task.view).unwrap_or_default();
@@ -838,7 +861,7 @@ fn write_wonder3d(
         .map(|row| row.iter().map(|&x| x as f32 as f64).collect())
         .collect();
     wonder3d::savetxt(&dir.join(format!("{name}_RT.txt")), &rows)?;
-    let (rgb, normals) = wonder3d::images(film, camera)
+    let (rgb, normals) = wonder3d::images(film, camera, view)
         .map_err(|m| anyhow::anyhow!("{}: {m}", task.output.display()))?;
     let file = task
         .output

@@ -1,8 +1,9 @@
 //! `meshtrace merge`: the part files of one render (`render --part K/N`) added into the
 //! image of all their samples, bit for bit the image of one render on the same device.
 
+use super::ViewArg;
 use anyhow::{Result, bail};
-use meshtrace::film::{Film, PartHeader};
+use meshtrace::film::{BitDepth, DisplayTransform, Film, Format, PartHeader};
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
@@ -18,6 +19,10 @@ pub struct MergeArgs {
     /// bits, so the result is not the bits of any one render).
     #[arg(long)]
     pub allow_mixed_devices: bool,
+    /// How a PNG, WebP, JPEG or BMP output is formed from the radiance: `standard`,
+    /// `filmic` or `agx`, as `render --view-transform`.
+    #[arg(long, value_enum)]
+    pub view_transform: Option<ViewArg>,
     /// Print nothing but warnings and errors.
     #[arg(short, long)]
     pub quiet: bool,
@@ -32,6 +37,14 @@ struct Part {
 
 pub fn merge(args: &MergeArgs) -> Result<()> {
     Film::check_writable(&args.output, false)?;
+    let view = match args.view_transform.map(ViewArg::view) {
+        Some(v) => {
+            let format = Format::from_path(&args.output)?;
+            Film::check_encoding(&args.output, format, BitDepth::Eight, v)?;
+            DisplayTransform::load(v)?
+        }
+        None => DisplayTransform::default(),
+    };
     let mut parts = Vec::new();
     for path in &args.parts {
         let (film, header) = Film::read_part(path)?;
@@ -60,7 +73,7 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
             );
         }
     }
-    merged.save(&args.output)?;
+    merged.save_as(&args.output, BitDepth::Eight, &view)?;
     if !args.quiet {
         eprintln!(
             "merged {} parts ({} of {spp} spp, {}) -> {}",

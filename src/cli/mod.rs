@@ -5,6 +5,7 @@
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
+use meshtrace::film::ViewTransform;
 use meshtrace::pipeline::PipelineError;
 use meshtrace::render::backend::{Backend, DeviceChoice};
 use meshtrace::render::gpu::Accel;
@@ -83,6 +84,27 @@ impl AccelArg {
             Self::Auto => Accel::Auto,
             Self::Software => Accel::Software,
             Self::Hardware => Accel::Hardware,
+        }
+    }
+}
+
+/// How an 8- or 16-bit image is formed ([`ViewTransform`]).
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ViewArg {
+    /// The sRGB curve of the clamped radiance.
+    Standard,
+    /// Blender's Filmic, its default in 2.80–3.6.
+    Filmic,
+    /// Blender's AgX, its default since 4.0.
+    Agx,
+}
+
+impl ViewArg {
+    pub fn view(self) -> ViewTransform {
+        match self {
+            Self::Standard => ViewTransform::Standard,
+            Self::Filmic => ViewTransform::Filmic,
+            Self::Agx => ViewTransform::Agx,
         }
     }
 }

@@ -3,12 +3,12 @@
 //! optional preview window, and the image (or part file) written.
 
 use super::{
-    DeviceArgs, Interrupted, UpAxis, backend, batch, flag_error, pipeline_error, preview,
+    DeviceArgs, Interrupted, UpAxis, ViewArg, backend, batch, flag_error, pipeline_error, preview,
     progress::Progress, set_threads, warn,
 };
 use anyhow::{Context, Result, bail};
 use clap::builder::{PossibleValuesParser, TypedValueParser};
-use meshtrace::film::{Aov, Film, Format};
+use meshtrace::film::{Aov, DisplayTransform, Film, Format};
 use meshtrace::pipeline::Prepared;
 use meshtrace::render::backend::Backend;
 use meshtrace::request::{Part, RenderRequest};
@@ -93,6 +93,11 @@ pub struct RenderArgs {
     /// gradients (alpha too, with --transparent).
     #[arg(long, value_name = "8|16")]
     pub bit_depth: Option<u32>,
+    /// How a PNG, WebP, JPEG or BMP output is formed from the radiance: `standard` (the
+    /// sRGB curve), or Blender's `filmic` (its default in 2.80–3.6) or `agx` (4.0 and
+    /// later), read from Blender's LUTs (docs/outputs.md, "View transforms").
+    #[arg(long, value_enum)]
+    pub view_transform: Option<ViewArg>,
     /// Trace camera rays alone, for the AOVs (depth, normal, alpha, ids) without path
     /// tracing; the image is the first surface's base colour, unlit. A few samples a pixel
     /// antialias the AOVs.
@@ -195,6 +200,7 @@ impl RenderArgs {
             aov,
             transparent: Some(self.transparent),
             bit_depth: self.bit_depth,
+            view_transform: self.view_transform.map(ViewArg::view),
             geometry_only: Some(self.geometry_only),
             up: self.up.map(UpAxis::up),
             environment: self.env.clone(),
@@ -225,13 +231,19 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         None
     };
     Film::check_writable(&args.output, args.transparent && part.is_none())?;
-    if part.is_none() {
-        Film::check_depth(
-            &args.output,
-            Format::from_path(&args.output)?,
-            request.bit_depth(),
-        )?;
-    }
+    // A part holds sums; `merge` forms the image.
+    let view = match part {
+        None => {
+            Film::check_encoding(
+                &args.output,
+                Format::from_path(&args.output)?,
+                request.bit_depth(),
+                request.view_transform(),
+            )?;
+            DisplayTransform::load(request.view_transform())?
+        }
+        Some(_) => DisplayTransform::default(),
+    };
     if request.aov_mask() != 0 && part.is_none() && Format::from_path(&args.output)? != Format::Exr
     {
         Film::check_writable(&Film::aov_path(&args.output), false)?;
@@ -247,7 +259,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     let depth = request.bit_depth();
     let write = Arc::new(move |film: &Film| match &header {
         Some(h) => film.save_part(&output, h),
-        None => film.save_as(&output, depth),
+        None => film.save_as(&output, depth, &view),
     });
     let cancel = Arc::new(AtomicBool::new(false));
     prepared.job.cancel = Some(cancel.clone());
