@@ -355,6 +355,17 @@ fn bad_manifests_fail_cleanly() {
             &["render.bit_depth", "8 or 16"],
         ),
         (
+            "[render]\nview_transform = \"agx\"\n[[jobs]]\nmeshes = \"models/*.obj\"\noutput = \"{stem}.exr\"\n",
+            &[
+                "jobs[0].output",
+                "render.view_transform forms 8- and 16-bit images",
+            ],
+        ),
+        (
+            "[render]\nview_transform = \"aces\"\n[[jobs]]\nmeshes = \"models/*.obj\"\noutput = \"{stem}.png\"\n",
+            &["bad.toml:2", "`aces` is not one of standard, filmic, agx"],
+        ),
+        (
             "[render]\npart = 1\n[[jobs]]\nscene = \"x.toml\"\noutput = \"a.png\"\n",
             &["bad.toml:2", "unknown field `part`"],
         ),

@@ -182,6 +182,58 @@ fn render_and_merge_write_the_view() {
     assert!(standard.into_raw() != expected);
 }
 
+/// A batch forms every image by its manifest's `render.view_transform`: the same coverage
+/// as the sRGB curve's images, other colours; and without the LUTs it fails before the
+/// first input, naming the manifest's field.
+#[test]
+fn a_batch_forms_its_images_by_the_manifest_view() {
+    let Some(_) = load(
+        "a_batch_forms_its_images_by_the_manifest_view",
+        ViewTransform::Filmic,
+    ) else {
+        return;
+    };
+    let dir = TempDir::new("view-batch");
+    dir.write("tri.obj", "v -1 -1 0\nv 1 -1 0\nv 0 1 0.5\nf 1 2 3\n");
+    let manifest = |view: &str| {
+        format!(
+            "[render]\nspp = 2\nwidth = 16\nheight = 16\ntransparent = true\nview_transform = \"{view}\"\n\
+             [[jobs]]\nmeshes = \"tri.obj\"\nviews = 1\noutput = \"{view}/{{stem}}.png\"\n"
+        )
+    };
+    for view in ["standard", "filmic"] {
+        dir.write(&format!("{view}.toml"), manifest(view));
+        let (code, stderr) = run(&dir, &["batch", &format!("{view}.toml"), "--device", "cpu"]);
+        assert_eq!(code, 0, "{stderr}");
+    }
+    let read = |view: &str| {
+        image::open(dir.join(format!("{view}/tri.png")))
+            .unwrap()
+            .into_rgba8()
+    };
+    let (standard, filmic) = (read("standard"), read("filmic"));
+    let alpha = |img: &image::RgbaImage| img.pixels().map(|p| p[3]).collect::<Vec<_>>();
+    assert_eq!(alpha(&standard), alpha(&filmic));
+    assert!(alpha(&filmic).contains(&255));
+    let colour =
+        |img: &image::RgbaImage| img.pixels().map(|p| [p[0], p[1], p[2]]).collect::<Vec<_>>();
+    assert_ne!(colour(&standard), colour(&filmic));
+    let out = Command::new(env!("CARGO_BIN_EXE_meshtrace"))
+        .args(["batch", "filmic.toml", "--device", "cpu"])
+        .current_dir(dir.path())
+        .env("NODEVICE_SELECT", "1")
+        .env("MESHTRACE_BLENDER_LUTS", dir.join("nowhere"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("filmic.toml: render.view_transform: ")
+            && stderr.contains("filmic_desat_33.cube not found"),
+        "{stderr}"
+    );
+}
+
 /// Where the LUTs are missing or damaged, or the output holds floats, the render fails
 /// before it starts, with one line naming the file (and its line) or the output.
 #[test]
