@@ -24,7 +24,10 @@ runs keep the script's view count, since a ring's cameras depend on it.
 (Blender's part takes the longest), to try meshtrace's settings against them.
 `--denoise` renders meshtrace's views with Open Image Denoise (a `--features denoise`
 build, given with `--meshtrace`), as the scripts denoise theirs; `--spp` sets meshtrace's
-samples (default: the preset's, as the scripts').
+samples (default: the preset's, as the scripts'). `--view-transform` forms meshtrace's
+images (default `agx`: the view transform the scripts get in Blender 5, so that both
+renderers' noise is counted in the same 8-bit levels), with the LUTs of `--blender-python`'s
+`bpy` unless MESHTRACE_BLENDER_LUTS names others.
 """
 
 import argparse
@@ -127,19 +130,34 @@ def blender(args, script, extra, asset, out, views, seed, samples=None):
     return elapsed
 
 
+def lut_env(args):
+    """The environment of meshtrace's runs: MESHTRACE_BLENDER_LUTS set, where unset, to the
+    colour-management folder of the bpy that runs the scripts."""
+    env = dict(os.environ)
+    if args.view_transform != "standard" and not env.get("MESHTRACE_BLENDER_LUTS"):
+        where = subprocess.run(
+            [args.blender_python, "-c",
+             "import bpy; print(bpy.utils.system_resource('DATAFILES', path='colormanagement'))"],
+            capture_output=True, text=True, check=True,
+        )
+        env["MESHTRACE_BLENDER_LUTS"] = where.stdout.strip().splitlines()[-1]
+    return env
+
+
 def meshtrace(args, preset, assets, out, views, spp):
     manifest = out / "manifest.toml"
     out.mkdir(parents=True, exist_ok=True)
     render = f"spp = {spp}\n" if spp else ""
     if args.denoise:
         render += "denoise = true\n"
+    render += f"view_transform = \"{args.view_transform}\"\n"
     manifest.write_text(
         f"[render]\n{render}\n[[jobs]]\nmeshes = \"{assets.resolve()}/*.glb\"\n"
         f"preset = \"{preset}\"\nviews = {views}\noutput = \"{{uid}}/{{view:03}}.png\"\n"
     )
     cmd = [args.meshtrace, "batch", str(manifest), "--device", args.device, "--quiet"]
     start = time.perf_counter()
-    run = subprocess.run(cmd, capture_output=True, text=True)
+    run = subprocess.run(cmd, capture_output=True, text=True, env=lut_env(args))
     elapsed = time.perf_counter() - start
     if run.returncode != 0:
         sys.exit(f"{' '.join(cmd)} failed:\n{run.stderr[-2000:]}")
@@ -156,6 +174,7 @@ def main():
     p.add_argument("--device", default="cpu")
     p.add_argument("--spp", type=int, help="meshtrace's samples (default: the preset's)")
     p.add_argument("--denoise", action="store_true")
+    p.add_argument("--view-transform", default="agx", choices=["standard", "filmic", "agx"])
     p.add_argument("--reference-spp", type=int, default=1024)
     p.add_argument("--reference-views", type=int, default=2)
     p.add_argument("--seed", type=int, default=1)
@@ -228,6 +247,7 @@ def main():
             "meshtrace_summary": summary,
             "meshtrace_spp": args.spp,
             "denoise": args.denoise,
+            "view_transform": args.view_transform,
             "device": args.device,
         }
         rows.append(row)

@@ -8,11 +8,10 @@
 
 use crate::common;
 
-use common::cli::{assert_fails, run};
+use common::cli::{assert_fails, output_with, run};
 use common::fs::{TempDir, data};
 use meshtrace::film::{Aov, BitDepth, DisplayTransform, Film, ViewTransform, lut_folder};
 use meshtrace::fixed::{to_fixed, to_fixed3};
-use std::process::Command;
 
 /// The view loaded, or `None` after saying why the test skips (its LUTs are not here).
 fn load(test: &str, view: ViewTransform) -> Option<DisplayTransform> {
@@ -218,20 +217,30 @@ fn a_batch_forms_its_images_by_the_manifest_view() {
     let colour =
         |img: &image::RgbaImage| img.pixels().map(|p| [p[0], p[1], p[2]]).collect::<Vec<_>>();
     assert_ne!(colour(&standard), colour(&filmic));
-    let out = Command::new(env!("CARGO_BIN_EXE_meshtrace"))
-        .args(["batch", "filmic.toml", "--device", "cpu"])
-        .current_dir(dir.path())
-        .env("NODEVICE_SELECT", "1")
-        .env("MESHTRACE_BLENDER_LUTS", dir.join("nowhere"))
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{stderr}");
-    assert!(
-        stderr.contains("filmic.toml: render.view_transform: ")
-            && stderr.contains("filmic_desat_33.cube not found"),
-        "{stderr}"
+    fails_with_luts(
+        &dir,
+        &dir.join("nowhere"),
+        &["batch", "filmic.toml", "--device", "cpu"],
+        &[
+            "filmic.toml: render.view_transform: ",
+            "filmic_desat_33.cube not found",
+        ],
     );
+}
+
+/// Runs meshtrace with MESHTRACE_BLENDER_LUTS naming `luts`; asserts that it fails with
+/// every one of `needles` in its output and writes no `x.png`.
+fn fails_with_luts(dir: &TempDir, luts: &std::path::Path, args: &[&str], needles: &[&str]) {
+    let out = output_with(dir, args, &[("MESHTRACE_BLENDER_LUTS", luts)]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+    for needle in needles {
+        assert!(
+            stderr.contains(needle),
+            "{args:?}: no `{needle}` in {stderr}"
+        );
+    }
+    assert!(!dir.join("x.png").exists());
 }
 
 /// Where the LUTs are missing or damaged, or the output holds floats, the render fails
@@ -239,28 +248,20 @@ fn a_batch_forms_its_images_by_the_manifest_view() {
 #[test]
 fn missing_or_bad_luts_and_float_outputs_are_refused() {
     let dir = TempDir::new("view-errors");
-    let lone = |lut_folder: &std::path::Path, args: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_meshtrace"))
-            .args(args)
-            .current_dir(dir.path())
-            .env("NODEVICE_SELECT", "1")
-            .env("MESHTRACE_BLENDER_LUTS", lut_folder)
-            .output()
-            .unwrap()
-    };
     let args = [
         "render", "--spp", "1", "--width", "8", "--height", "8", "-o", "x.png",
     ];
     let view = |v: &'static str| [&args[..], &["--view-transform", v]].concat();
     let empty = dir.join("empty");
     std::fs::create_dir(&empty).unwrap();
-    let out = lone(&empty, &view("agx"));
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{stderr}");
-    assert!(
-        stderr.contains("luts/AgX_Base_sRGB.cube not found")
-            && stderr.contains("MESHTRACE_BLENDER_LUTS"),
-        "{stderr}"
+    fails_with_luts(
+        &dir,
+        &empty,
+        &view("agx"),
+        &[
+            "luts/AgX_Base_sRGB.cube not found",
+            "MESHTRACE_BLENDER_LUTS",
+        ],
     );
     // A cube cut short, and a curve with a word that is not a number.
     let bad = dir.join("bad");
@@ -291,11 +292,7 @@ fn missing_or_bad_luts_and_float_outputs_are_refused() {
             "filmic_to_0-70_1-03.spi1d:7: `half` is not a number",
         ),
     ] {
-        let out = lone(&bad, &view(v));
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(1), "{stderr}");
-        assert!(stderr.contains(needle), "{v}: {stderr}");
-        assert!(!dir.join("x.png").exists());
+        fails_with_luts(&dir, &bad, &view(v), &[needle]);
     }
     assert_fails(
         &dir,

@@ -6,10 +6,20 @@ use std::process::Command;
 
 /// Runs `meshtrace args...` in `dir`; returns its output.
 pub fn output(dir: &TempDir, args: &[&str]) -> std::process::Output {
+    output_with(dir, args, &[])
+}
+
+/// [`output`] with the environment variables `vars` set.
+pub fn output_with(
+    dir: &TempDir,
+    args: &[&str],
+    vars: &[(&str, &std::path::Path)],
+) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_meshtrace"))
         .args(args)
         .current_dir(dir.path())
         .env("NODEVICE_SELECT", "1")
+        .envs(vars.iter().copied())
         .output()
         .unwrap()
 }
