@@ -355,6 +355,42 @@ fn bad_manifests_fail_cleanly() {
             &["render.bit_depth", "8 or 16"],
         ),
         (
+            "[[jobs]]\nmeshes = \"models/*.obj\"\npreset = \"objaverse\"\ncamera_type = \"random\"\n",
+            &[
+                "jobs[0].camera_type",
+                "SyncDreamer's `--camera_type`, which the `objaverse` script does not take",
+            ],
+        ),
+        (
+            "[[jobs]]\nmeshes = \"models/*.obj\"\npreset = \"syncdreamer\"\ncamera_type = \"even\"\n",
+            &["jobs[0].camera_type", "`even`: use \"fixed\" or \"random\""],
+        ),
+        (
+            "[[jobs]]\nmeshes = \"models/*.obj\"\npreset = \"syncdreamer\"\nelevation_range = [0, 10]\n",
+            &[
+                "jobs[0].elevation_range",
+                "is not a camera parameter of `syncdreamer`, whose are elevation and distance",
+            ],
+        ),
+        (
+            "[[jobs]]\nmeshes = \"models/*.obj\"\npreset = \"syncdreamer\"\ncamera_type = \"random\"\nelevation = 20\n",
+            &[
+                "jobs[0].elevation",
+                "whose are elevation_range = [min, max] and distance",
+            ],
+        ),
+        (
+            "[[jobs]]\nmeshes = \"models/*.obj\"\npreset = \"syncdreamer\"\ncamera_type = \"random\"\nelevation_range = [40, -10]\n",
+            &[
+                "jobs[0].elevation_range",
+                "[40, -10]: must be -90 < min <= max < 90 degrees",
+            ],
+        ),
+        (
+            "[[jobs]]\nmeshes = \"models/*.obj\"\ncamera_type = \"random\"\noutput = \"{stem}.png\"\n",
+            &["jobs[0].camera_type", "applies to a preset's cameras"],
+        ),
+        (
             "[render]\nview_transform = \"agx\"\n[[jobs]]\nmeshes = \"models/*.obj\"\noutput = \"{stem}.exr\"\n",
             &[
                 "jobs[0].output",
@@ -777,12 +813,17 @@ fn read_npy(path: &Path) -> [[f64; 4]; 3] {
 /// first dot) with preset `preset` at `size`², `views` views, 2 samples, from `dir/models`,
 /// which it returns.
 fn render_preset(dir: &TempDir, preset: &str, size: u32, views: u32) -> PathBuf {
+    render_preset_with(dir, preset, size, views, "")
+}
+
+/// [`render_preset`] with the job's `extra` keys (TOML lines).
+fn render_preset_with(dir: &TempDir, preset: &str, size: u32, views: u32, extra: &str) -> PathBuf {
     let models = dir.path().join("models");
     std::fs::create_dir_all(&models).unwrap();
     std::fs::copy(data("gltf/corpus/crowd.glb"), models.join("crowd.glb")).unwrap();
     std::fs::copy(data("box.obj"), models.join("box.v1.obj")).unwrap();
     let manifest = format!(
-        "[render]\nspp = 2\nwidth = {size}\nheight = {size}\n\n[[jobs]]\nmeshes = \"models/*\"\npreset = \"{preset}\"\nviews = {views}\n"
+        "[render]\nspp = 2\nwidth = {size}\nheight = {size}\n\n[[jobs]]\nmeshes = \"models/*\"\npreset = \"{preset}\"\nviews = {views}\n{extra}"
     );
     std::fs::write(dir.path().join("m.toml"), manifest).unwrap();
     let (code, stderr) = run(dir, &["batch", "m.toml", "--device", "cpu"]);
@@ -862,6 +903,159 @@ fn the_objaverse_preset_projects_the_normalised_mesh_onto_its_masks() {
         covered > 100 && covered < (size * size / 2) as usize,
         "{covered} pixels covered"
     );
+}
+
+/// SyncDreamer's `--camera_type random` (its input views), checked through the `meta.pkl`
+/// it writes per object: K (float32) for the image's size, the ring's azimuths (float32), an
+/// elevation per view (float64) drawn in [−10°, 40°], the distance 1.5 (float64), and poses
+/// (float64, OpenCV's convention) whose camera centres sit at those angles and project the
+/// normalised mesh onto each view's mask. A second run writes the same bytes.
+#[test]
+fn syncdreamers_random_views_write_the_meta_pkl_of_its_script() {
+    let dir = TempDir::new("batch-syncdreamer-random");
+    let (size, views) = (96u32, 5usize);
+    let extra = "camera_type = \"random\"\n";
+    let models = render_preset_with(&dir, "syncdreamer", size, views as u32, extra);
+    let mut elevations = Vec::new();
+    for (file, uid) in [("crowd.glb", "crowd"), ("box.v1.obj", "box")] {
+        let folder = dir.path().join("views").join(uid);
+        let mut want: Vec<String> = (0..views).map(|v| format!("{v:03}.png")).collect();
+        want.push("meta.pkl".into());
+        assert_eq!(files_in(&folder), want);
+        let arrays = read_pickled_arrays(&folder.join("meta.pkl"));
+        let kinds: Vec<(&str, Vec<usize>)> = arrays
+            .iter()
+            .map(|(k, shape, _)| (k.as_str(), shape.clone()))
+            .collect();
+        assert_eq!(
+            kinds,
+            [
+                ("f4", vec![3, 3]),
+                ("f4", vec![views]),
+                ("f8", vec![views]),
+                ("f8", vec![views]),
+                ("f8", vec![views, 3, 4]),
+            ]
+        );
+        let f = size as f64 / 2.0 / (16.0f64 / 35.0);
+        let c = size as f64 / 2.0;
+        for (got, want) in arrays[0]
+            .2
+            .iter()
+            .zip([f, 0.0, c, 0.0, f, c, 0.0, 0.0, 1.0])
+        {
+            assert!((got - want).abs() < 1e-4, "K: {:?}", arrays[0].2);
+        }
+        let (points, _, _) = normalised(&models.join(file));
+        for v in 0..views {
+            let (a, e, d) = (arrays[1].2[v], arrays[2].2[v], arrays[3].2[v]);
+            assert_eq!(
+                a,
+                (std::f64::consts::TAU * v as f64 / views as f64) as f32 as f64
+            );
+            assert!(
+                (-10.0..=40.0).contains(&e.to_degrees()),
+                "{}",
+                e.to_degrees()
+            );
+            assert_eq!(d, 1.5);
+            elevations.push(e);
+            // OpenCV's [R | t] back to Blender's camera convention: rows 1 and 2 negated.
+            let p = &arrays[4].2[v * 12..v * 12 + 12];
+            let sign = [1.0, -1.0, -1.0];
+            let rt: [[f64; 4]; 3] =
+                std::array::from_fn(|k| std::array::from_fn(|j| sign[k] * p[k * 4 + j]));
+            let row = |k: usize| glam::DVec3::new(rt[k][0], rt[k][1], rt[k][2]);
+            let t = glam::DVec3::new(rt[0][3], rt[1][3], rt[2][3]);
+            let centre = -(row(0) * t.x + row(1) * t.y + row(2) * t.z);
+            let want = d * glam::DVec3::new(a.cos() * e.cos(), a.sin() * e.cos(), e.sin());
+            assert!(
+                (centre - want).length() < 1e-6,
+                "view {v}: {centre} against {want}"
+            );
+            assert!(
+                (row(2) - centre.normalize()).length() < 1e-6,
+                "view {v}: {rt:?}"
+            );
+            assert!(row(0).cross(row(1)).dot(row(2)) > 0.9999);
+            let image = image::open(folder.join(format!("{v:03}.png")))
+                .unwrap()
+                .to_rgba8();
+            let (fraction, framed) = on_mask(&points, &rt, Lens::Pinhole(f), &image);
+            eprintln!(
+                "{uid} view {v}: elevation {:.1}°, {fraction} on the mask",
+                e.to_degrees()
+            );
+            assert_eq!(framed, 1.0, "{uid} view {v}: the object leaves the image");
+            assert!(fraction >= 0.99, "{uid} view {v}: {fraction}");
+        }
+    }
+    let spread = elevations.iter().cloned().fold(f64::MIN, f64::max)
+        - elevations.iter().cloned().fold(f64::MAX, f64::min);
+    assert!(spread.to_degrees() > 10.0, "{elevations:?}");
+    let again = TempDir::new("batch-syncdreamer-random-again");
+    render_preset_with(&again, "syncdreamer", size, views as u32, extra);
+    for uid in ["crowd", "box"] {
+        let path = |d: &TempDir| d.path().join("views").join(uid).join("meta.pkl");
+        assert!(std::fs::read(path(&dir)).unwrap() == std::fs::read(path(&again)).unwrap());
+    }
+}
+
+/// The NumPy arrays of a pickle as meshtrace writes `meta.pkl` (protocol 3: a list of
+/// `_reconstruct` calls, each built with its shape, dtype and bytes): each array's dtype
+/// (`f4`, `f8`), shape and values. Python's own reading is `python/tests`'.
+fn read_pickled_arrays(path: &Path) -> Vec<(String, Vec<usize>, Vec<f64>)> {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(&bytes[..2], b"\x80\x03", "protocol 3");
+    let (mut at, mut ints, mut texts, mut data) = (2, Vec::new(), Vec::new(), Vec::new());
+    let mut arrays = Vec::new();
+    let take = |at: &mut usize, n: usize| {
+        *at += n;
+        &bytes[*at - n..*at]
+    };
+    while at < bytes.len() {
+        match take(&mut at, 1)[0] {
+            b'c' => {
+                for _ in 0..2 {
+                    let end = at + bytes[at..].iter().position(|&b| b == b'\n').unwrap();
+                    at = end + 1;
+                }
+            }
+            b'J' => ints.push(i32::from_le_bytes(take(&mut at, 4).try_into().unwrap())),
+            b'X' | b'B' => {
+                let n = u32::from_le_bytes(take(&mut at, 4).try_into().unwrap()) as usize;
+                let body = take(&mut at, n).to_vec();
+                match bytes[at - n - 5] {
+                    b'X' => texts.push(String::from_utf8(body).unwrap()),
+                    _ => data.push(body),
+                }
+            }
+            // A built array: its state's ints were (1, shape..., then the dtype's 3, -1,
+            // -1, 0), its texts (kind, "<"), its bytes (b"b", data).
+            b'b' if texts.len() == 2 && data.len() == 2 => {
+                let shape: Vec<usize> = ints[2..ints.len() - 4]
+                    .iter()
+                    .map(|&d| d as usize)
+                    .collect();
+                let kind = texts[0].clone();
+                let values = match kind.as_str() {
+                    "f4" => data[1]
+                        .chunks(4)
+                        .map(|c| f32::from_le_bytes(c.try_into().unwrap()) as f64)
+                        .collect(),
+                    _ => data[1]
+                        .chunks(8)
+                        .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+                        .collect(),
+                };
+                arrays.push((kind, shape, values));
+                (ints, texts, data) = (Vec::new(), Vec::new(), Vec::new());
+            }
+            b']' | b'(' | b't' | b'R' | b'b' | b'N' | 0x88 | 0x89 | b'e' | b'.' => {}
+            op => panic!("{}: opcode {op:#x} at {}", path.display(), at - 1),
+        }
+    }
+    arrays
 }
 
 /// The zero123 preset, checked by reprojection through the pose files it writes: each

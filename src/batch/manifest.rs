@@ -34,6 +34,12 @@ struct JobFile {
     only_northern_hemisphere: Option<bool>,
     /// Wonder3D's rig turned at random per render (its `--random_pose`).
     random_pose: Option<bool>,
+    /// SyncDreamer's `--camera_type`: `fixed` (the ring) or `random` (each view at its own
+    /// elevation, and `meta.pkl`).
+    camera_type: Option<String>,
+    /// A random ring's elevations, [min, max] degrees (SyncDreamer's `--elevation_start`
+    /// and `--elevation_end`).
+    elevation_range: Option<[f32; 2]>,
     /// An orthographic preset's view width in normalised units (Blender's `ortho_scale`).
     ortho_scale: Option<f32>,
     /// TRELLIS's `--save_normal`: each view's normal pass beside its image.
@@ -182,6 +188,33 @@ impl Manifest {
                     if let Some(v) = j.views {
                         p.views = v;
                     }
+                    match j.camera_type.as_deref() {
+                        None | Some("fixed") if p.name == "syncdreamer" => {}
+                        Some("random") if p.name == "syncdreamer" => {
+                            p.layout = Layout::RandomRing {
+                                min: -10.0,
+                                max: 40.0,
+                            };
+                            p.poses = Poses::MetaPkl;
+                        }
+                        Some(other) if p.name == "syncdreamer" => {
+                            return Err(invalid(
+                                field("camera_type"),
+                                format!(
+                                    "`{other}`: use \"fixed\" or \"random\", as SyncDreamer's script"
+                                ),
+                            ));
+                        }
+                        Some(_) => {
+                            return Err(invalid(
+                                field("camera_type"),
+                                format!(
+                                    "is SyncDreamer's `--camera_type`, which the `{name}` script does not take"
+                                ),
+                            ));
+                        }
+                        None => {}
+                    }
                     for (key, given) in [
                         ("elevation", j.elevation.is_some()),
                         ("distance", j.distance.is_some()),
@@ -192,6 +225,7 @@ impl Manifest {
                         ),
                         ("random_pose", j.random_pose.is_some()),
                         ("ortho_scale", j.ortho_scale.is_some()),
+                        ("elevation_range", j.elevation_range.is_some()),
                     ] {
                         if given && !p.layout.takes(key) {
                             return Err(invalid(
@@ -224,6 +258,22 @@ impl Manifest {
                     }
                     if let (Layout::Rig { random }, Some(given)) = (&mut p.layout, j.random_pose) {
                         *random = given;
+                    }
+                    if let (Layout::RandomRing { min, max }, Some([lo, hi])) =
+                        (&mut p.layout, j.elevation_range)
+                    {
+                        if !(lo.is_finite()
+                            && hi.is_finite()
+                            && -90.0 < lo
+                            && lo <= hi
+                            && hi < 90.0)
+                        {
+                            return Err(invalid(
+                                field("elevation_range"),
+                                format!("[{lo}, {hi}]: must be -90 < min <= max < 90 degrees"),
+                            ));
+                        }
+                        (*min, *max) = (lo, hi);
                     }
                     if let Some(save) = j.save_normal {
                         if p.poses != Poses::Transforms {
@@ -283,6 +333,8 @@ impl Manifest {
                     ),
                     ("random_pose", j.random_pose.is_some()),
                     ("ortho_scale", j.ortho_scale.is_some()),
+                    ("camera_type", j.camera_type.is_some()),
+                    ("elevation_range", j.elevation_range.is_some()),
                 ] {
                     if given {
                         return Err(invalid(

@@ -6,6 +6,7 @@
 pub mod failures;
 pub mod manifest;
 pub mod preset;
+pub mod syncdreamer;
 pub mod transforms;
 pub mod trellis;
 pub mod wonder3d;

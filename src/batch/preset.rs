@@ -33,6 +33,10 @@ pub const NAMES: [&str; 6] = [
 pub enum Layout {
     /// Evenly spaced in azimuth on a ring at the preset's elevation and distance.
     Ring,
+    /// SyncDreamer's `--camera_type random` (its input views): the ring's azimuths, each
+    /// view at its own elevation, uniform in [`min`, `max`] degrees (the script's
+    /// `--elevation_start` and `--elevation_end`), at the preset's distance.
+    RandomRing { min: f32, max: f32 },
     /// Zero123's and Objaverse-XL's `sample_spherical`, drawn anew for each view: the
     /// direction of a point uniform in the cube [−1, 1]³ (not uniform on the sphere: it
     /// favours the cube's diagonals), at a distance uniform in [`radius_min`, `radius_max`];
@@ -59,6 +63,7 @@ impl Layout {
     pub fn takes(&self, key: &str) -> bool {
         match self {
             Layout::Ring => matches!(key, "elevation" | "distance"),
+            Layout::RandomRing { .. } => matches!(key, "elevation_range" | "distance"),
             Layout::Shell { .. } => matches!(key, "radius" | "only_northern_hemisphere"),
             Layout::Hammersley => key == "distance",
             Layout::Rig { .. } => matches!(key, "random_pose" | "ortho_scale"),
@@ -69,6 +74,7 @@ impl Layout {
     pub fn keys(&self) -> &'static str {
         match self {
             Layout::Ring => "elevation and distance",
+            Layout::RandomRing { .. } => "elevation_range = [min, max] and distance",
             Layout::Shell { .. } => "radius = [min, max] and only_northern_hemisphere",
             Layout::Hammersley => "distance",
             Layout::Rig { .. } => "random_pose and ortho_scale",
@@ -112,6 +118,9 @@ pub enum Poses {
     /// `scale_offset_matrix.txt` (scale, offset and orthographic scale, a value a line);
     /// and per view, beside the colour, `normals_{name}` ([`wonder3d::images`]).
     RtTxt,
+    /// SyncDreamer's `meta.pkl` per object ([`super::syncdreamer::meta_pkl`]): K, the azimuths,
+    /// elevations and distances, and every view's world→camera pose in OpenCV's convention.
+    MetaPkl,
 }
 
 /// How a script lights the object.
@@ -396,7 +405,7 @@ impl Preset {
         match self.poses {
             Poses::Transforms => "renders/{uid}/{view:03}.png",
             Poses::RtTxt => "views/{uid:2}/{uid}/rgb_{name}.webp",
-            Poses::None | Poses::Npy => "views/{uid}/{view:03}.png",
+            Poses::None | Poses::Npy | Poses::MetaPkl => "views/{uid}/{view:03}.png",
         }
     }
 
@@ -423,8 +432,9 @@ impl Preset {
 
     /// The camera position of view `view` of object `uid` in the script's normalised frame
     /// (Blender's, Z up). On a ring: at the preset's elevation and distance, view 0 on +X,
-    /// turning counter-clockwise seen from +Z. On a shell: drawn as the layout says, from
-    /// [`uniform`] numbers of the object and view.
+    /// turning counter-clockwise seen from +Z; on a random ring, at the view's own elevation
+    /// ([`Preset::ring_angles`]). On a shell: drawn as the layout says, from [`uniform`]
+    /// numbers of the object and view.
     pub fn blender_position(&self, uid: &str, view: u32) -> DVec3 {
         match self.layout {
             Layout::Ring => {
@@ -432,6 +442,11 @@ impl Preset {
                 let phi = (90.0 - self.elevation as f64).to_radians();
                 self.distance as f64
                     * DVec3::new(phi.sin() * theta.cos(), phi.sin() * theta.sin(), phi.cos())
+            }
+            Layout::RandomRing { .. } => {
+                let (azimuth, elevation) = self.ring_angles(uid, view);
+                let (a, e) = (azimuth as f64, elevation);
+                self.distance as f64 * DVec3::new(a.cos() * e.cos(), a.sin() * e.cos(), e.sin())
             }
             Layout::Shell {
                 radius_min,
@@ -481,6 +496,21 @@ impl Preset {
                 wonder3d::turn(uid, rig, random) * (self.distance as f64 * local)
             }
         }
+    }
+
+    /// A random ring's azimuth and elevation of view `view` of object `uid`, in radians, as
+    /// SyncDreamer's script holds them: the azimuth 2π view / views in single precision
+    /// (its `astype(np.float32)`), the elevation `np.deg2rad(np.random.uniform(min, max))`
+    /// in double, drawn from [`uniform`]. On another layout, its azimuth and elevation.
+    pub fn ring_angles(&self, uid: &str, view: u32) -> (f32, f64) {
+        let azimuth = (std::f64::consts::TAU * view as f64 / self.views as f64) as f32;
+        let degrees = match self.layout {
+            Layout::RandomRing { min, max } => {
+                min as f64 + (max as f64 - min as f64) * uniform(uid, view, RING_ELEVATION)
+            }
+            _ => self.elevation as f64,
+        };
+        (azimuth, degrees.to_radians())
     }
 
     /// TRELLIS's `transforms.json` of object `uid`, which `norm` normalises: the unit box,
@@ -694,6 +724,8 @@ fn radical_inverse_2(i: u32) -> f64 {
 const OBJECT: u32 = u32::MAX;
 /// The dimension of a shell view's radius, past the direction's (and its redraws').
 const SHELL_RADIUS: u32 = 1 << 16;
+/// The dimension of a random ring view's elevation.
+const RING_ELEVATION: u32 = 0;
 
 /// Blender's factory point light (1,000 W at (4.0762, 1.0055, 5.9039)) in the frame of a
 /// mesh that `norm` normalises. It is a root object when the scripts normalise, so it moves

@@ -8,7 +8,7 @@ use meshtrace::batch::preset::Normalisation;
 use meshtrace::batch::preset::{Poses, Preset, metadata, write_npy};
 use meshtrace::batch::transforms::{self, Frame, Intrinsics};
 use meshtrace::batch::{self, Manifest, Task};
-use meshtrace::batch::{trellis, wonder3d};
+use meshtrace::batch::{syncdreamer, trellis, wonder3d};
 use meshtrace::film::{Aov, BitDepth, DisplayTransform, Film, Format};
 use meshtrace::pipeline::Prepared;
 use meshtrace::render::backend::Backend;
@@ -476,9 +476,9 @@ struct Input {
     norm: Option<Normalisation>,
     uid: String,
     /// A preset's per-object files (metadata, poses of the whole object), each path with
-    /// its text: written by the renders, so that an input loaded ahead and never rendered
+    /// its bytes: written by the renders, so that an input loaded ahead and never rendered
     /// leaves nothing behind.
-    files: Vec<(PathBuf, String)>,
+    files: Vec<(PathBuf, Vec<u8>)>,
     prepared: Prepared,
     /// Time spent loading (reading, decoding, lighting) and building its tables and BVH.
     load: Duration,
@@ -559,14 +559,16 @@ fn load_input(
             // Per object, beside its first view's image (before the preset's lights, which
             // the metadata does not count).
             let dir = group[0].output.parent().unwrap_or(Path::new(""));
-            let json = |value: serde_json::Value| serde_json::to_string_pretty(&value);
+            let json = |value: serde_json::Value| {
+                serde_json::to_string_pretty(&value).map(|text| (text + "\n").into_bytes())
+            };
             if preset.metadata {
                 let value = metadata(&group[0].input, &scene, &norm);
-                files.push((dir.join("metadata.json"), json(value)? + "\n"));
+                files.push((dir.join("metadata.json"), json(value)?));
             }
             if preset.poses == Poses::Transforms {
                 let value = preset.trellis_transforms(&uid, &norm);
-                files.push((dir.join("transforms.json"), json(value)? + "\n"));
+                files.push((dir.join("transforms.json"), json(value)?));
             }
             if preset.poses == Poses::RtTxt {
                 // np.savetxt([scale] + list(offset) + [ortho_scale]): the offset is
@@ -578,7 +580,15 @@ fn load_input(
                     .chain([decimal(preset.ortho_scale)]);
                 let rows: Vec<Vec<f64>> = values.map(|v| vec![v]).collect();
                 let text = wonder3d::savetxt_text(&rows);
-                files.push((dir.join("scale_offset_matrix.txt"), text));
+                files.push((dir.join("scale_offset_matrix.txt"), text.into_bytes()));
+            }
+            if preset.poses == Poses::MetaPkl {
+                let size = (
+                    request.width.unwrap_or(preset.size),
+                    request.height.unwrap_or(preset.size),
+                );
+                let bytes = syncdreamer::meta_pkl(preset, &uid, &norm, size);
+                files.push((dir.join("meta.pkl"), bytes));
             }
             Some(norm)
         }
@@ -754,13 +764,13 @@ struct Encoder<'a> {
 
 impl Encoder<'_> {
     /// Writes each view that `receive` brings until the renders end or a write fails,
-    /// the input's own `files` (path and text) before the first, so that an input with no
+    /// the input's own `files` (path and bytes) before the first, so that an input with no
     /// finished view leaves nothing: the images written, the time spent, and the first
     /// error.
     fn run(
         &self,
         receive: std::sync::mpsc::Receiver<Rendered>,
-        mut files: Vec<(PathBuf, String)>,
+        mut files: Vec<(PathBuf, Vec<u8>)>,
     ) -> (usize, Duration, Result<()>) {
         let (mut written, mut spent) = (0, Duration::ZERO);
         for view in receive {
@@ -768,7 +778,7 @@ impl Encoder<'_> {
             let mut own = std::mem::take(&mut files).into_iter();
             let (output, began) = (view.task.output.clone(), view.began);
             if let Err(e) = own
-                .try_for_each(|(path, text)| write_file(&path, &text))
+                .try_for_each(|(path, bytes)| write_file(&path, &bytes))
                 .and_then(|()| self.write(view))
             {
                 return (written, spent, Err(e));
@@ -832,11 +842,11 @@ fn decimal(x: f32) -> f64 {
 }
 
 /// Writes `text` to `path` (through a temporary file), its folder made first.
-fn write_file(path: &Path, text: &str) -> Result<()> {
+fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
-    meshtrace::film::write_bytes(path, text.as_bytes())?;
+    meshtrace::film::write_bytes(path, bytes)?;
     Ok(())
 }
 
