@@ -108,10 +108,18 @@ pub fn record(dir: &Path, frames: &[Frame]) -> Result<(), BatchError> {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
         Err(e) => return Err(io(&path, &e)),
     };
+    let mut at: std::collections::HashMap<String, usize> = all
+        .iter()
+        .enumerate()
+        .map(|(i, f)| (f.file_path.clone(), i))
+        .collect();
     for f in frames {
-        match all.iter_mut().find(|g| g.file_path == f.file_path) {
-            Some(slot) => *slot = f.clone(),
-            None => all.push(f.clone()),
+        match at.get(&f.file_path) {
+            Some(&i) => all[i] = f.clone(),
+            None => {
+                at.insert(f.file_path.clone(), all.len());
+                all.push(f.clone());
+            }
         }
     }
     all.sort_by(|a, b| a.file_path.cmp(&b.file_path));

@@ -154,8 +154,11 @@ fn record(frames: &[(PathBuf, Frame)]) -> Result<()> {
     Ok(())
 }
 
-/// How often waiting frames go into their `transforms.json`.
+/// How often waiting frames go into their `transforms.json` at most: every 2 s, and no
+/// sooner than 20 times as long as the last flush took after it, so that rewriting a
+/// large folder's file (a flush reads and writes it whole) takes at most 5% of the run.
 const FLUSH_SECONDS: f64 = 2.0;
+const FLUSH_SHARE: f64 = 0.05;
 
 /// What the shard's tasks came to so far.
 #[derive(Default)]
@@ -236,7 +239,7 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
         warm_up: (tasks.len() / 10).max(1),
         ..Tally::default()
     };
-    let mut flushed = Instant::now();
+    let (mut flushed, mut flush_every) = (Instant::now(), Duration::from_secs_f64(FLUSH_SECONDS));
     // The tasks of one input are consecutive: load and prepare it once for all its views.
     let mut groups = Vec::new();
     let mut rest = &tasks[..];
@@ -309,8 +312,13 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
                 }
                 Err(e) => Err(e),
             };
-            if flushed.elapsed().as_secs_f64() > FLUSH_SECONDS {
+            if flushed.elapsed() > flush_every {
+                let t = Instant::now();
                 record(&std::mem::take(&mut tally.frames))?;
+                flush_every = t
+                    .elapsed()
+                    .div_f64(FLUSH_SHARE)
+                    .max(Duration::from_secs_f64(FLUSH_SECONDS));
                 flushed = Instant::now();
             }
             if let Err(e) = result {
