@@ -3,12 +3,15 @@
 //! `meshtrace render` writes it, to the bit.
 
 use crate::errors;
-use meshtrace::film::{Aov, AovValues, BitDepth, DisplayTransform, Film, ViewTransform};
+use meshtrace::film::{
+    Aov, AovValues, BitDepth, DisplayTransform, Film, FilmError, ViewTransform, lut_folder,
+};
 use meshtrace::request::parse_name;
 use numpy::IntoPyArray;
 use numpy::ndarray::{Array2, Array3};
 use pyo3::prelude::*;
 use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
 
 /// A render's images by name, as a read-only mapping: `color` (float32, H×W×3, linear
 /// radiance; premultiplied by `alpha` in a transparent render) and each AOV asked for:
@@ -161,7 +164,7 @@ impl Output {
             .map_err(|e| errors::message(format!("view_transform: {e}")))?
             .unwrap_or_default();
         py.detach(|| {
-            let display = DisplayTransform::load(view)?;
+            let display = display_transform(view)?;
             self.film.save_as(&path, depth, &display)
         })
         .map_err(|e| errors::error(&e))
@@ -176,6 +179,24 @@ impl Output {
             self.keys().join(", ")
         )
     }
+}
+
+/// `view` with its LUTs read, once per view and LUT folder: a script saves many images, and
+/// reading AgX's LUT takes 20 to 40 ms, forty times a small image's encoding.
+fn display_transform(view: ViewTransform) -> Result<Arc<DisplayTransform>, FilmError> {
+    type Loaded = Vec<(ViewTransform, PathBuf, Arc<DisplayTransform>)>;
+    static LOADED: Mutex<Loaded> = Mutex::new(Vec::new());
+    if view == ViewTransform::Standard {
+        return Ok(Arc::default());
+    }
+    let folder = lut_folder(view)?;
+    let mut loaded = LOADED.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some((_, _, d)) = loaded.iter().find(|(v, f, _)| *v == view && *f == folder) {
+        return Ok(d.clone());
+    }
+    let display = Arc::new(DisplayTransform::load(view)?);
+    loaded.push((view, folder, display.clone()));
+    Ok(display)
 }
 
 /// Writes `output` to `path` ([`Output::save`]).

@@ -127,7 +127,16 @@ def test_save_forms_the_image_by_the_view_transform(cpu, tmp_path, monkeypatch):
         out.save(tmp_path / "standard.png")
         out.save(tmp_path / "agx.png", view_transform="agx")
         assert (tmp_path / "agx.png").read_bytes() != (tmp_path / "standard.png").read_bytes()
-    monkeypatch.setenv("MESHTRACE_BLENDER_LUTS", str(tmp_path))
+    # The LUTs are read once per folder: another folder's are read anew.
+    other = tmp_path / "other"
+    (other / "luts").mkdir(parents=True)
+    (other / "luts" / "AgX_Base_sRGB.cube").write_text(
+        "LUT_3D_SIZE 2\n" + "".join(f"{r} {g} {b}\n" for b in (0, 1) for g in (0, 1) for r in (0, 1))
+    )
+    monkeypatch.setenv("MESHTRACE_BLENDER_LUTS", str(other))
+    out.save(tmp_path / "identity.png", view_transform="agx")
+    if (tmp_path / "agx.png").exists():
+        assert (tmp_path / "identity.png").read_bytes() != (tmp_path / "agx.png").read_bytes()
     with pytest.raises(mt.MeshtraceError, match="filmic_desat_33.cube not found"):
         out.save(tmp_path / "b.png", view_transform="filmic")
     assert not (tmp_path / "b.png").exists()
