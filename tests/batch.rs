@@ -966,8 +966,7 @@ fn syncdreamers_random_views_write_the_meta_pkl_of_its_script() {
             let rt: [[f64; 4]; 3] =
                 std::array::from_fn(|k| std::array::from_fn(|j| sign[k] * p[k * 4 + j]));
             let row = |k: usize| glam::DVec3::new(rt[k][0], rt[k][1], rt[k][2]);
-            let t = glam::DVec3::new(rt[0][3], rt[1][3], rt[2][3]);
-            let centre = -(row(0) * t.x + row(1) * t.y + row(2) * t.z);
+            let centre = camera_centre(&rt);
             let want = d * glam::DVec3::new(a.cos() * e.cos(), a.sin() * e.cos(), e.sin());
             assert!(
                 (centre - want).length() < 1e-6,
@@ -999,6 +998,12 @@ fn syncdreamers_random_views_write_the_meta_pkl_of_its_script() {
         let path = |d: &TempDir| d.path().join("views").join(uid).join("meta.pkl");
         assert!(std::fs::read(path(&dir)).unwrap() == std::fs::read(path(&again)).unwrap());
     }
+}
+
+/// The camera centre C = −Rᵀt of a world→camera pose [R | t].
+fn camera_centre(rt: &[[f64; 4]; 3]) -> glam::DVec3 {
+    let row = |k: usize| glam::DVec3::new(rt[k][0], rt[k][1], rt[k][2]);
+    -(row(0) * rt[0][3] + row(1) * rt[1][3] + row(2) * rt[2][3])
 }
 
 /// The NumPy arrays of a pickle as meshtrace writes `meta.pkl` (protocol 3: a list of
@@ -1103,9 +1108,8 @@ fn shell_preset_check(preset: &str, xl: bool) {
         for view in 0..views {
             let rt = read_npy(&folder.join(format!("{view:03}.npy")));
             let row = |k: usize| glam::DVec3::new(rt[k][0], rt[k][1], rt[k][2]);
-            // A rotation, and a camera centre C = −Rᵀt on the shell, looking at the target.
-            let t = glam::DVec3::new(rt[0][3], rt[1][3], rt[2][3]);
-            let c = -(row(0) * t.x + row(1) * t.y + row(2) * t.z);
+            // A rotation, and a camera centre on the shell, looking at the target.
+            let c = camera_centre(&rt);
             assert!((1.5 - 1e-5..=2.2 + 1e-5).contains(&c.length()), "{c}");
             assert!(
                 (row(2) - (c - target).normalize()).length() < 1e-5,

@@ -41,41 +41,18 @@ pub fn meta_pkl(
     let mut out = Pickle(vec![PROTO, 3]);
     out.0.push(EMPTY_LIST);
     out.0.push(MARK);
-    out.array(&[3, 3], "f4", &k.map(f32::to_le_bytes).concat());
-    out.array(
-        &[n],
-        "f4",
-        &azimuths
-            .iter()
-            .flat_map(|v| v.to_le_bytes())
-            .collect::<Vec<_>>(),
-    );
-    out.array(
-        &[n],
-        "f8",
-        &elevations
-            .iter()
-            .flat_map(|v| v.to_le_bytes())
-            .collect::<Vec<_>>(),
-    );
-    out.array(
-        &[n],
-        "f8",
-        &distances
-            .iter()
-            .flat_map(|v| v.to_le_bytes())
-            .collect::<Vec<_>>(),
-    );
-    out.array(
-        &[n, 3, 4],
-        "f8",
-        &poses
-            .iter()
-            .flat_map(|v| v.to_le_bytes())
-            .collect::<Vec<_>>(),
-    );
+    out.array(&[3, 3], "f4", &le_bytes(&k, f32::to_le_bytes));
+    out.array(&[n], "f4", &le_bytes(&azimuths, f32::to_le_bytes));
+    out.array(&[n], "f8", &le_bytes(&elevations, f64::to_le_bytes));
+    out.array(&[n], "f8", &le_bytes(&distances, f64::to_le_bytes));
+    out.array(&[n, 3, 4], "f8", &le_bytes(&poses, f64::to_le_bytes));
     out.0.extend([APPENDS, STOP]);
     out.0
+}
+
+/// `values` as an array's data: each one's little-endian bytes, in order.
+fn le_bytes<T: Copy, const N: usize>(values: &[T], bytes: fn(T) -> [u8; N]) -> Vec<u8> {
+    values.iter().flat_map(|&v| bytes(v)).collect()
 }
 
 const PROTO: u8 = 0x80;
