@@ -192,9 +192,10 @@ fn generated_obj(i: usize) -> String {
 
 /// Peak memory over a batch of distinct generated assets (3,000 here; set
 /// MESHTRACE_MEMORY_ASSETS for more, 10,000 for the figure in BENCHMARKS.md), each into
-/// its own folder, grows less than 10% after the first tenth of the images. (The loader
-/// and encoder threads warm their allocator arenas over the first few hundred inputs: the
-/// first tenth of 1,000 ends inside that, at 8-10% growth, of 3,000 after it.)
+/// its own folder, grows less than 5% after the summary's first peak (a tenth of the
+/// images, at least 1,000). (The loader and encoder threads warm their allocator arenas
+/// over the first several hundred inputs: from the 300th image of 3,000 the peak grew
+/// 4-10% in runs without a leak, from the 1,000th 0-3%.)
 #[test]
 fn memory_stays_flat_over_distinct_assets() {
     let count: usize = std::env::var("MESHTRACE_MEMORY_ASSETS")
@@ -221,7 +222,7 @@ fn memory_stays_flat_over_distinct_assets() {
         .and_then(|(g, _)| g.parse().ok())
         .unwrap_or_else(|| panic!("no memory growth in: {err}"));
     assert!(
-        growth < 10.0,
+        growth < 5.0,
         "peak memory grew {growth}% over {count} distinct assets: {err}"
     );
     for i in [0, count / 2, count - 1] {

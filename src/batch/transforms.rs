@@ -91,10 +91,11 @@ pub fn camera_to_world(camera: &Camera) -> [[f32; 4]; 4] {
 /// Adds `frames` to the `transforms.json` of folder `dir` (creating it), replacing frames
 /// of the same `file_path`, under the file's lock ([`lock_file`]). The top level takes the intrinsics of
 /// the first frame (by path); a frame whose intrinsics differ carries its own, as
-/// nerfstudio allows.
-pub fn record(dir: &Path, frames: &[Frame]) -> Result<(), BatchError> {
+/// nerfstudio allows. Returns how many frames already in the file were rewritten with
+/// them: the part of the work that grows with the folder rather than with `frames`.
+pub fn record(dir: &Path, frames: &[Frame]) -> Result<usize, BatchError> {
     if frames.is_empty() {
-        return Ok(());
+        return Ok(0);
     }
     let path = dir.join(FILE_NAME);
     let io = |p: &Path, e: &dyn std::fmt::Display| BatchError::Io {
@@ -108,6 +109,7 @@ pub fn record(dir: &Path, frames: &[Frame]) -> Result<(), BatchError> {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
         Err(e) => return Err(io(&path, &e)),
     };
+    let earlier = all.len();
     let mut at: std::collections::HashMap<String, usize> = all
         .iter()
         .enumerate()
@@ -139,7 +141,7 @@ pub fn record(dir: &Path, frames: &[Frame]) -> Result<(), BatchError> {
     bytes.push(b'\n');
     crate::film::write_bytes(&path, &bytes).map_err(|e| io(&path, &e))?;
     drop(lock);
-    Ok(())
+    Ok(earlier)
 }
 
 /// An exclusive lock on the file at `path` (created empty if missing), held until the

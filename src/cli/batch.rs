@@ -141,24 +141,39 @@ fn frame(task: &Task, camera: &Camera, w: u32, h: u32) -> Frame {
     }
 }
 
-/// Adds `frames` (by output) to their folders' `transforms.json`.
-fn record(frames: &[(PathBuf, Frame)]) -> Result<()> {
+/// Adds `frames` (by output) to their folders' `transforms.json`. Returns the share of the
+/// frames written that were already there (rewritten because a flush writes a file whole).
+fn record(frames: &[(PathBuf, Frame)]) -> Result<f64> {
     let mut by_dir: BTreeMap<PathBuf, Vec<Frame>> = BTreeMap::new();
     for (output, f) in frames {
         let dir = output.parent().map(Path::to_path_buf).unwrap_or_default();
         by_dir.entry(dir).or_default().push(f.clone());
     }
+    let mut earlier = 0;
     for (dir, frames) in by_dir {
-        transforms::record(&dir, &frames)?;
+        earlier += transforms::record(&dir, &frames)?;
     }
-    Ok(())
+    Ok(earlier as f64 / (earlier + frames.len()).max(1) as f64)
 }
 
 /// How often waiting frames go into their `transforms.json` at most: every 2 s, and no
-/// sooner than 20 times as long as the last flush took after it, so that rewriting a
-/// large folder's file (a flush reads and writes it whole) takes at most 5% of the run.
+/// sooner than 20 times as long as the last flush spent rewriting frames already in their
+/// files after it, so that rewriting a large folder's file (a flush reads and writes it
+/// whole) takes at most 5% of the run. Only that part is counted: writing new frames
+/// costs the same however they are grouped, and counting it would let the wait, and the
+/// frames waiting, grow without bound where each image has its own folder.
 const FLUSH_SECONDS: f64 = 2.0;
 const FLUSH_SHARE: f64 = 0.05;
+
+/// The wait before the next flush after one that `took` this long, of which the share
+/// `rewritten` went to frames already in their files.
+fn flush_wait(took: Duration, rewritten: f64) -> Duration {
+    took.mul_f64(rewritten / FLUSH_SHARE)
+        .max(Duration::from_secs_f64(FLUSH_SECONDS))
+}
+
+/// The fewest images rendered before the summary's first peak memory is taken.
+const WARM_UP_IMAGES: usize = 1000;
 
 /// What the shard's tasks came to so far.
 #[derive(Default)]
@@ -170,8 +185,10 @@ struct Tally {
     failed: Vec<String>,
     /// Images skipped because the failure log lists their input.
     skipped_failed: usize,
-    /// The peak memory once `warm_up` images are rendered (a tenth of the shard, after
-    /// the allocator's warm-up), against which the closing summary measures growth.
+    /// The peak memory once `warm_up` images are rendered (a tenth of the shard, and at
+    /// least 1,000 images: the allocator's arenas and the loader's and encoder's buffers
+    /// settle over the first several hundred), against which the closing summary measures
+    /// growth.
     first_peak: Option<u64>,
     warm_up: usize,
     /// Frames waiting to go into their transforms.json: every few seconds and at the end,
@@ -236,7 +253,9 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
     .context("cannot install the Ctrl-C and SIGTERM handler")?;
     let start = Instant::now();
     let mut tally = Tally {
-        warm_up: (tasks.len() / 10).max(1),
+        warm_up: (tasks.len() / 10)
+            .max(WARM_UP_IMAGES.min(tasks.len()))
+            .max(1),
         ..Tally::default()
     };
     let (mut flushed, mut flush_every) = (Instant::now(), Duration::from_secs_f64(FLUSH_SECONDS));
@@ -314,11 +333,8 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
             };
             if flushed.elapsed() > flush_every {
                 let t = Instant::now();
-                record(&std::mem::take(&mut tally.frames))?;
-                flush_every = t
-                    .elapsed()
-                    .div_f64(FLUSH_SHARE)
-                    .max(Duration::from_secs_f64(FLUSH_SECONDS));
+                let rewritten = record(&std::mem::take(&mut tally.frames))?;
+                flush_every = flush_wait(t.elapsed(), rewritten);
                 flushed = Instant::now();
             }
             if let Err(e) = result {
@@ -909,4 +925,24 @@ fn all_recorded(tasks: &[Task]) -> bool {
                 .contains(name.to_string_lossy().as_ref()),
             _ => false,
         })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// New frames cost the same however they are grouped, so only the rewriting of frames
+    /// already in the files lengthens the wait: were a flush's whole time counted, a
+    /// batch with a folder per image would wait 20 times as long after each flush and
+    /// gather 20 times as many frames for the next (at 1,000 images a second and 1 ms a
+    /// folder), without bound.
+    #[test]
+    fn flushes_wait_for_the_rewriting_of_earlier_frames_only() {
+        let s = Duration::from_secs_f64;
+        assert_eq!(flush_wait(s(0.5), 0.0), s(2.0));
+        assert_eq!(flush_wait(s(30.0), 0.0), s(2.0));
+        assert_eq!(flush_wait(s(0.05), 1.0), s(2.0));
+        let wait = flush_wait(s(0.4), 0.9).as_secs_f64();
+        assert!((wait - 7.2).abs() < 1e-9, "{wait}");
+    }
 }
