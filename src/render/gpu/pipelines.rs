@@ -52,7 +52,7 @@ impl Pipeline {
         let module = match checks {
             ShaderChecks::Checked => ctx.device.create_shader_module(desc),
             // SAFETY: the kernels index only in range, divide by no zero and end all
-            // their loops, as `ShaderChecks` sets out; tests/shader_checks.rs checks it
+            // their loops, as `ShaderChecks` sets out; tests/checked_kernels.rs checks it
             // on the test scenes with the checked build of the same source. Ray-query
             // tracking stays on: it also guards queries against rays with NaN in them,
             // which a degenerate path can produce.

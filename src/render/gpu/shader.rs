@@ -209,7 +209,7 @@ const BENCH: Source = shader!("bench.wgsl");
 /// table index comes from validated scene data; the divisors are texture sizes, at least 1.
 /// A checked module keeps naga's checks and also tests each of those claims itself where
 /// it relies on them (`check` in shaders/bindings.wgsl), counting the failures, which the
-/// render kernel reports: tests/shader_checks.rs renders the test scenes checked, and
+/// render kernel reports: tests/checked_kernels.rs renders the test scenes checked, and
 /// requires no failure and the trusted kernel's bits.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum ShaderChecks {

@@ -5,6 +5,10 @@
 //! hold. Here every scene of the suite's kinds (meshes, spheres, area, punctual and sky
 //! lights, an environment map, glTF materials, textures in every wrap mode, normal maps,
 //! alpha masks, AOVs) renders checked with no failure and gives the trusted kernel's bits.
+//!
+//! (libtest starts tests in the order of their names, and the checked kernels' compiles run
+//! on one core for about a minute: under a name late in the alphabet, `shader_checks`, this
+//! test ran last and alone for its final 41 s of CI's suite; here it runs beside the others.)
 
 use crate::common;
 
@@ -132,7 +136,7 @@ fn check_scenes(trusted: GpuContext) {
 }
 
 #[test]
-fn checked_kernels_find_every_index_in_range_and_match_the_trusted_bits() {
+fn find_every_index_in_range_and_match_the_trusted_bits() {
     if let Some(ctx) = common::gpu("checked_kernels_find_every_index_in_range") {
         check_scenes(ctx);
     }
@@ -143,7 +147,7 @@ fn checked_kernels_find_every_index_in_range_and_match_the_trusted_bits() {
 /// claims are those of the shading code that the test above covers (the traversal is the
 /// driver's, and ray-query tracking stays on).
 #[test]
-fn checked_ray_query_kernels_find_every_index_in_range_and_match_the_trusted_bits() {
+fn with_ray_queries_find_every_index_in_range_and_match_the_trusted_bits() {
     if let Some(ctx) = common::ray_query_gpu("checked_ray_query_kernels") {
         check_scenes(ctx);
     }
