@@ -172,7 +172,8 @@ fn flush_wait(took: Duration, rewritten: f64) -> Duration {
         .max(Duration::from_secs_f64(FLUSH_SECONDS))
 }
 
-/// The fewest images rendered before the summary's first peak memory is taken.
+/// The fewest images rendered before the summary's first peak memory is taken; a shard
+/// that renders fewer reports its peak alone.
 const WARM_UP_IMAGES: usize = 1000;
 
 /// What the shard's tasks came to so far.
@@ -188,7 +189,7 @@ struct Tally {
     /// The peak memory once `warm_up` images are rendered (a tenth of the shard, and at
     /// least 1,000 images: the allocator's arenas and the loader's and encoder's buffers
     /// settle over the first several hundred), against which the closing summary measures
-    /// growth.
+    /// growth; none in a shard that renders fewer.
     first_peak: Option<u64>,
     warm_up: usize,
     /// Frames waiting to go into their transforms.json: every few seconds and at the end,
@@ -253,9 +254,7 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
     .context("cannot install the Ctrl-C and SIGTERM handler")?;
     let start = Instant::now();
     let mut tally = Tally {
-        warm_up: (tasks.len() / 10)
-            .max(WARM_UP_IMAGES.min(tasks.len()))
-            .max(1),
+        warm_up: (tasks.len() / 10).max(WARM_UP_IMAGES),
         ..Tally::default()
     };
     let (mut flushed, mut flush_every) = (Instant::now(), Duration::from_secs_f64(FLUSH_SECONDS));
@@ -369,6 +368,9 @@ pub fn batch(args: &BatchArgs) -> Result<()> {
             b as f64 / 1024.0,
             100.0 * (b as f64 / a as f64 - 1.0)
         ),
+        // Fewer images rendered than the warm-up: the peak alone, as growth over a
+        // settling allocator would mean nothing.
+        (None, Some(b)) => format!("; peak memory {:.1} MiB", b as f64 / 1024.0),
         _ => String::new(),
     };
     let logged = if tally.skipped_failed > 0 {
@@ -932,10 +934,9 @@ mod tests {
     use super::*;
 
     /// New frames cost the same however they are grouped, so only the rewriting of frames
-    /// already in the files lengthens the wait: were a flush's whole time counted, a
-    /// batch with a folder per image would wait 20 times as long after each flush and
-    /// gather 20 times as many frames for the next (at 1,000 images a second and 1 ms a
-    /// folder), without bound.
+    /// already in the files lengthens the wait: were a flush's whole time counted, a batch
+    /// with a folder per image would wait ever longer and gather ever more frames for the
+    /// next flush (3,000 grids, 8², 1 spp: 363 frames in 0.46 s, then 1,639 in 1.87 s).
     #[test]
     fn flushes_wait_for_the_rewriting_of_earlier_frames_only() {
         let s = Duration::from_secs_f64;
