@@ -466,6 +466,20 @@ fn base_sample(m: Material, wo: vec3<f32>, u_lobe: f32, u: vec2<f32>) -> BsdfSam
     return BsdfSample(wi, base_eval(m, wo, wi) / pdf, pdf, false, eta, true, lobe_of(wo, wi, lobe == 3u));
 }
 
+// The colour of m's diffuse lobe (Cycles' Diffuse Color pass).
+// mirror: src/render/bsdf.rs `diffuse_color`
+fn diffuse_color(m: Material) -> vec3<f32> {
+    if m.kind == MAT_DIFFUSE {
+        return m.albedo;
+    }
+    if m.kind == MAT_PBR {
+        let base = (1.0 - m.metallic) * (1.0 - m.transmission);
+        let coat = 1.0 - m.clearcoat * coat_fresnel(1.0);
+        return m.albedo * (vec3<f32>(1.0) - pbr_fresnel(m, 1.0)) * (base * coat);
+    }
+    return vec3<f32>(0.0);
+}
+
 // The sheen and clear-coat layers over the pbr base (src/render/bsdf.rs says how they
 // stack).
 

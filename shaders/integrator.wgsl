@@ -442,6 +442,7 @@ struct FirstHit {
     p: vec3<f32>,
     normal: vec3<f32>,
     albedo: vec3<f32>,
+    diffuse: vec3<f32>,
     material: u32,
     object: u32,
     cost: u32,
@@ -452,7 +453,7 @@ fn first_hit(ray: Ray) -> FirstHit {
     let counted = traverse_closest_counted(ray, T_INF, true);
     let hit = counted.hit;
     if hit.tri == NO_HIT {
-        return FirstHit(false, vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), NO_ID, NO_ID, counted.cost);
+        return FirstHit(false, vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), NO_ID, NO_ID, counted.cost);
     }
     let si = surface_at(ray, hit);
     let mat = material_at(load_material(si.material), si.uv, si.color);
@@ -460,5 +461,5 @@ fn first_hit(ray: Ray) -> FirstHit {
     let albedo = select(mat.albedo, vec3<f32>(1.0), mat.kind == MAT_DIELECTRIC);
     // TriVerts.v1.w holds the bits of the triangle's object index.
     let object = bitcast<u32>(load_tri(hit.tri).v1.w);
-    return FirstHit(true, si.p, normal, albedo, si.material, object, counted.cost);
+    return FirstHit(true, si.p, normal, albedo, diffuse_color(mat), si.material, object, counted.cost);
 }

@@ -57,7 +57,7 @@ fn is_finite3(v: vec3<f32>) -> bool {
 // A pixel's AOV accumulators: a texel per AOV, indexed by its bit's position, as the AOV's
 // film channel holds it. mirror: src/render/cpu.rs `AovSums`
 struct AovSums {
-    t: array<Texel, 7>,
+    t: array<Texel, 8>,
 }
 
 // The film texel of the AOV of bit `bit` for the pixel whose first texel is `base`.
@@ -76,6 +76,7 @@ fn add_aov_sample(sums: ptr<function, AovSums>, fh: FirstHit) {
     (*sums).t[1] = texel_add((*sums).t[1], vec4<f32>(fh.normal, 1.0));
     (*sums).t[2] = texel_add((*sums).t[2], vec4<f32>(fh.albedo, 1.0));
     (*sums).t[3] = texel_add((*sums).t[3], vec4<f32>(1.0, 0.0, 0.0, 1.0));
+    (*sums).t[7] = texel_add((*sums).t[7], vec4<f32>(fh.diffuse, 1.0));
 }
 
 // mirror: src/render/cpu.rs `set_aov_ids`
@@ -145,7 +146,7 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         var miss_rays = start.rays;
         for (var m = start.s; m < params.sample_end; m++) {
             if m == 0u && params.aovs != 0u {
-                set_aov_ids(&miss_sums, FirstHit(false, vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), NO_ID, NO_ID, 0u));
+                set_aov_ids(&miss_sums, FirstHit(false, vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), NO_ID, NO_ID, 0u));
             }
             miss_rays = texel_add(miss_rays, vec4<f32>(1.0, 0.0, 0.0, 0.0));
         }

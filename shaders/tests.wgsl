@@ -158,6 +158,17 @@ fn test_first_hit(@builtin(global_invocation_id) gid: vec3<u32>) {
     case_out(i, vec4<u32>(select(0u, 1u, fh.hit), fh.cost, fh.material, fh.object), u4(vec4<f32>(fh.normal, depth)));
 }
 
+// in: (x, y, _, _) | out: the pixel-centre ray's first hit: (albedo xyz, hit), (diffuse
+// colour xyz, material)
+@compute @workgroup_size(64)
+fn test_first_hit_colours(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = case_index(gid);
+    if i >= case_count() { return; }
+    let k = case_in(i, 0u);
+    let fh = first_hit(pixel_centre_ray(k.x, k.y));
+    case_out(i, vec4<u32>(u4(vec4<f32>(fh.albedo, 0.0)).xyz, select(0u, 1u, fh.hit)), vec4<u32>(u4(vec4<f32>(fh.diffuse, 0.0)).xyz, fh.material));
+}
+
 // in: (x, y, sample, _) | out: (radiance xyz, rays), (splat values summed xyz, the sum of
 // the pixels of the splats that land)
 @compute @workgroup_size(64)

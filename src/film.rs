@@ -49,6 +49,10 @@ pub enum Aov {
     MaterialId,
     /// BVH nodes visited plus triangles tested per camera ray.
     BvhCost,
+    /// The colour of the diffuse lobe at the hit (Cycles' Diffuse Color pass), a miss
+    /// counting 0: what the first hit scatters diffusely, as `render::bsdf::diffuse_color`
+    /// defines it.
+    DiffuseColor,
 }
 
 /// The id an [`Aov::ObjectId`] or [`Aov::MaterialId`] pixel holds where nothing is hit.
@@ -56,7 +60,7 @@ pub const NO_ID: u32 = u32::MAX;
 
 impl Aov {
     /// Every AOV, in channel order.
-    pub const ALL: [Aov; 7] = [
+    pub const ALL: [Aov; 8] = [
         Aov::Depth,
         Aov::Normal,
         Aov::Albedo,
@@ -64,6 +68,7 @@ impl Aov {
         Aov::ObjectId,
         Aov::MaterialId,
         Aov::BvhCost,
+        Aov::DiffuseColor,
     ];
 
     /// The name on the command line and of the film channel.
@@ -76,6 +81,7 @@ impl Aov {
             Aov::ObjectId => "object_id",
             Aov::MaterialId => "material_id",
             Aov::BvhCost => "bvh_cost",
+            Aov::DiffuseColor => "diffuse_color",
         }
     }
 
@@ -113,7 +119,7 @@ impl Aov {
         match self {
             Aov::Depth => (1, Accumulation::HitSamples),
             Aov::Normal => (3, Accumulation::HitSamples),
-            Aov::Albedo => (3, Accumulation::AllSamples),
+            Aov::Albedo | Aov::DiffuseColor => (3, Accumulation::AllSamples),
             Aov::Alpha | Aov::BvhCost => (1, Accumulation::AllSamples),
             Aov::ObjectId | Aov::MaterialId => (2, Accumulation::PixelCentre),
         }
@@ -129,6 +135,7 @@ impl Aov {
             Aov::ObjectId => &["object_id"],
             Aov::MaterialId => &["material_id"],
             Aov::BvhCost => &["bvh_cost"],
+            Aov::DiffuseColor => &["diffuse_color.R", "diffuse_color.G", "diffuse_color.B"],
         }
     }
 }
@@ -323,7 +330,7 @@ impl Film {
         Some(match aov {
             Aov::Depth => vec![scalar(&|v| v.map_or(f32::INFINITY, |v| v[0]))],
             Aov::Alpha | Aov::BvhCost => vec![scalar(&|v| v.map_or(0.0, |v| v[0]))],
-            Aov::Albedo => (0..3)
+            Aov::Albedo | Aov::DiffuseColor => (0..3)
                 .map(|k| scalar(&|v: Option<[f32; 3]>| v.map_or(0.0, |v| v[k])))
                 .collect(),
             Aov::Normal => {
@@ -833,7 +840,7 @@ fn srgb(x: f32) -> f32 {
 }
 
 /// An integer channel of a PNG, 8 or 16 bits.
-trait Quantum: Copy {
+pub trait Quantum: Copy {
     /// `x` in [0, 1] (clamped), rounded to the nearest level.
     fn quantise(x: f32) -> Self;
 }

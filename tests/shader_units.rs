@@ -1708,3 +1708,53 @@ fn first_hit_matches() {
     depth_err.check("test_first_hit");
     assert!(hits > cases.len() / 2, "{hits}");
 }
+
+/// The colours `first_hit` reads for the AOVs, the albedo and the diffuse colour (the
+/// `pbr` material's layers dim it), against their Rust twins on every pixel-centre ray of
+/// the corpus's five spheres of glTF materials (a clear coat, sheen, unlit and bare bases).
+#[test]
+fn first_hit_colours_match() {
+    let Some(ctx) = common::gpu("first_hit_colours_match") else {
+        return;
+    };
+    let scene = load_scene(&common::fs::data("gltf/corpus/materials.glb")).unwrap();
+    let rs = RenderScene::new(&scene, &BuildParams::default()).expect("BVH");
+    let settings = RenderSettings {
+        width: 96,
+        height: 48,
+        spp: 1,
+        ..scene.settings
+    };
+    let cases: Vec<Case> = (0..settings.height)
+        .flat_map(|y| (0..settings.width).map(move |x| [[x, y, 0, 0], [0; 4]]))
+        .collect();
+    let out = run(&ctx, &rs, &settings, "test_first_hit_colours", &cases);
+    let cam = CameraRays::new(&rs.camera, settings.width, settings.height);
+    let mut differ = Tally::new("hit or material differ (rays through edges)", 5e-3);
+    let mut albedo_err = Worst::new("albedo (abs)", 1e-6);
+    let mut diffuse_err = Worst::new("diffuse colour (abs)", 1e-6);
+    let mut kinds = std::collections::BTreeSet::new();
+    for (c, o) in cases.iter().zip(&out) {
+        let [x, y, _, _] = c[0];
+        let fh = first_hit(&rs, &pixel_centre_ray(&cam, x, y));
+        let show = || format!("({x}, {y}): CPU {fh:?}, GPU {o:?}");
+        if [fh.hit as u32, fh.material] != [o[0][3], o[1][3]] {
+            differ.add(show);
+            continue;
+        }
+        if fh.hit {
+            kinds.insert(fh.material);
+            albedo_err.add((v3(o[0]) - fh.albedo).abs().max_element() as f64, show);
+            diffuse_err.add((v3(o[1]) - fh.diffuse).abs().max_element() as f64, show);
+        }
+    }
+    eprintln!(
+        "test_first_hit_colours: {} cases, materials {kinds:?}",
+        cases.len()
+    );
+    differ.check("test_first_hit_colours", cases.len());
+    albedo_err.check("test_first_hit_colours");
+    diffuse_err.check("test_first_hit_colours");
+    // The five spheres and the studio's floor.
+    assert_eq!(kinds.len(), 6, "every sphere is hit: {kinds:?}");
+}

@@ -100,7 +100,7 @@ class Output:
     ) -> None: ...
 
 _View = Literal["standard", "filmic", "agx"]
-_Aov = Literal["depth", "normal", "albedo", "alpha", "object_id", "material_id", "bvh_cost"]
+_Aov = Literal["depth", "normal", "albedo", "alpha", "object_id", "material_id", "bvh_cost", "diffuse_color"]
 
 class Renderer:
     """A device opened once and kept across renders."""

@@ -17,7 +17,7 @@ use std::sync::{Arc, Mutex};
 /// radiance; premultiplied by `alpha` in a transparent render) and each AOV asked for:
 /// `depth` (H×W, inf where nothing was hit), `normal` and `albedo` (H×W×3), `alpha`
 /// (H×W), `object_id` and `material_id` (uint32, H×W, 4294967295 where nothing was hit),
-/// `bvh_cost` (H×W).
+/// `bvh_cost` (H×W), `diffuse_color` (H×W×3).
 #[pyclass(module = "meshtrace", frozen, mapping)]
 pub struct Output {
     film: Film,

@@ -188,7 +188,8 @@ impl Renderer {
     /// Renders `scene` (a Scene, or a path to load) from its own camera or `camera`, with
     /// the command line's settings under the same names; those left None keep the scene's
     /// own (a scene file's `[render]`) or the defaults. `aovs` lists the images to add
-    /// beside `color`: depth, normal, albedo, alpha, object_id, material_id, bvh_cost.
+    /// beside `color`: depth, normal, albedo, alpha, object_id, material_id, bvh_cost,
+    /// diffuse_color.
     /// Returns an Output, a mapping of NumPy arrays. Ctrl-C stops the render at its next
     /// pass and raises KeyboardInterrupt.
     #[pyo3(signature = (

@@ -637,6 +637,24 @@ pub fn base_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfS
 // ---------------------------------------------------------------------------------------
 // The sheen and clear-coat layers over the pbr base.
 
+/// The colour of `m`'s diffuse lobe (Cycles' Diffuse Color pass): a `diffuse` material's
+/// albedo; a `pbr` material's base colour where it is a dielectric that does not transmit
+/// ((1 − metallic)(1 − transmission)), times the light that its specular layer and clear
+/// coat let through at normal incidence (Cycles dims its diffuse closure by the layers'
+/// albedo above it); nothing for the kinds without a diffuse lobe (conductors,
+/// `dielectric`, `unlit`). mirror: shaders/bsdf.wgsl `diffuse_color`
+pub fn diffuse_color(m: &Material) -> Vec3 {
+    match m.kind {
+        MaterialKind::DIFFUSE => m.albedo,
+        MaterialKind::PBR => {
+            let base = (1.0 - m.metallic) * (1.0 - m.transmission);
+            let coat = 1.0 - m.clearcoat * coat_fresnel(1.0);
+            m.albedo * (Vec3::ONE - pbr_fresnel(m, 1.0)) * (base * coat)
+        }
+        _ => Vec3::ZERO,
+    }
+}
+
 /// Whether a `pbr` material has a sheen or a clear coat over its base.
 /// mirror: shaders/bsdf.wgsl `has_layers`
 pub fn has_layers(m: &Material) -> bool {
@@ -837,4 +855,39 @@ pub fn pbr_sample(m: &Material, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSa
         eta,
         lobe,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_diffuse_colour_is_the_base_under_its_layers() {
+        let base = Vec3::new(0.8, 0.1, 0.1);
+        let with = |kind, f: &dyn Fn(&mut Material)| {
+            let mut m = Material {
+                albedo: base,
+                ..Material::new(kind)
+            };
+            f(&mut m);
+            diffuse_color(&m)
+        };
+        let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 1e-6;
+        assert_eq!(with(MaterialKind::DIFFUSE, &|_| {}), base);
+        for kind in [
+            MaterialKind::CONDUCTOR,
+            MaterialKind::ROUGH_CONDUCTOR,
+            MaterialKind::DIELECTRIC,
+            MaterialKind::UNLIT,
+        ] {
+            assert_eq!(with(kind, &|_| {}), Vec3::ZERO, "{}", kind.name());
+        }
+        // IOR 1.5: F0 = 0.04 at normal incidence, and the coat's is 0.04 too.
+        let pbr = MaterialKind::PBR;
+        assert!(close(with(pbr, &|_| {}), base * 0.96));
+        assert!(close(with(pbr, &|m| m.metallic = 0.25), base * 0.72));
+        assert!(close(with(pbr, &|m| m.transmission = 0.5), base * 0.48));
+        assert!(close(with(pbr, &|m| m.clearcoat = 1.0), base * 0.96 * 0.96));
+        assert!(close(with(pbr, &|m| m.specular = 0.0), base));
+    }
 }

@@ -260,7 +260,7 @@ fn fill(film: &mut Film, pixels: &[PixelSums], aovs: &[AovSums]) {
 }
 
 /// Adds one camera sample's first hit to a pixel's AOV sums: its cost, and where it hit,
-/// its depth along the viewing axis, normal, albedo and coverage.
+/// its depth along the viewing axis, normal, albedo, coverage and diffuse colour.
 /// mirror: shaders/render.wgsl `add_aov_sample`
 pub fn add_aov_sample(sums: &mut AovSums, cam: &CameraRays, fh: &FirstHit) {
     let t = &mut sums.0;
@@ -278,6 +278,7 @@ pub fn add_aov_sample(sums: &mut AovSums, cam: &CameraRays, fh: &FirstHit) {
     add(Aov::Normal, fh.normal.to_array());
     add(Aov::Albedo, fh.albedo.to_array());
     add(Aov::Alpha, [1.0, 0.0, 0.0]);
+    add(Aov::DiffuseColor, fh.diffuse.to_array());
 }
 
 /// Sets a pixel's ids from its centre ray's first hit: each id as its low and high 16

@@ -9,7 +9,7 @@
 
 use super::bsdf::{
     bsdf_draws_direction, bsdf_draws_lobe, bsdf_eval, bsdf_is_delta, bsdf_pdf, bsdf_sample,
-    bsdf_transmits,
+    bsdf_transmits, diffuse_color,
 };
 use super::camera::CameraRays;
 use super::caustics::{
@@ -676,6 +676,8 @@ pub struct FirstHit {
     pub normal: Vec3,
     /// The reflectance: albedo or base colour with its texture, 1 for `dielectric`.
     pub albedo: Vec3,
+    /// The colour of the diffuse lobe ([`diffuse_color`]).
+    pub diffuse: Vec3,
     pub material: u32,
     pub object: u32,
     /// BVH nodes visited plus triangles tested.
@@ -689,6 +691,7 @@ impl FirstHit {
         p: Vec3::ZERO,
         normal: Vec3::ZERO,
         albedo: Vec3::ZERO,
+        diffuse: Vec3::ZERO,
         material: NO_ID,
         object: NO_ID,
         cost: 0,
@@ -746,6 +749,7 @@ fn first_hit_at(scene: &RenderScene, ray: &Ray, hit: Option<Hit>, cost: u32) -> 
         } else {
             mat.albedo
         },
+        diffuse: diffuse_color(&mat),
         material: si.material,
         object: scene.tris[hit.tri as usize].object(),
         cost,
