@@ -42,11 +42,27 @@ struct JobFile {
     elevation_range: Option<[f32; 2]>,
     /// An orthographic preset's view width in normalised units (Blender's `ortho_scale`).
     ortho_scale: Option<f32>,
-    /// TRELLIS's `--save_normal`: each view's normal pass beside its image.
+    /// TRELLIS's `--save_depth`, `--save_normal`, `--save_albedo` and `--save_mist`: each
+    /// view's passes beside its image.
+    save_depth: Option<bool>,
     save_normal: Option<bool>,
+    save_albedo: Option<bool>,
+    save_mist: Option<bool>,
     fov: Option<f32>,
     up: Option<String>,
     output: Option<String>,
+}
+
+impl JobFile {
+    /// TRELLIS's pass flags by manifest key, as given.
+    fn passes(&self) -> [(&'static str, Option<bool>); 4] {
+        [
+            ("save_depth", self.save_depth),
+            ("save_normal", self.save_normal),
+            ("save_albedo", self.save_albedo),
+            ("save_mist", self.save_mist),
+        ]
+    }
 }
 
 /// What a job renders.
@@ -158,6 +174,7 @@ impl Manifest {
         let mut out = Vec::new();
         for (i, j) in jobs.into_iter().enumerate() {
             let field = |key: &str| format!("jobs[{i}].{key}");
+            let passes = j.passes();
             let source = match (j.meshes, j.scene) {
                 (Some(glob), None) => Source::Meshes(glob),
                 (None, Some(scene)) => Source::Scene(PathBuf::from(scene)),
@@ -275,16 +292,19 @@ impl Manifest {
                         }
                         (*min, *max) = (lo, hi);
                     }
-                    if let Some(save) = j.save_normal {
-                        if p.poses != Poses::Transforms {
-                            return Err(invalid(
-                                field("save_normal"),
-                                format!(
-                                    "is TRELLIS's `--save_normal`, which the `{name}` script does not take"
-                                ),
-                            ));
+                    for (key, given) in passes {
+                        let Some(save) = given else { continue };
+                        match p.passes.flag(key) {
+                            Some(flag) if p.poses == Poses::Transforms => *flag = save,
+                            _ => {
+                                return Err(invalid(
+                                    field(key),
+                                    format!(
+                                        "is TRELLIS's `--{key}`, which the `{name}` script does not take"
+                                    ),
+                                ));
+                            }
                         }
-                        p.save_normal = save;
                     }
                     if let Some(e) = j.elevation {
                         p.elevation = e;
@@ -316,10 +336,12 @@ impl Manifest {
                     Some(p)
                 }
             };
-            if preset.is_none() && j.save_normal.is_some() {
+            if preset.is_none()
+                && let Some((key, _)) = passes.into_iter().find(|(_, g)| g.is_some())
+            {
                 return Err(invalid(
-                    field("save_normal"),
-                    "is TRELLIS's `--save_normal`; add preset = \"trellis\"".into(),
+                    field(key),
+                    format!("is TRELLIS's `--{key}`; add preset = \"trellis\""),
                 ));
             }
             if preset.is_none() {

@@ -16,6 +16,7 @@ use crate::scene::texture::{ImageType, TextureError, TextureRef, TextureSource, 
 use crate::scene::{BounceLimits, Scene, SceneError, Sky};
 use glam::{DVec3, Vec3};
 
+use super::trellis::{Passes, depth_range};
 use super::wonder3d;
 
 /// The presets there are, by their manifest names.
@@ -187,9 +188,9 @@ pub struct Preset {
     pub bounces: BounceLimits,
     pub lighting: Lighting,
     pub poses: Poses,
-    /// TRELLIS's `--save_normal`: each view's normal pass beside its image
-    /// ([`super::trellis`]). Off, as `dataset_toolkits/render.py` runs the script.
-    pub save_normal: bool,
+    /// TRELLIS's `--save_depth`, `--save_normal`, `--save_albedo` and `--save_mist`: each
+    /// view's passes beside its image ([`super::trellis`]).
+    pub passes: Passes,
 }
 
 /// The light paths of the Zero123 script and those made from it (objaverse-rendering,
@@ -236,7 +237,7 @@ impl Preset {
                 bounces: SCRIPT_BOUNCES,
                 lighting: Lighting::AreaAbove,
                 poses: Poses::None,
-                save_normal: false,
+                passes: Passes::default(),
             }),
             // liuyuan-pal/SyncDreamer blender_script.py, --camera_type fixed (its target
             // views): 16 views on a ring at 30° elevation, distance 1.5, the same lens,
@@ -260,7 +261,7 @@ impl Preset {
                 bounces: SCRIPT_BOUNCES,
                 lighting: Lighting::FactoryPoint { world: 0.5 },
                 poses: Poses::None,
-                save_normal: false,
+                passes: Passes::default(),
             }),
             // cvlab-columbia/zero123 objaverse-rendering/scripts/blender_script.py: views
             // at random on a shell of radius 1.5–2.2, the same lens, 512², 128 samples,
@@ -288,7 +289,7 @@ impl Preset {
                 bounces: SCRIPT_BOUNCES,
                 lighting: Lighting::Zero123,
                 poses: Poses::Npy,
-                save_normal: false,
+                passes: Passes::default(),
             }),
             // microsoft/TRELLIS dataset_toolkits/render.py and blender_script/render.py: 150
             // views on a Hammersley sphere of radius 2, a 40° field of view, 512², 128
@@ -311,7 +312,7 @@ impl Preset {
                 bounces: SCRIPT_BOUNCES,
                 lighting: Lighting::Trellis,
                 poses: Poses::Transforms,
-                save_normal: false,
+                passes: Passes::default(),
             }),
             // allenai/objaverse-xl scripts/rendering/blender_script.py: Zero123's shell of
             // cameras (looking at the file's origin), four shadowless suns, 512², a `.npy`
@@ -356,7 +357,7 @@ impl Preset {
                 },
                 lighting: Lighting::Wonder3d,
                 poses: Poses::RtTxt,
-                save_normal: false,
+                passes: Passes::default(),
             }),
             _ => Err(format!(
                 "`{name}` is not a preset; there are {}",
@@ -388,13 +389,11 @@ impl Preset {
     }
 
     /// The AOVs the preset's files are made of, whatever else the manifest asks for.
-    pub fn aovs(&self) -> &'static [crate::film::Aov] {
+    pub fn aovs(&self) -> Vec<crate::film::Aov> {
         if self.rig() {
-            &[crate::film::Aov::Normal, crate::film::Aov::ObjectId]
-        } else if self.save_normal {
-            &[crate::film::Aov::Normal]
+            vec![crate::film::Aov::Normal, crate::film::Aov::ObjectId]
         } else {
-            &[]
+            self.passes.aovs()
         }
     }
 
@@ -517,7 +516,7 @@ impl Preset {
     /// the normalisation (`scale`, `offset` in Blender's frame), and per view its image, its
     /// horizontal field of view in radians and its camera→world matrix in Blender's camera
     /// convention (columns right, up, back and the position), as `get_transform_matrix`
-    /// writes them.
+    /// writes them; with the depth pass, the range its PNG maps to [0, 1].
     pub fn trellis_transforms(&self, uid: &str, norm: &Normalisation) -> serde_json::Value {
         let frames: Vec<serde_json::Value> = (0..self.views)
             .map(|view| {
@@ -527,11 +526,16 @@ impl Preset {
                     .map(|k| [r[k], u[k], b[k], c[k]])
                     .chain([[0.0, 0.0, 0.0, 1.0]])
                     .collect();
-                serde_json::json!({
+                let mut frame = serde_json::json!({
                     "file_path": format!("{view:03}.png"),
                     "camera_angle_x": (self.fov as f64).to_radians(),
                     "transform_matrix": m,
-                })
+                });
+                if self.passes.depth {
+                    let [min, max] = depth_range(self.distance as f64);
+                    frame["depth"] = serde_json::json!({"min": min, "max": max});
+                }
+                frame
             })
             .collect();
         serde_json::json!({

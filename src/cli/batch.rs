@@ -9,7 +9,7 @@ use meshtrace::batch::preset::{Poses, Preset, metadata, write_npy};
 use meshtrace::batch::transforms::{self, Frame, Intrinsics};
 use meshtrace::batch::{self, Manifest, Task};
 use meshtrace::batch::{syncdreamer, trellis, wonder3d};
-use meshtrace::film::{Aov, BitDepth, DisplayTransform, Film, Format};
+use meshtrace::film::{BitDepth, DisplayTransform, Film, Format};
 use meshtrace::pipeline::Prepared;
 use meshtrace::render::backend::Backend;
 use meshtrace::request::RenderRequest;
@@ -118,14 +118,13 @@ fn peak_kib() -> Option<u64> {
 }
 
 /// Whether `task`'s output is complete: the image (written last, by rename) and, beside a
-/// non-EXR image with AOVs, their `.aovs.exr`.
-fn complete(task: &Task, aovs: bool, normals: bool) -> bool {
+/// non-EXR image with AOVs, their `.aovs.exr`, and TRELLIS's `passes`.
+fn complete(task: &Task, aovs: bool, passes: trellis::Passes) -> bool {
     let image = task.output.is_file();
     let beside = !aovs
         || Format::from_path(&task.output).is_ok_and(|f| f == Format::Exr)
         || Film::aov_path(&task.output).is_file();
-    let normal_pass = !normals || trellis::normal_path(&task.output).is_file();
-    image && beside && normal_pass
+    image && beside && passes.paths(&task.output).iter().all(|p| p.is_file())
 }
 
 /// The `transforms.json` entry of `task` seen through `camera`.
@@ -497,6 +496,9 @@ enum Loaded {
 struct Input {
     /// The request its images take: the manifest's, the job's and its preset's.
     request: RenderRequest,
+    /// The AOVs the manifest asks for, which go beside the images (a preset's own go into
+    /// its files).
+    saved_aovs: u32,
     /// Per task, whether its output is complete already.
     done: Vec<bool>,
     norm: Option<Normalisation>,
@@ -527,9 +529,9 @@ fn load_input(
     // Wonder3D's preset writes its AOVs into its own images, not beside them.
     let named = job.preset.as_ref().is_some_and(Preset::rig);
     let aovs = request.aov_mask() != 0 && !named;
-    // A rerun that asks for TRELLIS's normal pass renders the views that lack it.
-    let normals = job.preset.as_ref().is_some_and(|p| p.save_normal);
-    let done: Vec<bool> = group.iter().map(|t| complete(t, aovs, normals)).collect();
+    // A rerun that asks for TRELLIS's passes renders the views that lack them.
+    let passes = job.preset.as_ref().map(|p| p.passes).unwrap_or_default();
+    let done: Vec<bool> = group.iter().map(|t| complete(t, aovs, passes)).collect();
     // A preset writes its script's files alone: no transforms.json.
     let recorded = job.preset.is_some() || all_recorded(group);
     if done.iter().all(|&d| d) && recorded {
@@ -542,6 +544,8 @@ fn load_input(
         ..Default::default()
     }
     .over(&request.over(&preset_request));
+    // The AOVs the manifest asks for, before a preset adds those its own files need.
+    let saved_aovs = request.aov_mask();
     if let Some(preset) = &job.preset
         && !preset.aovs().is_empty()
     {
@@ -636,6 +640,7 @@ fn load_input(
     }
     Ok(Loaded::Ready(Box::new(Input {
         request,
+        saved_aovs,
         done,
         norm,
         uid,
@@ -685,6 +690,7 @@ fn render_input(
     let job = &manifest.jobs[group[0].job];
     let Input {
         request,
+        saved_aovs,
         done,
         norm,
         uid,
@@ -707,6 +713,7 @@ fn render_input(
         norm: norm.as_ref(),
         uid: &uid,
         bit_depth: request.bit_depth(),
+        saved_aovs,
         view,
         quiet,
     };
@@ -784,6 +791,8 @@ struct Encoder<'a> {
     norm: Option<&'a Normalisation>,
     uid: &'a str,
     bit_depth: BitDepth,
+    /// The AOVs the manifest asks for ([`Input::saved_aovs`]).
+    saved_aovs: u32,
     view: &'a DisplayTransform,
     quiet: bool,
 }
@@ -846,13 +855,13 @@ impl Encoder<'_> {
             (Some(preset), Some(norm)) if preset.poses == Poses::RtTxt => {
                 write_wonder3d(preset, norm, self.uid, task, &film, camera, self.view)?;
             }
-            (Some(preset), Some(_)) if preset.save_normal => {
-                let path = trellis::normal_path(&task.output);
-                let pass = trellis::normal_pass(&film)
-                    .map_err(|m| anyhow::anyhow!("{}: {m}", task.output.display()))?;
-                trellis::write_normal_exr(&path, film.width, film.height, pass)?;
-                // The pass is the normal AOV's file: none goes beside the image too.
-                film.saved_aovs &= !Aov::Normal.bit();
+            (Some(preset), Some(norm)) if preset.passes.any() => {
+                let frame = [preset.distance as f64, norm.scale as f64];
+                let passes = preset.passes;
+                passes.write(&task.output, &film, camera, frame, self.view)?;
+                // The passes are the AOVs' files: only those the manifest asks for go beside
+                // the image too.
+                film.saved_aovs = self.saved_aovs;
                 film.save_as(&task.output, self.bit_depth, self.view)?;
             }
             _ => film.save_as(&task.output, self.bit_depth, self.view)?,

@@ -636,6 +636,21 @@ def objaverse_xl_cycles(glb, out_dir, views, uid="spheres"):
     cycles_views(scene, out_dir, shell_cameras(uid, views), 512, target)
 
 
+def trellis_angles(uid, views, count):
+    """The yaw and pitch (radians) of views `views` of `count` on TRELLIS's Hammersley
+    sphere, with the offsets meshtrace's trellis preset draws for `uid`
+    (`uniform(uid, 2^32 - 1, 10)` and `11`), as `dataset_toolkits/render.py` passes them
+    to its Blender script: view: (yaw, pitch)."""
+    o0, o1 = uniform(uid, (1 << 32) - 1, 10), uniform(uid, (1 << 32) - 1, 11)
+    angles = {}
+    for i in views:
+        u = i / count + o0 / count
+        v = int(f"{i:032b}"[::-1], 2) / 2**32 + o1
+        u = 2 * u if u < 0.25 else 2 / 3 * u + 1 / 3
+        angles[i] = (2 * math.pi * v, math.acos(1 - 2 * u) - math.pi / 2)
+    return angles
+
+
 def trellis_cycles(glb, out_dir, views, uid="spheres", count=150, size=512, normals=False):
     """microsoft/TRELLIS's dataset_toolkits/blender_script/render.py on `glb`: the object
     normalised first (its root objects under one empty), then the lights made in the
@@ -643,7 +658,7 @@ def trellis_cycles(glb, out_dir, views, uid="spheres", count=150, size=512, norm
     0.25 m scaled by 100, at (0, 0, 10) facing down, and the one of 1,000 W at (0, 0, -10)
     that faces away), the factory world; views of `count` on the Hammersley sphere of
     radius 2 with the offsets meshtrace's trellis preset draws for `uid`
-    (`uniform(uid, 2^32 - 1, 10)` and `11`), a 40° field of view, `filter_width` 1,
+    (`trellis_angles`), a 40° field of view, `filter_width` 1,
     `size`². The reference for meshtrace's trellis preset; with `normals`, for its
     `save_normal` (cycles_views)."""
     bpy.ops.wm.read_factory_settings()
@@ -659,13 +674,8 @@ def trellis_cycles(glb, out_dir, views, uid="spheres", count=150, size=512, norm
         light.data.energy = energy
         light.location = location
         light.scale = (scale, scale, scale)
-    o0, o1 = uniform(uid, (1 << 32) - 1, 10), uniform(uid, (1 << 32) - 1, 11)
     cameras = {}
-    for i in views:
-        u = i / count + o0 / count
-        v = int(f"{i:032b}"[::-1], 2) / 2**32 + o1
-        u = 2 * u if u < 0.25 else 2 / 3 * u + 1 / 3
-        pitch, yaw = math.acos(1 - 2 * u) - math.pi / 2, 2 * math.pi * v
+    for i, (yaw, pitch) in trellis_angles(uid, views, count).items():
         cameras[i] = (
             2 * math.cos(yaw) * math.cos(pitch),
             2 * math.sin(yaw) * math.cos(pitch),

@@ -24,3 +24,11 @@ transform draco "$out/crowd.glb" "$out/crowd_draco.glb"
 transform draco "$out/skinned_arm.glb" "$out/skinned_arm_draco.glb"
 (cd "$TOOLS" && NODE_PATH=node_modules node "$here/spec_gloss.cjs" "$out")
 (cd "$TOOLS" && node "$here/validate.mjs" "$out"/*.glb)
+# TRELLIS's own files of its optional passes need Blender 4.5 (PYTHON45 with
+# `pip install bpy==4.5.15`) and the script (TRELLIS_SCRIPT: microsoft/TRELLIS's
+# dataset_toolkits/blender_script/render.py).
+if [ -n "${PYTHON45:-}" ] && [ -n "${TRELLIS_SCRIPT:-}" ]; then
+    "$PYTHON45" "$here/trellis_passes.py" "$TRELLIS_SCRIPT" "$out" | tail -n 1
+else
+    echo "trellis-passes.blender45 kept as it is: set PYTHON45 and TRELLIS_SCRIPT to remake it"
+fi
