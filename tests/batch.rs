@@ -1639,23 +1639,13 @@ fn the_trellis_passes_are_the_scripts_own_files() {
         return;
     }
     let dir = TempDir::new("batch-trellis-passes");
-    let models = dir.path().join("models");
-    std::fs::create_dir_all(&models).unwrap();
-    std::fs::copy(
-        data("gltf/corpus/materials_joined.glb"),
-        models.join("spheres.glb"),
-    )
-    .unwrap();
-    std::fs::write(
-        dir.path().join("m.toml"),
-        "[render]\nspp = 128\nwidth = 256\nheight = 256\nview_transform = \"agx\"\n\n\
-         [[jobs]]\nmeshes = \"models/*\"\npreset = \"trellis\"\nviews = 2\n\
-         save_depth = true\nsave_normal = true\nsave_albedo = true\nsave_mist = true\n",
-    )
-    .unwrap();
-    let (code, stderr) = run(&dir, &["batch", "m.toml", "--device", "cpu", "-q"]);
-    assert_eq!(code, 0, "{stderr}");
-    let ours = dir.path().join("renders/spheres");
+    let (ours, _) = render_trellis(
+        &dir,
+        "gltf/corpus/materials_joined.glb",
+        "spheres.glb",
+        "spp = 128\nwidth = 256\nheight = 256\nview_transform = \"agx\"\n",
+        "views = 2\nsave_depth = true\nsave_normal = true\nsave_albedo = true\nsave_mist = true\n",
+    );
     let blender = data("gltf/corpus/trellis-passes.blender45");
     assert_eq!(files_in(&ours), files_in(&blender));
     let frames = |folder: &Path| {
@@ -1746,9 +1736,31 @@ fn exr_channels(path: &Path, names: [&str; 3]) -> Vec<glam::DVec3> {
         .collect()
 }
 
-/// Renders `model` (under tests/data), copied as `name`, with the trellis preset and
-/// `save_normal = true`: `views` views of `size`² at `spp` samples. Returns the object's
-/// folder and the models' folder.
+/// Renders `model` (under tests/data), copied as `name`, with the trellis preset, the
+/// manifest's `[render]` table holding `render` and its job `job` (each lines of TOML).
+/// Returns the object's folder and the models' folder.
+fn render_trellis(
+    dir: &TempDir,
+    model: &str,
+    name: &str,
+    render: &str,
+    job: &str,
+) -> (PathBuf, PathBuf) {
+    let models = dir.path().join("models");
+    std::fs::create_dir_all(&models).unwrap();
+    std::fs::copy(data(model), models.join(name)).unwrap();
+    std::fs::write(
+        dir.path().join("m.toml"),
+        format!("[render]\n{render}\n[[jobs]]\nmeshes = \"models/*\"\npreset = \"trellis\"\n{job}"),
+    )
+    .unwrap();
+    let (code, stderr) = run(dir, &["batch", "m.toml", "--device", "cpu", "-q"]);
+    assert_eq!(code, 0, "{stderr}");
+    let uid = name.split('.').next().unwrap_or_default();
+    (dir.path().join("renders").join(uid), models)
+}
+
+/// [`render_trellis`] with `save_normal = true`: `views` views of `size`² at `spp` samples.
 fn render_trellis_normals(
     dir: &TempDir,
     model: &str,
@@ -1757,21 +1769,9 @@ fn render_trellis_normals(
     spp: u32,
     views: u32,
 ) -> (PathBuf, PathBuf) {
-    let models = dir.path().join("models");
-    std::fs::create_dir_all(&models).unwrap();
-    std::fs::copy(data(model), models.join(name)).unwrap();
-    std::fs::write(
-        dir.path().join("m.toml"),
-        format!(
-            "[render]\nspp = {spp}\nwidth = {size}\nheight = {size}\n\n[[jobs]]\n\
-             meshes = \"models/*\"\npreset = \"trellis\"\nviews = {views}\nsave_normal = true\n"
-        ),
-    )
-    .unwrap();
-    let (code, stderr) = run(dir, &["batch", "m.toml", "--device", "cpu", "-q"]);
-    assert_eq!(code, 0, "{stderr}");
-    let uid = name.split('.').next().unwrap_or_default();
-    (dir.path().join("renders").join(uid), models)
+    let render = format!("spp = {spp}\nwidth = {size}\nheight = {size}\n");
+    let job = format!("views = {views}\nsave_normal = true\n");
+    render_trellis(dir, model, name, &render, &job)
 }
 
 /// The outward normal of the face by which the ray from `eye` along `d` enters the box
