@@ -542,15 +542,7 @@ scale = 0.4
 color = [1.0, 1.0, 1.0]
 "#,
     );
-    let all = [
-        Aov::Depth,
-        Aov::Normal,
-        Aov::Albedo,
-        Aov::Alpha,
-        Aov::ObjectId,
-        Aov::MaterialId,
-        Aov::BvhCost,
-    ];
+    let all = Aov::ALL;
     let job = RenderJob::new(scene.settings).with_aovs(Aov::mask(&all), false);
     let full = common::render_both_job("geometry: full", &scene, &job);
     let geometry = common::render_both_job("geometry", &scene, &job.clone().with_geometry(true));

@@ -1386,6 +1386,144 @@ fn the_wonder3d_preset_writes_its_scripts_files_and_poses_that_agree() {
     }
 }
 
+/// The wonder3d preset against Wonder3D's own script: `render_codes/blenderProc_ortho.py`
+/// run unchanged through BlenderProc in Blender 4.2 (`tools/gltf_corpus/
+/// wonder3d_blenderproc.py`; `wonder3d.blenderproc`) on the corpus's five spheres, the rig
+/// unturned (`random_pose` off), 128², Filmic. The folder holds the script's files and no
+/// others; every `_RT.txt` is the script's within 10⁻⁶ (2.7 × 10⁻⁷ measured: Blender's
+/// single-precision rounding); `scale_offset_matrix.txt` holds its scale (within 10⁻⁷
+/// relative) and orthographic scale, and its offset where Blender scales the file's one
+/// root node about that node's translation T: the preset's −s c less (1 − s) T. Per view,
+/// the masks (alpha) have an IoU of at least 0.99 (1.0 measured in all 13 views); where
+/// both cover, the normals differ by a median of at most 8 levels and a 90th percentile of
+/// at most 48 (4–5 and 26–39 measured), the colours by at most 14 and 40 (6–10 and 16–27:
+/// Cycles' 1,024 adaptive samples denoised), and by a mean of at most 4 levels either way
+/// (10 in the end-on views, whose 216 pixels are one sphere's; −2.6 to −0.3 and −7.8
+/// measured). The script's WebP is lossy: decoded by libwebp (Pillow), its normals are 2–3
+/// levels (median) and 15–23 (90th percentile) from the preset's.
+#[test]
+fn the_wonder3d_preset_writes_what_its_script_writes_in_blenderproc() {
+    let test = "the_wonder3d_preset_writes_what_its_script_writes_in_blenderproc";
+    if let Err(e) = meshtrace::film::lut_folder(meshtrace::film::ViewTransform::Filmic) {
+        let required = std::env::var("MESHTRACE_REQUIRE_BLENDER_LUTS").is_ok_and(|v| v == "1");
+        assert!(!required, "MESHTRACE_REQUIRE_BLENDER_LUTS=1 but {e}");
+        eprintln!("{test}: skipped: {e}");
+        return;
+    }
+    let dir = TempDir::new("batch-wonder3d-blenderproc");
+    let models = dir.path().join("models");
+    std::fs::create_dir_all(&models).unwrap();
+    let glb = data("gltf/corpus/materials_joined.glb");
+    std::fs::copy(&glb, models.join("spheres.glb")).unwrap();
+    std::fs::write(
+        dir.path().join("m.toml"),
+        "[render]\nwidth = 128\nheight = 128\nspp = 64\nview_transform = \"filmic\"\n\n\
+         [[jobs]]\nmeshes = \"models/*\"\npreset = \"wonder3d\"\nrandom_pose = false\n",
+    )
+    .unwrap();
+    let (code, stderr) = run(&dir, &["batch", "m.toml", "--device", "cpu", "-q"]);
+    assert_eq!(code, 0, "{stderr}");
+    let ours = dir.path().join("views/sp/spheres");
+    let script = data("gltf/corpus/wonder3d.blenderproc");
+    assert_eq!(files_in(&ours), files_in(&script));
+    let numbers = |path: PathBuf| -> Vec<f64> {
+        std::fs::read_to_string(&path)
+            .unwrap()
+            .split_whitespace()
+            .map(|v| v.parse().unwrap())
+            .collect()
+    };
+    // The file's one root node, where Blender's importer puts the object's origin: its
+    // glTF translation (x, y, z) is Blender's (x, −z, y).
+    let gltf = ::gltf::Gltf::from_slice(&std::fs::read(&glb).unwrap()).unwrap();
+    let root = gltf.default_scene().unwrap().nodes().next().unwrap();
+    let [x, y, z] = root.transform().decomposed().0.map(f64::from);
+    let origin = [x, -z, y];
+    let (a, b) = (
+        numbers(ours.join("scale_offset_matrix.txt")),
+        numbers(script.join("scale_offset_matrix.txt")),
+    );
+    let s = b[0];
+    assert!((a[0] - s).abs() <= 1e-7 * s, "scale {} against {s}", a[0]);
+    for k in 0..3 {
+        let expected = a[1 + k] - (1.0 - s) * origin[k];
+        assert!(
+            (expected - b[1 + k]).abs() < 1e-6,
+            "offset {k}: {a:?} {b:?}"
+        );
+    }
+    assert_eq!(a[4], b[4], "ortho_scale");
+    let percentile = |mut d: Vec<u32>, p: usize| {
+        d.sort_unstable();
+        d[(d.len() - 1) * p / 100]
+    };
+    let rgba = |path: PathBuf| image::open(&path).unwrap().into_rgba8().into_raw();
+    for entry in files_in(&script) {
+        let Some(name) = entry.strip_suffix("_RT.txt") else {
+            continue;
+        };
+        let (a, b) = (numbers(ours.join(&entry)), numbers(script.join(&entry)));
+        let worst = a
+            .iter()
+            .zip(&b)
+            .map(|(p, q)| (p - q).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-6, "{entry}: {worst}");
+        let (rgb, their_rgb) = (
+            rgba(ours.join(format!("rgb_{name}.webp"))),
+            rgba(script.join(format!("rgb_{name}.webp"))),
+        );
+        let (normals, their_normals) = (
+            rgba(ours.join(format!("normals_{name}.webp"))),
+            rgba(script.join(format!("normals_{name}.webp"))),
+        );
+        let covered = |px: &[u8], i: usize| px[4 * i + 3] > 127;
+        let pixels = rgb.len() / 4;
+        let both: Vec<usize> = (0..pixels)
+            .filter(|&i| covered(&rgb, i) && covered(&their_rgb, i))
+            .collect();
+        let either = (0..pixels)
+            .filter(|&i| covered(&rgb, i) || covered(&their_rgb, i))
+            .count();
+        let iou = both.len() as f64 / either as f64;
+        assert!(iou >= 0.99 && both.len() > 200, "{name}: IoU {iou}");
+        let levels = |a: &[u8], b: &[u8]| -> Vec<u32> {
+            both.iter()
+                .map(|&i| {
+                    (0..3)
+                        .map(|c| a[4 * i + c].abs_diff(b[4 * i + c]) as u32)
+                        .max()
+                        .unwrap_or(0)
+                })
+                .collect()
+        };
+        for (what, d, median, p90) in [
+            ("normals", levels(&normals, &their_normals), 8, 48),
+            ("colour", levels(&rgb, &their_rgb), 14, 40),
+        ] {
+            let (m, q) = (percentile(d.clone(), 50), percentile(d, 90));
+            eprintln!("{name} {what}: median {m}, 90th percentile {q}");
+            assert!(m <= median && q <= p90, "{name} {what}: {m}, {q}");
+        }
+        // The colour's mean difference, which the noise and the WebP average out of: a
+        // light or a material off shows here first.
+        let (ours_rgb, theirs_rgb) = (&rgb, &their_rgb);
+        let sum: i64 = both
+            .iter()
+            .flat_map(|&i| {
+                (0..3).map(move |c| ours_rgb[4 * i + c] as i64 - theirs_rgb[4 * i + c] as i64)
+            })
+            .sum();
+        let bias = sum as f64 / (3 * both.len()) as f64;
+        let limit = if both.len() >= 500 { 4.0 } else { 10.0 };
+        eprintln!("{name} colour: mean difference {bias:.2}");
+        assert!(
+            bias.abs() <= limit,
+            "{name}: colour off by {bias:.2} levels on average"
+        );
+    }
+}
+
 /// The trellis preset, checked through the `transforms.json` it writes per object: the unit
 /// box, the normalisation's scale and offset, and per view the image, the field of view and
 /// a camera→world matrix (Blender's camera convention) of a camera at distance 2 looking at

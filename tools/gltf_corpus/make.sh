@@ -32,3 +32,11 @@ if [ -n "${PYTHON45:-}" ] && [ -n "${TRELLIS_SCRIPT:-}" ]; then
 else
     echo "trellis-passes.blender45 kept as it is: set PYTHON45 and TRELLIS_SCRIPT to remake it"
 fi
+# Wonder3D's own files need Blender 4.2 with BlenderProc's sources (PYTHON42 with the
+# packages wonder3d_blenderproc.py lists, BLENDERPROC a checkout of DLR-RM/BlenderProc)
+# and the script (WONDER3D_SCRIPT: xxlong0/Wonder3D's render_codes/blenderProc_ortho.py).
+if [ -n "${PYTHON42:-}" ] && [ -n "${BLENDERPROC:-}" ] && [ -n "${WONDER3D_SCRIPT:-}" ]; then
+    PYTHONPATH="$BLENDERPROC" "$PYTHON42" "$here/wonder3d_blenderproc.py" "$WONDER3D_SCRIPT" "$out" | tail -n 1
+else
+    echo "wonder3d.blenderproc kept as it is: set PYTHON42, BLENDERPROC and WONDER3D_SCRIPT to remake it"
+fi
