@@ -484,6 +484,7 @@ pub fn terrain(n: u32) -> Scene {
         warnings: Vec::new(),
         notes: Vec::new(),
         framed: None,
+        root_origin: None,
     }
 }
 

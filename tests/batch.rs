@@ -1392,8 +1392,8 @@ fn the_wonder3d_preset_writes_its_scripts_files_and_poses_that_agree() {
 /// unturned (`random_pose` off), 128², Filmic. The folder holds the script's files and no
 /// others; every `_RT.txt` is the script's within 10⁻⁶ (2.7 × 10⁻⁷ measured: Blender's
 /// single-precision rounding); `scale_offset_matrix.txt` holds its scale (within 10⁻⁷
-/// relative) and orthographic scale, and its offset where Blender scales the file's one
-/// root node about that node's translation T: the preset's −s c less (1 − s) T. Per view,
+/// relative), its offset (within 10⁻⁶: the file's one root node is translated, about
+/// which Blender scales it) and orthographic scale. Per view,
 /// the masks (alpha) have an IoU of at least 0.99 (1.0 measured in all 13 views); where
 /// both cover, the normals differ by a median of at most 8 levels and a 90th percentile of
 /// at most 48 (4–5 and 26–39 measured), the colours by at most 14 and 40 (6–10 and 16–27:
@@ -1414,7 +1414,7 @@ fn the_wonder3d_preset_writes_what_its_script_writes_in_blenderproc() {
     let models = dir.path().join("models");
     std::fs::create_dir_all(&models).unwrap();
     let glb = data("gltf/corpus/materials_joined.glb");
-    std::fs::copy(&glb, models.join("spheres.glb")).unwrap();
+    std::fs::copy(glb, models.join("spheres.glb")).unwrap();
     std::fs::write(
         dir.path().join("m.toml"),
         "[render]\nwidth = 128\nheight = 128\nspp = 64\nview_transform = \"filmic\"\n\n\
@@ -1433,24 +1433,13 @@ fn the_wonder3d_preset_writes_what_its_script_writes_in_blenderproc() {
             .map(|v| v.parse().unwrap())
             .collect()
     };
-    // The file's one root node, where Blender's importer puts the object's origin: its
-    // glTF translation (x, y, z) is Blender's (x, −z, y).
-    let gltf = ::gltf::Gltf::from_slice(&std::fs::read(&glb).unwrap()).unwrap();
-    let root = gltf.default_scene().unwrap().nodes().next().unwrap();
-    let [x, y, z] = root.transform().decomposed().0.map(f64::from);
-    let origin = [x, -z, y];
     let (a, b) = (
         numbers(ours.join("scale_offset_matrix.txt")),
         numbers(script.join("scale_offset_matrix.txt")),
     );
-    let s = b[0];
-    assert!((a[0] - s).abs() <= 1e-7 * s, "scale {} against {s}", a[0]);
-    for k in 0..3 {
-        let expected = a[1 + k] - (1.0 - s) * origin[k];
-        assert!(
-            (expected - b[1 + k]).abs() < 1e-6,
-            "offset {k}: {a:?} {b:?}"
-        );
+    assert!((a[0] - b[0]).abs() <= 1e-7 * b[0], "scale: {a:?} {b:?}");
+    for k in 1..4 {
+        assert!((a[k] - b[k]).abs() < 1e-6, "offset: {a:?} {b:?}");
     }
     assert_eq!(a[4], b[4], "ortho_scale");
     let percentile = |mut d: Vec<u32>, p: usize| {
@@ -1761,7 +1750,7 @@ fn the_trellis_normal_pass_is_cycles_normal_pass() {
 /// 4.5.15 with all four flags on the corpus's five spheres
 /// (`tools/gltf_corpus/trellis_passes.py`; `trellis-passes.blender45`), the same two views
 /// at 256², 128 samples, AgX. The folder holds the script's files and no others, and
-/// `transforms.json` the script's depth ranges. Over the pixels that both colour images
+/// `transforms.json` the script's depth ranges, scale and offset. Over the pixels that both colour images
 /// cover whole, the levels differ by a median of at most 8 of 65,535 in the depth PNG, 2 in
 /// the mist PNG and 2 of 255 in the albedo PNG, and by a 90th percentile of at most 64, 4
 /// and 10 (measured: 2, 0, 1 and 11–25, 0–1, 7: a depth pixel is one sample in Cycles, the
@@ -1786,15 +1775,24 @@ fn the_trellis_passes_are_the_scripts_own_files() {
     );
     let blender = data("gltf/corpus/trellis-passes.blender45");
     assert_eq!(files_in(&ours), files_in(&blender));
-    let frames = |folder: &Path| {
-        let t: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(folder.join("transforms.json")).unwrap())
-                .unwrap();
-        t["frames"].clone()
+    let json = |folder: &Path| -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(folder.join("transforms.json")).unwrap()).unwrap()
     };
-    let (our_frames, their_frames) = (frames(&ours), frames(&blender));
+    let (a, b) = (json(&ours), json(&blender));
     for view in 0..2 {
-        assert_eq!(our_frames[view]["depth"], their_frames[view]["depth"]);
+        assert_eq!(a["frames"][view]["depth"], b["frames"][view]["depth"]);
+    }
+    // The normalisation the script records, whose offset depends on the translation of the
+    // file's one root node, about which Blender scales it.
+    let number = |v: &serde_json::Value| v.as_f64().unwrap();
+    let s = number(&b["scale"]);
+    assert!((number(&a["scale"]) - s).abs() <= 1e-7 * s, "{a} {b}");
+    for k in 0..3 {
+        let (p, q) = (number(&a["offset"][k]), number(&b["offset"][k]));
+        assert!(
+            (p - q).abs() < 1e-6,
+            "offset {k}: {p} against the script's {q}"
+        );
     }
     let rgba = |path: PathBuf| image::open(&path).unwrap().into_rgba8().into_raw();
     let gray16 = |path: PathBuf| image::open(&path).unwrap().into_luma16().into_raw();

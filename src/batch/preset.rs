@@ -737,12 +737,10 @@ const RING_ELEVATION: u32 = 0;
 /// the scale, and its intensity, P / (4π) W/sr as Cycles emits a point light's watts, is
 /// divided by the scale squared, so that the object receives what it does in the script.
 /// (Blender's light is a sphere of radius 0.1 m, meshtrace's a point: the shadows are
-/// harder.) This assumes the object's root node at the origin, as in most files.
+/// harder.) It moves by the script's offset ([`Normalisation::blender_offset`]).
 fn factory_point(norm: &Normalisation) -> PunctualLight {
-    thousand_watts_at(
-        to_meshtrace(DVec3::new(4.0762, 1.0055, 5.9039)) / norm.scale,
-        norm,
-    )
+    let normalised = DVec3::new(4.0762, 1.0055, 5.9039) + norm.blender_offset();
+    thousand_watts_at(norm.to_scene(to_meshtrace(normalised)), norm)
 }
 
 /// A point light of 1,000 W (P / (4π) W/sr, as Cycles emits a point light's watts) placed
@@ -862,6 +860,12 @@ pub struct Normalisation {
     pub scale: f32,
     /// The box's centre in the mesh's own frame.
     pub centre: Vec3,
+    /// Where the scripts' scaled object has its origin, in Blender's frame: the file's one
+    /// root node's translation T ([`Scene::root_origin`]), about which the script scales
+    /// it; 0 where there is none or the script scales an empty at the origin instead.
+    /// The images are the same either way; the offset the script records is not
+    /// ([`Normalisation::blender_offset`]).
+    pub root: DVec3,
 }
 
 impl Normalisation {
@@ -871,6 +875,7 @@ impl Normalisation {
         (extent.is_finite() && extent > 0.0).then(|| Self {
             scale: 1.0 / extent,
             centre: (b.min + b.max) * 0.5,
+            root: DVec3::ZERO,
         })
     }
 
@@ -881,13 +886,29 @@ impl Normalisation {
         (diagonal.is_finite() && diagonal > 0.0).then(|| Self {
             scale: 1.0 / diagonal,
             centre: (b.min + b.max) * 0.5,
+            root: DVec3::ZERO,
         })
     }
 
-    /// The normalisation's translation in Blender's frame, −s c: where it takes the
-    /// file's origin (p ↦ s p + offset).
+    /// The translation the script records, in Blender's frame: it scales its object by s
+    /// about the object's origin T ([`Normalisation::root`]), then moves it by this offset,
+    /// −s c − (1 − s) T, so that a point p of the file lands at s p − s c whatever T is.
+    /// Objects that are roots beside the mesh (the factory light) move by it too.
     pub fn blender_offset(&self) -> DVec3 {
-        -(self.scale as f64) * to_blender(self.centre)
+        let s = self.scale as f64;
+        -s * to_blender(self.centre) - (1.0 - s) * self.root
+    }
+
+    /// Where the script's object scales about: `root`, the file's one root node's
+    /// translation in the mesh's frame, unless `preset` scales an empty at the origin.
+    pub fn with_root(self, preset: &Preset, root: Option<Vec3>) -> Self {
+        // Objaverse-XL parents every root object to an empty at the origin, and scales
+        // that (which is why its cameras aim at the file's origin).
+        let root = match (preset.aim, root) {
+            (Aim::Centre, Some(t)) => to_blender(t),
+            _ => DVec3::ZERO,
+        };
+        Self { root, ..self }
     }
 
     /// A normalised point back in the mesh's frame.
@@ -899,6 +920,35 @@ impl Normalisation {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_recorded_offset_is_the_scripts_for_a_translated_root() {
+        // A box from (1, 2, 3) to (3, 4, 5) in the file (Y up): s = 1/2, c = (2, 3, 4),
+        // Blender's c = (2, −4, 3). Its one root node at (1, 0, 0) (Blender's too).
+        let b = Aabb {
+            min: Vec3::new(1.0, 2.0, 3.0),
+            max: Vec3::new(3.0, 4.0, 5.0),
+        };
+        let trellis = Preset::named("trellis").unwrap();
+        let norm = trellis.normalisation(&b).unwrap();
+        // Scaled about the origin: −s c.
+        assert_eq!(norm.blender_offset(), DVec3::new(-1.0, 2.0, -1.5));
+        // Scaled about T = (1, 0, 0): the box's centre goes to T + s (c − T) = (1.5, −2,
+        // 1.5), and the script moves it back to the origin.
+        let root = Some(Vec3::X);
+        let rooted = norm.with_root(&trellis, root);
+        assert_eq!(rooted.blender_offset(), DVec3::new(-1.5, 2.0, -1.5));
+        // Either way a point of the file lands at s p − s c.
+        let p = DVec3::new(3.0, -2.0, 5.0);
+        let moved = DVec3::X + 0.5 * (p - DVec3::X) + rooted.blender_offset();
+        assert_eq!(moved, 0.5 * p + norm.blender_offset());
+        // Objaverse-XL scales an empty at the origin, whatever the file's root.
+        let xl = Preset::named("objaverse-xl").unwrap();
+        assert_eq!(
+            norm.with_root(&xl, root).blender_offset(),
+            norm.blender_offset()
+        );
+    }
 
     /// The scripts' light paths reach each image's request, under a manifest's `[render]`.
     #[test]

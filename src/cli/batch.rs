@@ -585,7 +585,8 @@ fn load_input(
                 .framed
                 .as_ref()
                 .and_then(|b| preset.normalisation(b))
-                .context("the mesh has no extent to normalise")?;
+                .context("the mesh has no extent to normalise")?
+                .with_root(preset, scene.root_origin);
             // Per object, beside its first view's image (before the preset's lights, which
             // the metadata does not count).
             let dir = group[0].output.parent().unwrap_or(Path::new(""));

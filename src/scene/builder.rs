@@ -395,6 +395,7 @@ impl Builder {
             warnings: self.warnings,
             notes: self.notes,
             framed: None,
+            root_origin: None,
         }
     }
 }

@@ -185,6 +185,12 @@ pub struct Scene {
     /// (the ground left out), for other views framed alike (`meshtrace batch`'s turntables).
     /// `None` for a scene file.
     pub framed: Option<crate::math::Aabb>,
+    /// For a bare glTF file whose default scene has one root node: that node's
+    /// translation, turned up as the mesh is. Blender's importer makes the node an object
+    /// with its origin there, and the dataset scripts scale that object about it, which
+    /// changes the offset they record (`batch::preset::Normalisation::root`). `None`
+    /// otherwise.
+    pub root_origin: Option<Vec3>,
 }
 
 /// An input's uid, as the dataset scripts name an object: its file name up to the first

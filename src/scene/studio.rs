@@ -225,6 +225,7 @@ pub(super) fn load_bare_gltf(
     let asset = load_gltf(path, files)?;
     let turn = options.up.unwrap_or(Up::Y).to_y();
     let own_camera = asset.camera.clone();
+    let root_origin = asset.root_origin.map(|t| turn.transform_point3(t));
     let mut builder = Builder::default();
     let error = |at: &str, message: String| SceneError::Gltf {
         path: shown.clone(),
@@ -266,7 +267,9 @@ pub(super) fn load_bare_gltf(
             ),
         )
     })?;
-    builder.finish_in_studio(path, camera, bounds, files, options)
+    let mut scene = builder.finish_in_studio(path, camera, bounds, files, options)?;
+    scene.root_origin = root_origin;
+    Ok(scene)
 }
 
 impl Builder {

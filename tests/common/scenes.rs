@@ -87,6 +87,7 @@ pub fn scene(
         warnings: Vec::new(),
         notes: Vec::new(),
         framed: None,
+        root_origin: None,
     }
 }
 

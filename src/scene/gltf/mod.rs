@@ -28,7 +28,7 @@ use super::part::MeshPart;
 use super::source::FileSource;
 use super::texture::TextureRef;
 use super::{Camera, Material, PunctualLight, SceneError};
-use glam::Mat4;
+use glam::{Mat4, Vec3};
 use gltf::json;
 use std::path::Path;
 
@@ -50,6 +50,9 @@ pub struct GltfAsset {
     /// The first camera (perspective or orthographic) of the default scene's node tree
     /// (depth first).
     pub camera: Option<Camera>,
+    /// The translation of the default scene's root node where it has only one
+    /// ([`Scene::root_origin`](crate::scene::Scene::root_origin)).
+    pub root_origin: Option<Vec3>,
     /// Problems that did not stop loading, each one line naming the file.
     pub warnings: Vec<String>,
     /// What the file holds that a still render leaves out and that is no problem

@@ -75,6 +75,9 @@ pub(super) fn load_scene(doc: &Doc, buffers: &Buffers) -> Result<GltfAsset, Scen
             ));
         }
         let world = parent * local_matrix(doc, node, &at)?;
+        if scene.nodes.len() == 1 && parent == Mat4::IDENTITY && asset.root_origin.is_none() {
+            asset.root_origin = Some(world.w_axis.truncate());
+        }
         if let Some(mesh) = node.mesh {
             let m = mesh.value();
             if let Entry::Vacant(e) = meshes.entry(m) {
