@@ -45,6 +45,7 @@ impl Passes {
         }
     }
 
+    /// Whether any pass is on.
     pub fn any(self) -> bool {
         self.depth || self.normal || self.albedo || self.mist
     }
@@ -66,7 +67,7 @@ impl Passes {
         aovs
     }
 
-    /// The files of the passes beside the image at `image`: its stem with `_depth` and the
+    /// The files of the passes beside the image at `image`: its stem with `_{pass}` and the
     /// pass's extension (`renders/uid/007.png` → `renders/uid/007_depth.png`).
     pub fn paths(self, image: &Path) -> Vec<PathBuf> {
         [
