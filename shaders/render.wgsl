@@ -57,7 +57,7 @@ fn is_finite3(v: vec3<f32>) -> bool {
 // A pixel's AOV accumulators: a texel per AOV, indexed by its bit's position, as the AOV's
 // film channel holds it. mirror: src/render/cpu.rs `AovSums`
 struct AovSums {
-    t: array<Texel, 8>,
+    t: array<Texel, AOV_COUNT>,
 }
 
 // The film texel of the AOV of bit `bit` for the pixel whose first texel is `base`.
@@ -304,7 +304,7 @@ fn pixel_start(gid: vec3<u32>) -> PixelStart {
 // A pixel's AOV sums as the film holds them so far.
 fn film_aov_sums(base: u32) -> AovSums {
     var sums = AovSums();
-    for (var k = 0u; k < 7u; k++) {
+    for (var k = 0u; k < AOV_COUNT; k++) {
         if (params.aovs & (1u << k)) != 0u {
             sums.t[k] = film[aov_texel(base, 1u << k)];
         }
@@ -333,7 +333,7 @@ fn finish_pixel(base: u32, s: u32, radiance_sums: Texel, rays: Texel, sums: AovS
     radiance.zw.z = s;
     film[base] = radiance;
     film[base + 1u] = rays;
-    for (var k = 0u; k < 7u; k++) {
+    for (var k = 0u; k < AOV_COUNT; k++) {
         if (params.aovs & (1u << k)) != 0u {
             film[aov_texel(base, 1u << k)] = sums.t[k];
         }

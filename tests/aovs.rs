@@ -557,6 +557,12 @@ color = [1.0, 1.0, 1.0]
             );
         }
         let albedo = g.channel(Aov::Albedo.name()).unwrap();
+        // A diffuse surface's diffuse colour is its albedo, summed alike.
+        for film in [f, g] {
+            let diffuse = film.channel(Aov::DiffuseColor.name()).unwrap();
+            let albedo = film.channel(Aov::Albedo.name()).unwrap();
+            assert_eq!(diffuse.data, albedo.data, "{device}: diffuse_color");
+        }
         for (i, (sum, a)) in g.sum.iter().zip(&albedo.data).enumerate() {
             // The albedo channel's first three sums are the hits' albedo sums.
             assert_eq!(&sum[..], &a[..3], "{device}: pixel {i}");

@@ -81,7 +81,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "SECONDS")]
     pub checkpoint: Option<f64>,
     /// Render outputs to add, comma-separated: depth, normal, albedo, alpha, object_id,
-    /// material_id, bvh_cost. Extra channels of an .exr output; beside any other output,
+    /// material_id, bvh_cost, diffuse_color. Extra channels of an .exr output; beside any other output,
     /// one <stem>.aovs.exr.
     #[arg(long, value_name = "LIST")]
     pub aov: Option<String>,

@@ -116,6 +116,7 @@ pub fn shared_constants() -> Vec<(String, Value)> {
     for aov in Aov::ALL {
         list.push((format!("AOV_{}", aov.name().to_uppercase()), U32(aov.bit())));
     }
+    list.push(("AOV_COUNT".into(), U32(Aov::ALL.len() as u32)));
     list
 }
 
