@@ -1403,11 +1403,13 @@ fn the_wonder3d_preset_writes_its_scripts_files_and_poses_that_agree() {
 /// levels (median) and 15–23 (90th percentile) from the preset's.
 #[test]
 fn the_wonder3d_preset_writes_what_its_script_writes_in_blenderproc() {
-    let test = "the_wonder3d_preset_writes_what_its_script_writes_in_blenderproc";
-    if let Err(e) = meshtrace::film::lut_folder(meshtrace::film::ViewTransform::Filmic) {
-        let required = std::env::var("MESHTRACE_REQUIRE_BLENDER_LUTS").is_ok_and(|v| v == "1");
-        assert!(!required, "MESHTRACE_REQUIRE_BLENDER_LUTS=1 but {e}");
-        eprintln!("{test}: skipped: {e}");
+    let view = meshtrace::film::ViewTransform::Filmic;
+    if common::luts::view_or_skip(
+        "the_wonder3d_preset_writes_what_its_script_writes_in_blenderproc",
+        view,
+    )
+    .is_none()
+    {
         return;
     }
     let dir = TempDir::new("batch-wonder3d-blenderproc");
@@ -1761,11 +1763,8 @@ fn the_trellis_normal_pass_is_cycles_normal_pass() {
 /// 3,515 differ).
 #[test]
 fn the_trellis_passes_are_the_scripts_own_files() {
-    let test = "the_trellis_passes_are_the_scripts_own_files";
-    if let Err(e) = meshtrace::film::lut_folder(meshtrace::film::ViewTransform::Agx) {
-        let required = std::env::var("MESHTRACE_REQUIRE_BLENDER_LUTS").is_ok_and(|v| v == "1");
-        assert!(!required, "MESHTRACE_REQUIRE_BLENDER_LUTS=1 but {e}");
-        eprintln!("{test}: skipped: {e}");
+    let view = meshtrace::film::ViewTransform::Agx;
+    if common::luts::view_or_skip("the_trellis_passes_are_the_scripts_own_files", view).is_none() {
         return;
     }
     let dir = TempDir::new("batch-trellis-passes");

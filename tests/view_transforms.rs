@@ -10,19 +10,10 @@ use crate::common;
 
 use common::cli::{assert_fails, output_with, run};
 use common::fs::{TempDir, data};
-use meshtrace::film::{Aov, BitDepth, DisplayTransform, Film, ViewTransform, lut_folder};
+use meshtrace::film::{Aov, BitDepth, Film, ViewTransform};
 use meshtrace::fixed::{to_fixed, to_fixed3};
 
-/// The view loaded, or `None` after saying why the test skips (its LUTs are not here).
-fn load(test: &str, view: ViewTransform) -> Option<DisplayTransform> {
-    if let Err(e) = lut_folder(view) {
-        let required = std::env::var("MESHTRACE_REQUIRE_BLENDER_LUTS").is_ok_and(|v| v == "1");
-        assert!(!required, "MESHTRACE_REQUIRE_BLENDER_LUTS=1 but {e}");
-        eprintln!("{test}: skipped: {e}");
-        return None;
-    }
-    Some(DisplayTransform::load(view).unwrap_or_else(|e| panic!("{e}")))
-}
+use common::luts::view_or_skip as load;
 
 /// The transparent film of Blender's input image: its premultiplied colour the mean, its
 /// alpha the coverage, of one sample.

@@ -10,6 +10,7 @@
 //! - [`images`]: renders of several seeds compared block by block as z scores.
 //! - [`materials`]: BSDF test helpers (material names, directions, GGX conditioning).
 //! - [`chi2`]: the chi-square goodness-of-fit test of sampled directions.
+//! - [`luts`]: Blender's LUTs for the Filmic and AgX views, or a skip without them.
 //! - [`gamma`]: ln Gamma and the regularised incomplete gamma function (in logs), for the
 //!   chi-square p-values here and in the algorithm benches.
 //! - [`kernels`]: running the WGSL test kernels (case packing, bits, BSDF cases).
@@ -26,6 +27,7 @@ pub mod gamma;
 pub mod gltf;
 pub mod images;
 pub mod kernels;
+pub mod luts;
 pub mod materials;
 pub mod rand;
 pub mod scenes;
